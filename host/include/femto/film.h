@@ -1,0 +1,82 @@
+// femto public API: films, which turn radiance samples into images (and, for transient films,
+// into time-resolved images).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "femto/color.h"
+#include "femto/math.h"
+#include "femto/object.h"
+#include "femto/rfilter.h"
+
+namespace femto {
+
+/// One radiance contribution of a camera sample, with the optical path length (time x c, in
+/// scene units) of the path that carried it. Steady films ignore the time.
+struct Contribution {
+    Color radiance;
+    double path_length = 0.0;
+};
+
+/// What the integrator reports for one camera sample.
+class ContributionList {
+public:
+    void add(const Color& radiance, double path_length) {
+        if (!radiance.is_black()) items_.push_back({radiance, path_length});
+    }
+    void clear() { items_.clear(); }
+    const std::vector<Contribution>& items() const { return items_; }
+
+private:
+    std::vector<Contribution> items_;
+};
+
+/// Metadata recorded into every output file.
+struct RenderInfo {
+    std::string scene_file;
+    std::string integrator;
+    std::string femto_version;
+    uint64_t seed = 0;
+    uint32_t samples_per_pixel = 0;  ///< reached (lower than requested when interrupted)
+    uint32_t samples_requested = 0;
+    double render_seconds = 0;
+    bool interrupted = false;
+};
+
+/// A rectangle of pixels owned by one worker; accumulates without locks.
+class FilmBlock {
+public:
+    virtual ~FilmBlock() = default;
+    /// Splats one camera sample at continuous film position `pos` (pixels, origin top-left).
+    virtual void put(Vec2 pos, const ContributionList& sample) = 0;
+};
+
+class Film : public Object {
+public:
+    PluginKind kind() const override { return PluginKind::Film; }
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const ReconstructionFilter& rfilter() const { return *rfilter_; }
+
+    /// Workspace for pixels [x0, x0+w) x [y0, y0+h) plus the filter's border.
+    virtual std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const = 0;
+    /// Adds a finished block into the film; safe to call from several threads.
+    virtual void merge(const FilmBlock& block) = 0;
+    /// Latest path length (scene units) this film records; paths beyond it may stop.
+    virtual double max_path_length() const;
+    /// Writes the outputs for `out_base` (no extension), atomically; returns the paths written.
+    virtual std::vector<std::string> write(const std::string& out_base,
+                                           const RenderInfo& info) const = 0;
+
+protected:
+    /// Reads `width`, `height` and the <rfilter> child (default `gaussian`); validates sizes.
+    explicit Film(const class Properties& props);
+
+    int width_ = 0, height_ = 0;
+    std::shared_ptr<ReconstructionFilter> rfilter_;
+};
+
+}  // namespace femto

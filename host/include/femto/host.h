@@ -1,0 +1,78 @@
+// femto public API: loading and rendering scenes from C++ (what the `femto` CLI, the tests
+// and embedding applications use).
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "femto/film.h"
+#include "femto/object.h"
+#include "femto/plugin.h"
+#include "femto/properties.h"
+#include "femto/scene.h"
+
+namespace femto {
+
+struct LoadOptions {
+    /// `-D name=value` overrides for `<default>` parameters.
+    std::vector<std::pair<std::string, std::string>> defines;
+    /// Extra plugin folders (`--plugin-dir`), searched after the build folder and
+    /// $FEMTO_PLUGIN_PATH.
+    std::vector<std::string> plugin_dirs;
+    /// Report unread parameters as warnings instead of errors.
+    bool lenient = false;
+};
+
+/// Loads a scene file. Throws SceneError (bad input) with a file:line:col location.
+std::unique_ptr<Scene> load_scene(const std::string& path, const LoadOptions& options = {});
+/// Loads a scene from XML text; `base_dir` resolves relative file names.
+std::unique_ptr<Scene> load_scene_string(const std::string& xml, const LoadOptions& options = {},
+                                         const std::string& base_dir = ".");
+
+/// Instantiates one plugin directly (for tests and tools): checks the schema and unread
+/// parameters exactly as the loader does.
+ObjectPtr create_object(PluginKind kind, const std::string& type, const Properties& props,
+                        const LoadOptions& options = {});
+
+/// Descriptor of plugin `type` of `kind`, loading it on first use. Throws SceneError.
+const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
+                                    const LoadOptions& options = {});
+/// Every plugin found on the search path (this loads them all).
+std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(const LoadOptions& options = {});
+/// Paths of the plugin libraries opened so far (lazy loading means: only those named).
+std::vector<std::string> loaded_plugin_files();
+/// The folders searched for plugins, in order.
+std::vector<std::string> plugin_search_path(const LoadOptions& options = {});
+
+struct RenderOptions {
+    uint32_t spp = 0;          ///< 0 = the sampler's sample_count
+    int threads = 0;           ///< 0 = all cores
+    uint64_t seed = 0;
+    bool progress = false;     ///< progress line on stderr
+    std::string scene_file;    ///< recorded in the outputs
+    /// When set and becomes true, rendering stops at the end of the current pass.
+    const std::atomic<bool>* stop = nullptr;
+};
+
+struct RenderStats {
+    uint32_t spp_done = 0;
+    uint32_t spp_requested = 0;
+    double seconds = 0;
+    uint64_t rays = 0;
+    uint64_t camera_samples = 0;
+    bool interrupted = false;
+};
+
+/// Renders into the sensor's film (passes over tiles, TBB threads, deterministic for a
+/// given seed and thread count).
+RenderStats render(Scene& scene, const RenderOptions& options);
+/// RenderInfo for the film's write(), from a finished render.
+RenderInfo make_render_info(const Scene& scene, const RenderOptions& options, const RenderStats& stats);
+
+const char* version();
+
+}  // namespace femto

@@ -1,0 +1,16 @@
+// femto public API: warnings and information printed by the host (to stderr).
+#pragma once
+
+#include <string>
+
+#include "femto/error.h"
+
+namespace femto {
+
+/// Prints "warning: <loc>: <message>" unless warnings are silenced; thread-safe.
+void log_warning(const SourceLocation& loc, const std::string& message);
+inline void log_warning(const std::string& message) { log_warning(SourceLocation{}, message); }
+/// Number of warnings printed so far in this process.
+int warning_count();
+
+}  // namespace femto

@@ -1,0 +1,32 @@
+// femto public API: pixel samplers (sources of the random numbers a path consumes).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "femto/math.h"
+#include "femto/object.h"
+
+namespace femto {
+
+class Sampler : public Object {
+public:
+    PluginKind kind() const override { return PluginKind::Sampler; }
+
+    /// A fresh sampler of the same type and settings, for one worker thread.
+    virtual std::unique_ptr<Sampler> clone() const = 0;
+    /// Positions the sampler at sample `sample_index` of pixel `pixel_index` for the render
+    /// seed `seed`. The numbers drawn afterwards depend only on these three values, which is
+    /// what makes renders deterministic whatever the thread scheduling.
+    virtual void start(uint64_t seed, uint64_t pixel_index, uint32_t sample_index) = 0;
+    virtual float next_1d() = 0;
+    virtual Vec2 next_2d() = 0;
+
+    uint32_t sample_count() const { return sample_count_; }
+    void set_sample_count(uint32_t n) { sample_count_ = n; }
+
+protected:
+    uint32_t sample_count_ = 4;
+};
+
+}  // namespace femto

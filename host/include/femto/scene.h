@@ -1,0 +1,70 @@
+// femto public API: the scene as integrators see it (ray queries and light sampling).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "femto/emitter.h"
+#include "femto/math.h"
+#include "femto/sensor.h"
+#include "femto/shape.h"
+
+namespace femto {
+
+class Integrator;
+
+struct Bounds3 {
+    Vec3 min{kInfinity, kInfinity, kInfinity}, max{-kInfinity, -kInfinity, -kInfinity};
+    void expand(const Vec3& p) {
+        for (int i = 0; i < 3; ++i) {
+            min[i] = std::min(min[i], p[i]);
+            max[i] = std::max(max[i], p[i]);
+        }
+    }
+    bool valid() const { return min.x <= max.x; }
+    Vec3 center() const { return (min + max) * 0.5f; }
+    float radius() const { return valid() ? 0.5f * length(max - min) : 0.f; }
+};
+
+class Scene {
+public:
+    Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sensor,
+          std::vector<std::shared_ptr<Shape>> shapes, std::vector<std::shared_ptr<Emitter>> emitters);
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    /// Closest hit along `ray` within [tmin, tmax]; surfaces with a pure `null` material and
+    /// no emitter are invisible.
+    bool intersect(const Ray& ray, Hit& hit) const;
+    /// True when anything blocks `ray` within [tmin, tmax]; `null` surfaces never block.
+    bool occluded(const Ray& ray) const;
+
+    /// All emitters (area emitters included).
+    const std::vector<const Emitter*>& emitters() const { return emitter_list_; }
+    /// Picks an emitter uniformly (u_select) and samples it for `ref`; the pdf and weight
+    /// include the selection probability.
+    EmitterSample sample_emitter(const Vec3& ref, float u_select, Vec2 u) const;
+    /// Density of sample_emitter() choosing `hit` on `emitter`, with the selection probability.
+    float pdf_emitter(const Emitter& emitter, const Vec3& ref, const Hit& hit) const;
+
+    const Sensor& sensor() const { return *sensor_; }
+    Integrator& integrator() const { return *integrator_; }
+    const std::vector<std::shared_ptr<Shape>>& shapes() const { return shapes_; }
+    const Bounds3& bounds() const { return bounds_; }
+
+    /// Rays traced so far by all threads (primary, bounce and shadow rays).
+    uint64_t rays_traced() const;
+
+private:
+    struct Accel;
+    std::unique_ptr<Accel> accel_;
+    std::shared_ptr<Integrator> integrator_;
+    std::shared_ptr<Sensor> sensor_;
+    std::vector<std::shared_ptr<Shape>> shapes_;
+    std::vector<std::shared_ptr<Emitter>> emitters_;
+    std::vector<const Emitter*> emitter_list_;
+    Bounds3 bounds_;
+};
+
+}  // namespace femto

@@ -1,0 +1,109 @@
+// femto public API: shapes, surface hits and area sampling.
+//
+// A shape plugin only builds geometry in its constructor: a triangle mesh (set_mesh) or an
+// analytic sphere (set_sphere), already in world space. The host traces it with Embree and
+// implements hit records and area/solid-angle sampling for both representations.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "femto/math.h"
+#include "femto/object.h"
+#include "femto/properties.h"
+
+namespace femto {
+
+class Bsdf;
+class Emitter;
+class Shape;
+
+/// A ray-surface intersection, everything an integrator needs at a path vertex.
+struct Hit {
+    float t = kInfinity;   ///< ray distance
+    Vec3 p;                ///< position
+    Vec3 ng;               ///< geometric normal (unit; points to the shape's "outside")
+    Frame sh;              ///< shading frame (sh.n is the interpolated normal)
+    Vec2 uv;               ///< surface parameterization
+    Vec3 wi;               ///< direction toward the ray origin, in the shading frame
+    const Shape* shape = nullptr;
+    uint32_t prim = 0;     ///< triangle index (0 for spheres)
+
+    Vec3 to_world(const Vec3& v) const { return sh.to_world(v); }
+    Vec3 to_local(const Vec3& v) const { return sh.to_local(v); }
+    /// A ray leaving this hit in world direction `d`, offset against self-intersection.
+    Ray spawn(const Vec3& d) const { return Ray{offset_origin(p, ng, d), d, 0.f, kInfinity}; }
+    /// A shadow ray from this hit toward point `target` (stops just short of it).
+    Ray spawn_to(const Vec3& target) const;
+};
+
+/// A triangle mesh in world space. `normals` and `uvs` are per vertex and may be empty.
+struct TriangleMesh {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;
+    std::vector<Vec2> uvs;
+    std::vector<uint32_t> indices;  ///< 3 per triangle
+    size_t triangle_count() const { return indices.size() / 3; }
+};
+
+/// A point sampled on a shape for next-event estimation, seen from a reference point.
+struct ShapeSample {
+    Vec3 p, n;
+    Vec2 uv;
+    float pdf = 0.f;  ///< solid-angle density at the reference point (0 = failed)
+};
+
+class Shape : public Object {
+public:
+    PluginKind kind() const override { return PluginKind::Shape; }
+    ~Shape() override;
+
+    bool is_sphere() const { return is_sphere_; }
+    const TriangleMesh& mesh() const { return mesh_; }
+    Vec3 sphere_center() const { return center_; }
+    float sphere_radius() const { return radius_; }
+    bool flip_normals() const { return flip_normals_; }
+
+    const Bsdf* bsdf() const { return bsdf_.get(); }
+    const Emitter* emitter() const { return emitter_.get(); }
+    std::shared_ptr<Emitter> emitter_ptr() const { return emitter_; }
+    float surface_area() const { return area_; }
+
+    /// Fills `hit` for primitive `prim` hit at distance `t` with Embree's (u, v).
+    void fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, Hit& hit) const;
+    /// Samples a point for direct lighting of `ref` (solid-angle pdf; spheres sample the
+    /// visible cone when `ref` is outside).
+    ShapeSample sample_direct(const Vec3& ref, Vec2 u) const;
+    /// Solid-angle pdf of sample_direct() choosing `hit` (a hit on this shape) from `ref`.
+    float pdf_direct(const Vec3& ref, const Hit& hit) const;
+    /// Uniform point on the surface (area measure, pdf = 1/area).
+    ShapeSample sample_area(Vec2 u) const;
+
+protected:
+    /// Reads the parameters common to all shapes (`flip_normals`, the bsdf and emitter
+    /// children). A shape without a bsdf gets a diffuse one, as in Mitsuba.
+    explicit Shape(const Properties& props);
+    /// Sets the geometry; call exactly once from the plugin's constructor. Throws a located
+    /// SceneError for empty or non-finite geometry.
+    void set_mesh(TriangleMesh mesh);
+    void set_sphere(const Vec3& center, float radius);
+
+private:
+    void finish_setup();
+    SourceLocation location_;
+    bool is_sphere_ = false;
+    bool flip_normals_ = false;
+    TriangleMesh mesh_;
+    std::vector<float> triangle_cdf_;
+    Vec3 center_;
+    float radius_ = 0.f;
+    float area_ = 0.f;
+    std::shared_ptr<Bsdf> bsdf_;
+    std::shared_ptr<Emitter> emitter_;
+};
+
+/// Reads a `to_world` transform, rejecting degenerate (singular) ones with a located error.
+Transform read_to_world(const Properties& props);
+
+}  // namespace femto

@@ -1,0 +1,32 @@
+// femto public API: sampling routines mapping [0,1)^2 to directions and points, with pdfs.
+// Each has a chi-square test against its pdf in tests/unit/test_warp.cpp.
+#pragma once
+
+#include "femto/math.h"
+
+namespace femto::warp {
+
+/// Concentric map to the unit disk (Shirley & Chiu); pdf 1/pi.
+Vec2 square_to_uniform_disk(Vec2 u);
+/// Cosine-weighted hemisphere around +z; pdf cos(theta)/pi.
+Vec3 square_to_cosine_hemisphere(Vec2 u);
+inline float cosine_hemisphere_pdf(const Vec3& v) { return v.z > 0 ? v.z * kInvPi : 0.f; }
+/// Uniform hemisphere around +z; pdf 1/(2 pi).
+Vec3 square_to_uniform_hemisphere(Vec2 u);
+inline float uniform_hemisphere_pdf(const Vec3& v) { return v.z >= 0 ? kInvTwoPi : 0.f; }
+/// Uniform sphere; pdf 1/(4 pi).
+Vec3 square_to_uniform_sphere(Vec2 u);
+inline constexpr float uniform_sphere_pdf() { return 0.25f * kInvPi; }
+/// Uniform in the cone of directions around +z with cos(theta) >= cos_max; pdf 1/(2pi(1-cos_max)).
+Vec3 square_to_uniform_cone(Vec2 u, float cos_max);
+inline float uniform_cone_pdf(const Vec3& v, float cos_max) {
+    return v.z >= cos_max ? 1.f / (2.f * kPi * (1.f - cos_max)) : 0.f;
+}
+/// Barycentric coordinates (b1, b2) uniform over a triangle.
+Vec2 square_to_uniform_triangle(Vec2 u);
+
+/// Sample an index of a discrete distribution given its normalized CDF (size n+1, cdf[0]=0,
+/// cdf[n]=1). Returns the index and rescales `u` to [0,1) within the chosen interval.
+uint32_t sample_discrete_cdf(const float* cdf, uint32_t n, float& u);
+
+}  // namespace femto::warp

@@ -1,0 +1,25 @@
+#include "femto/log.h"
+
+#include <atomic>
+#include <cstdio>
+#include <mutex>
+
+namespace femto {
+
+namespace {
+std::mutex g_log_mutex;
+std::atomic<int> g_warnings{0};
+}  // namespace
+
+void log_warning(const SourceLocation& loc, const std::string& message) {
+    std::lock_guard<std::mutex> lock(g_log_mutex);
+    ++g_warnings;
+    if (loc.file.empty())
+        std::fprintf(stderr, "warning: %s\n", message.c_str());
+    else
+        std::fprintf(stderr, "warning: %s: %s\n", loc.str().c_str(), message.c_str());
+}
+
+int warning_count() { return g_warnings.load(); }
+
+}  // namespace femto

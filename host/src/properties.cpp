@@ -1,0 +1,205 @@
+#include "femto/properties.h"
+
+#include <cmath>
+
+#include "femto/texture.h"
+
+namespace femto {
+
+namespace {
+constexpr struct {
+    PluginKind kind;
+    const char* tag;
+} kKindTags[] = {
+    {PluginKind::Integrator, "integrator"}, {PluginKind::Sensor, "sensor"},
+    {PluginKind::Film, "film"},             {PluginKind::ReconstructionFilter, "rfilter"},
+    {PluginKind::TemporalFilter, "tfilter"}, {PluginKind::Sampler, "sampler"},
+    {PluginKind::Shape, "shape"},           {PluginKind::Bsdf, "bsdf"},
+    {PluginKind::Emitter, "emitter"},       {PluginKind::Texture, "texture"},
+    {PluginKind::Medium, "medium"},         {PluginKind::Phase, "phase"},
+    {PluginKind::Volume, "volume"},         {PluginKind::Distance, "distance"},
+    {PluginKind::Connection, "connection"}, {PluginKind::Angular, "angular"},
+};
+}  // namespace
+
+const char* kind_tag(PluginKind kind) {
+    for (const auto& k : kKindTags)
+        if (k.kind == kind) return k.tag;
+    return "?";
+}
+
+bool kind_from_tag(const std::string& tag, PluginKind& kind) {
+    for (const auto& k : kKindTags)
+        if (tag == k.tag) {
+            kind = k.kind;
+            return true;
+        }
+    return false;
+}
+
+const char* Properties::type_name(Type t) {
+    switch (t) {
+        case Type::Bool: return "boolean";
+        case Type::Integer: return "integer";
+        case Type::Float: return "float";
+        case Type::String: return "string";
+        case Type::Point: return "point";
+        case Type::Vector: return "vector";
+        case Type::Color: return "color";
+        case Type::Transform: return "transform";
+        case Type::Object: return "object";
+    }
+    return "?";
+}
+
+void Properties::set(const std::string& name, Type type, Value value, SourceLocation loc) {
+    for (auto& e : entries_)
+        if (e.name == name) {
+            e.type = type;
+            e.value = std::move(value);
+            e.location = std::move(loc);
+            e.read = false;
+            return;
+        }
+    entries_.push_back(Entry{name, type, std::move(value), std::move(loc), false});
+}
+
+void Properties::set_point(const std::string& n, const Vec3& v) { set(n, Type::Point, v); }
+void Properties::set_vector(const std::string& n, const Vec3& v) { set(n, Type::Vector, v); }
+
+const Properties::Entry* Properties::find(const std::string& name) const {
+    for (const auto& e : entries_)
+        if (e.name == name) return &e;
+    return nullptr;
+}
+
+Properties::Type Properties::type(const std::string& name) const {
+    const Entry* e = find(name);
+    if (!e) fail(name, "parameter \"" + name + "\" is missing");
+    return e->type;
+}
+
+SourceLocation Properties::location_of(const std::string& name) const {
+    const Entry* e = find(name);
+    return e && !e->location.file.empty() ? e->location : location_;
+}
+
+void Properties::fail(const std::string& name, const std::string& message) const {
+    std::string where = plugin_type_.empty() ? std::string() : "\"" + plugin_type_ + "\": ";
+    throw SceneError(location_of(name), where + message);
+}
+
+const Properties::Entry& Properties::require(const std::string& name, Type type) const {
+    const Entry* e = find(name);
+    if (!e) fail(name, "required parameter \"" + name + "\" (" + type_name(type) + ") is missing");
+    const bool ok = e->type == type || (type == Type::Float && e->type == Type::Integer) ||
+                    (type == Type::Color && (e->type == Type::Float || e->type == Type::Integer)) ||
+                    (type == Type::Point && e->type == Type::Vector) ||
+                    (type == Type::Vector && e->type == Type::Point);
+    if (!ok)
+        fail(name, "parameter \"" + name + "\" must be a " + type_name(type) + ", but a " +
+                       type_name(e->type) + " was given");
+    e->read = true;
+    return *e;
+}
+
+bool Properties::get_bool(const std::string& name) const {
+    return std::get<bool>(require(name, Type::Bool).value);
+}
+bool Properties::get_bool(const std::string& name, bool def) const {
+    return has(name) ? get_bool(name) : def;
+}
+int64_t Properties::get_int(const std::string& name) const {
+    return std::get<int64_t>(require(name, Type::Integer).value);
+}
+int64_t Properties::get_int(const std::string& name, int64_t def) const {
+    return has(name) ? get_int(name) : def;
+}
+double Properties::get_float(const std::string& name) const {
+    const Entry& e = require(name, Type::Float);
+    const double v = e.type == Type::Integer ? static_cast<double>(std::get<int64_t>(e.value))
+                                             : std::get<double>(e.value);
+    if (!std::isfinite(v)) fail(name, "parameter \"" + name + "\" must be a finite number");
+    return v;
+}
+double Properties::get_float(const std::string& name, double def) const {
+    return has(name) ? get_float(name) : def;
+}
+std::string Properties::get_string(const std::string& name) const {
+    return std::get<std::string>(require(name, Type::String).value);
+}
+std::string Properties::get_string(const std::string& name, const std::string& def) const {
+    return has(name) ? get_string(name) : def;
+}
+Vec3 Properties::get_point(const std::string& name) const {
+    return std::get<Vec3>(require(name, Type::Point).value);
+}
+Vec3 Properties::get_point(const std::string& name, const Vec3& def) const {
+    return has(name) ? get_point(name) : def;
+}
+Vec3 Properties::get_vector(const std::string& name) const {
+    return std::get<Vec3>(require(name, Type::Vector).value);
+}
+Vec3 Properties::get_vector(const std::string& name, const Vec3& def) const {
+    return has(name) ? get_vector(name) : def;
+}
+Color Properties::get_color(const std::string& name) const {
+    const Entry& e = require(name, Type::Color);
+    if (e.type == Type::Color) {
+        const Color c = std::get<Color>(e.value);
+        if (!c.is_finite()) fail(name, "colour \"" + name + "\" must be finite");
+        return c;
+    }
+    return Color(static_cast<float>(get_float(name)));
+}
+Color Properties::get_color(const std::string& name, const Color& def) const {
+    return has(name) ? get_color(name) : def;
+}
+Transform Properties::get_transform(const std::string& name) const {
+    return std::get<Transform>(require(name, Type::Transform).value);
+}
+Transform Properties::get_transform(const std::string& name, const Transform& def) const {
+    return has(name) ? get_transform(name) : def;
+}
+
+ObjectPtr Properties::get_object(const std::string& name, PluginKind kind) const {
+    const Entry* e = find(name);
+    if (!e) return nullptr;
+    const ObjectPtr& obj = std::get<ObjectPtr>(require(name, Type::Object).value);
+    if (obj->kind() != kind)
+        fail(name, "\"" + name + "\" must be a <" + kind_tag(kind) + ">, but a <" +
+                       kind_tag(obj->kind()) + "> was given");
+    return obj;
+}
+
+std::vector<ObjectPtr> Properties::objects(PluginKind kind) const {
+    std::vector<ObjectPtr> out;
+    for (const auto& e : entries_)
+        if (e.type == Type::Object) {
+            const ObjectPtr& obj = std::get<ObjectPtr>(e.value);
+            if (obj && obj->kind() == kind) {
+                e.read = true;
+                out.push_back(obj);
+            }
+        }
+    return out;
+}
+
+std::vector<const Properties::Entry*> Properties::unread() const {
+    std::vector<const Entry*> out;
+    for (const auto& e : entries_)
+        if (!e.read) out.push_back(&e);
+    return out;
+}
+
+std::shared_ptr<Texture> get_texture(const Properties& props, const std::string& name,
+                                     const Color& def) {
+    if (!props.has(name)) return std::make_shared<ConstantTexture>(def);
+    if (props.type(name) == Properties::Type::Object) {
+        auto obj = props.get_object(name, PluginKind::Texture);
+        return std::static_pointer_cast<Texture>(obj);
+    }
+    return std::make_shared<ConstantTexture>(props.get_color(name));
+}
+
+}  // namespace femto
