@@ -67,6 +67,9 @@ public:
     virtual void merge(const FilmBlock& block) = 0;
     /// Latest path length (scene units) this film records; paths beyond it may stop.
     virtual double max_path_length() const;
+    /// The current image integrated over time: linear RGB, row-major, top row first, normalised
+    /// by the reconstruction-filter weights (what name.exr holds for a steady film).
+    virtual std::vector<float> steady_image() const = 0;
     /// Writes the outputs for `out_base` (no extension), atomically; returns the paths written.
     virtual std::vector<std::string> write(const std::string& out_base,
                                            const RenderInfo& info) const = 0;

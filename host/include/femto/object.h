@@ -38,9 +38,12 @@ public:
     /// The id given in the scene (`id="..."`), or empty.
     const std::string& id() const { return id_; }
     void set_id(std::string id) { id_ = std::move(id); }
+    /// The plugin type it was built from (`type="..."`); set by the host.
+    const std::string& type_name() const { return type_name_; }
+    void set_type_name(std::string t) { type_name_ = std::move(t); }
 
 private:
-    std::string id_;
+    std::string id_, type_name_;
 };
 
 using ObjectPtr = std::shared_ptr<Object>;

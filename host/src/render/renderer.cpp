@@ -1,0 +1,188 @@
+// The renderer: passes over image tiles, run in parallel with TBB.
+//
+// Determinism: a camera sample's random numbers depend only on (seed, pixel, sample index),
+// and tiles are merged in four phases of a 2x2 colouring, so that tiles merged at the same
+// time never overlap (their filter borders are narrower than a tile) and every pixel receives
+// its neighbours' splats in the same order whatever the thread count or schedule.
+#include <fmt/format.h>
+#include <pmmintrin.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+#include <xmmintrin.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+
+#include "femto/host.h"
+#include "femto/integrator.h"
+#include "femto/sensor.h"
+
+namespace femto {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kTileSize = 32;
+
+struct Tile {
+    int x0, y0, w, h;
+};
+
+std::string format_duration(double s) {
+    if (!std::isfinite(s) || s < 0) return "--:--";
+    const long t = long(s + 0.5);
+    if (t >= 3600) return fmt::format("{}:{:02}:{:02}", t / 3600, (t / 60) % 60, t % 60);
+    return fmt::format("{:02}:{:02}", t / 60, t % 60);
+}
+
+class Progress {
+public:
+    Progress(bool enabled, uint64_t total) : enabled_(enabled), total_(total), start_(Clock::now()) {}
+    void advance(uint64_t n) {
+        const uint64_t done = done_.fetch_add(n) + n;
+        if (!enabled_) return;
+        std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+        if (!lock.owns_lock()) return;
+        const auto now = Clock::now();
+        if (done < total_ && now - last_print_ < std::chrono::milliseconds(250)) return;
+        last_print_ = now;
+        print(done, now);
+    }
+    void finish() {
+        if (!enabled_) return;
+        std::lock_guard<std::mutex> lock(mutex_);
+        print(done_.load(), Clock::now());
+        std::fputc('\n', stderr);
+    }
+
+private:
+    void print(uint64_t done, Clock::time_point now) {
+        const double elapsed = std::chrono::duration<double>(now - start_).count();
+        const double frac = total_ ? double(done) / double(total_) : 1.0;
+        const double rate = elapsed > 0 ? double(done) / elapsed : 0.0;
+        const double eta = rate > 0 ? double(total_ - done) / rate : NAN;
+        constexpr int kBar = 30;
+        const int filled = int(frac * kBar);
+        std::fprintf(stderr, "\rRendering [%s%s] %5.1f%% | %s elapsed | ETA %s | %.2f M samples/s ",
+                     std::string(filled, '#').c_str(), std::string(kBar - filled, ' ').c_str(),
+                     100.0 * frac, format_duration(elapsed).c_str(), format_duration(eta).c_str(),
+                     rate * 1e-6);
+        std::fflush(stderr);
+    }
+
+    bool enabled_;
+    uint64_t total_;
+    std::atomic<uint64_t> done_{0};
+    Clock::time_point start_, last_print_{};
+    std::mutex mutex_;
+};
+
+void enable_flush_to_zero() {
+    // Embree asks for FTZ/DAZ in every thread that traces rays.
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+}
+
+}  // namespace
+
+RenderStats render(Scene& scene, const RenderOptions& options) {
+    const Sensor& sensor = scene.sensor();
+    Film& film = sensor.film();
+    const Sampler& prototype = sensor.sampler();
+    const Integrator& integrator = scene.integrator();
+    const uint32_t spp = options.spp ? options.spp : prototype.sample_count();
+    if (spp == 0) throw SceneError("the number of samples per pixel must be positive");
+    if (options.threads < 0) throw SceneError("the thread count must be positive (0 = all cores)");
+
+    std::unique_ptr<tbb::global_control> limit;
+    if (options.threads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      size_t(options.threads));
+    enable_flush_to_zero();
+    scene.integrator().preprocess(scene);
+
+    // Tiles grouped by colour (tx % 2, ty % 2).
+    const int W = film.width(), H = film.height();
+    std::vector<Tile> by_colour[4];
+    for (int ty = 0; ty * kTileSize < H; ++ty)
+        for (int tx = 0; tx * kTileSize < W; ++tx)
+            by_colour[(ty % 2) * 2 + (tx % 2)].push_back(
+                {tx * kTileSize, ty * kTileSize, std::min(kTileSize, W - tx * kTileSize),
+                 std::min(kTileSize, H - ty * kTileSize)});
+    if (film.rfilter().radius() > kTileSize / 2)
+        throw SceneError(fmt::format("the reconstruction filter's radius ({} px) is larger than femto "
+                                     "supports ({} px)",
+                                     film.rfilter().radius(), kTileSize / 2));
+
+    // Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
+    const uint32_t pass_spp = std::max<uint32_t>(1, spp / 16);
+    const uint64_t pixels = uint64_t(W) * uint64_t(H);
+    Progress progress(options.progress, pixels * spp);
+    tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
+        [&] { return prototype.clone(); });
+    tbb::enumerable_thread_specific<ContributionList> lists;
+
+    const uint64_t rays_before = scene.rays_traced();
+    const auto start = Clock::now();
+    RenderStats stats;
+    stats.spp_requested = spp;
+    for (uint32_t s0 = 0; s0 < spp; s0 += pass_spp) {
+        const uint32_t s1 = std::min(spp, s0 + pass_spp);
+        for (const auto& tiles : by_colour) {
+            tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
+                enable_flush_to_zero();
+                const Tile& tile = tiles[t];
+                Sampler& sampler = *samplers.local();
+                ContributionList& list = lists.local();
+                auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
+                for (int y = tile.y0; y < tile.y0 + tile.h; ++y)
+                    for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
+                        const uint64_t pixel = uint64_t(y) * uint64_t(W) + uint64_t(x);
+                        for (uint32_t s = s0; s < s1; ++s) {
+                            sampler.start(options.seed, pixel, s);
+                            const Vec2 jitter = sampler.next_2d();
+                            const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
+                            const Ray ray = sensor.sample_ray(pos, sampler.next_2d());
+                            list.clear();
+                            integrator.sample(scene, sampler, ray, list);
+                            block->put(pos, list);
+                        }
+                    }
+                film.merge(*block);
+                progress.advance(uint64_t(tile.w) * uint64_t(tile.h) * (s1 - s0));
+            });
+        }
+        stats.spp_done = s1;
+        if (options.stop && options.stop->load() && s1 < spp) {
+            stats.interrupted = true;
+            break;
+        }
+    }
+    progress.finish();
+    stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    stats.rays = scene.rays_traced() - rays_before;
+    stats.camera_samples = pixels * stats.spp_done;
+    return stats;
+}
+
+RenderInfo make_render_info(const Scene& scene, const RenderOptions& options, const RenderStats& stats) {
+    RenderInfo info;
+    info.scene_file = options.scene_file;
+    info.integrator = scene.integrator().type_name();
+    info.femto_version = version();
+    info.seed = options.seed;
+    info.samples_per_pixel = stats.spp_done;
+    info.samples_requested = stats.spp_requested;
+    info.render_seconds = stats.seconds;
+    info.interrupted = stats.interrupted;
+    return info;
+}
+
+}  // namespace femto

@@ -1,0 +1,479 @@
+#include "scene/loader.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <new>
+#include <set>
+
+#include "femto/emitter.h"
+#include "femto/integrator.h"
+#include "femto/log.h"
+#include "femto/sensor.h"
+#include "femto/shape.h"
+#include "plugin/registry.h"
+#include "util/strings.h"
+#include "xml/parser.h"
+
+namespace fs = std::filesystem;
+
+namespace femto {
+
+namespace detail {
+namespace {
+
+thread_local const LoadOptions* t_options = nullptr;
+const LoadOptions kNoOptions{};
+
+const LoadOptions& current_options() { return t_options ? *t_options : kNoOptions; }
+
+struct OptionsScope {
+    const LoadOptions* saved;
+    explicit OptionsScope(const LoadOptions& o) : saved(t_options) { t_options = &o; }
+    ~OptionsScope() { t_options = saved; }
+};
+
+const std::set<std::string> kPropertyTags = {"boolean", "integer", "float", "string", "point",
+                                             "vector",  "rgb",     "srgb",  "spectrum", "transform"};
+const char* const kObjectTags =
+    "integrator sensor film sampler rfilter tfilter shape bsdf emitter medium phase texture "
+    "volume distance connection angular";
+
+std::vector<double> parse_numbers(const XmlNode& node, const std::string& text, const char* what) {
+    std::vector<double> out;
+    const char* p = text.data();
+    const char* end = p + text.size();
+    while (p < end) {
+        while (p < end && (std::isspace(static_cast<unsigned char>(*p)) || *p == ',')) ++p;
+        if (p >= end) break;
+        if (*p == '+') ++p;
+        double v = 0;
+        auto res = std::from_chars(p, end, v);
+        if (res.ec != std::errc() ||
+            (res.ptr < end && !std::isspace(static_cast<unsigned char>(*res.ptr)) && *res.ptr != ','))
+            throw SceneError(node.location, fmt::format("{}: \"{}\" is not a number list", what, text));
+        if (!std::isfinite(v))
+            throw SceneError(node.location, fmt::format("{}: \"{}\" contains a non-finite number "
+                                                        "(NaN or infinity)",
+                                                        what, text));
+        out.push_back(v);
+        p = res.ptr;
+    }
+    return out;
+}
+
+double parse_number(const XmlNode& node, const std::string& text, const char* what) {
+    auto v = parse_numbers(node, text, what);
+    if (v.size() != 1)
+        throw SceneError(node.location, fmt::format("{}: expected one number, got \"{}\"", what, text));
+    return v[0];
+}
+
+const std::string& require_attr(const XmlNode& node, const char* name) {
+    const std::string* v = node.attribute(name);
+    if (!v) throw SceneError(node.location, fmt::format("<{}> needs the attribute \"{}\"", node.tag, name));
+    return *v;
+}
+
+void check_attributes(const XmlNode& node, std::initializer_list<const char*> allowed) {
+    for (const auto& a : node.attributes) {
+        bool ok = false;
+        for (const char* x : allowed) ok = ok || a.name == x;
+        if (!ok) {
+            std::vector<std::string> names(allowed.begin(), allowed.end());
+            throw SceneError(node.location,
+                             fmt::format("unknown attribute \"{}\" on <{}>{}; valid: {}", a.name,
+                                         node.tag, did_you_mean(a.name, names), join(names)));
+        }
+    }
+}
+
+void check_no_children(const XmlNode& node) {
+    if (!node.children.empty())
+        throw SceneError(node.children[0].location,
+                         fmt::format("<{}> cannot contain <{}>", node.tag, node.children[0].tag));
+}
+
+Vec3 parse_xyz(const XmlNode& node, float def) {
+    if (const std::string* v = node.attribute("value")) {
+        auto n = parse_numbers(node, *v, node.tag.c_str());
+        if (n.size() == 1) return Vec3(float(n[0]));
+        if (n.size() != 3)
+            throw SceneError(node.location, fmt::format("<{}> value needs 1 or 3 numbers", node.tag));
+        return {float(n[0]), float(n[1]), float(n[2])};
+    }
+    Vec3 r(def);
+    const char* axes[] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i)
+        if (const std::string* a = node.attribute(axes[i])) r[i] = float(parse_number(node, *a, axes[i]));
+    return r;
+}
+
+Vec3 parse_vec_attr(const XmlNode& node, const char* name) {
+    auto n = parse_numbers(node, require_attr(node, name), name);
+    if (n.size() != 3)
+        throw SceneError(node.location, fmt::format("<{}> {} needs 3 numbers", node.tag, name));
+    return {float(n[0]), float(n[1]), float(n[2])};
+}
+
+Transform parse_transform(const XmlNode& node) {
+    Transform t;
+    for (const auto& op : node.children) {
+        check_no_children(op);
+        try {
+            Transform m;
+            if (op.tag == "translate") {
+                check_attributes(op, {"x", "y", "z", "value"});
+                m = Transform::translate(parse_xyz(op, 0.f));
+            } else if (op.tag == "scale") {
+                check_attributes(op, {"x", "y", "z", "value"});
+                m = Transform::scale(parse_xyz(op, 1.f));
+            } else if (op.tag == "rotate") {
+                check_attributes(op, {"x", "y", "z", "value", "axis", "angle"});
+                Vec3 axis = op.attribute("axis") ? parse_vec_attr(op, "axis") : parse_xyz(op, 0.f);
+                m = Transform::rotate(axis, parse_number(op, require_attr(op, "angle"), "angle"));
+            } else if (op.tag == "lookat") {
+                check_attributes(op, {"origin", "target", "up"});
+                const Vec3 o = parse_vec_attr(op, "origin"), tg = parse_vec_attr(op, "target");
+                Vec3 up;
+                if (op.attribute("up")) {
+                    up = parse_vec_attr(op, "up");
+                } else {  // any up perpendicular to the view direction
+                    up = Frame(normalize(tg - o)).s;
+                }
+                m = Transform::look_at(o, tg, up);
+            } else if (op.tag == "matrix") {
+                check_attributes(op, {"value"});
+                auto v = parse_numbers(op, require_attr(op, "value"), "matrix");
+                Transform::Matrix mm{};
+                if (v.size() == 16) {
+                    for (int i = 0; i < 16; ++i) mm[i / 4][i % 4] = v[i];
+                } else if (v.size() == 9) {
+                    for (int i = 0; i < 9; ++i) mm[i / 3][i % 3] = v[i];
+                    mm[3][3] = 1;
+                } else {
+                    throw SceneError(op.location, fmt::format("<matrix> needs 16 (or 9) numbers, got {}",
+                                                              v.size()));
+                }
+                m = Transform(mm);
+            } else {
+                throw SceneError(op.location, fmt::format("unknown transform operation <{}>; valid: "
+                                                          "translate, rotate, scale, lookat, matrix",
+                                                          op.tag));
+            }
+            t = m * t;  // document order: later operations apply after earlier ones
+        } catch (const std::domain_error& e) {
+            throw SceneError(op.location, fmt::format("degenerate transform <{}>: {}", op.tag, e.what()));
+        }
+    }
+    return t;
+}
+
+Color parse_color(const XmlNode& node) {
+    const std::string& value = require_attr(node, "value");
+    if (node.tag == "srgb" && !value.empty() && value[0] == '#') {
+        if (value.size() != 7)
+            throw SceneError(node.location, fmt::format("srgb \"{}\" must look like #rrggbb", value));
+        Color c;
+        for (int i = 0; i < 3; ++i) {
+            unsigned v = 0;
+            auto r = std::from_chars(value.data() + 1 + 2 * i, value.data() + 3 + 2 * i, v, 16);
+            if (r.ec != std::errc() || r.ptr != value.data() + 3 + 2 * i)
+                throw SceneError(node.location, fmt::format("srgb \"{}\" is not a hex colour", value));
+            c[i] = srgb_to_linear(float(v) / 255.f);
+        }
+        return c;
+    }
+    if (node.tag == "spectrum" && value.find(':') != std::string::npos)
+        throw SceneError(node.location,
+                         "femto renders in RGB: sampled spectra (wavelength:value pairs) are not "
+                         "supported; give an rgb value or a single spectrum value");
+    auto n = parse_numbers(node, value, node.tag.c_str());
+    Color c;
+    if (n.size() == 1)
+        c = Color(float(n[0]));
+    else if (n.size() == 3)
+        c = Color(float(n[0]), float(n[1]), float(n[2]));
+    else
+        throw SceneError(node.location, fmt::format("<{}> needs 1 or 3 numbers, got {}", node.tag, n.size()));
+    if (node.tag == "srgb")
+        for (int i = 0; i < 3; ++i) c[i] = srgb_to_linear(c[i]);
+    return c;
+}
+
+class Instantiator {
+public:
+    explicit Instantiator(const LoadOptions& options) : options_(options) {}
+
+    ObjectPtr build(const XmlNode& node, PluginKind kind) {
+        check_attributes(node, {"type", "id", "name"});
+        const std::string& type = require_attr(node, "type");
+        Properties props(type, node.location);
+        if (const std::string* id = node.attribute("id")) props.set_id(*id);
+        int arg_index = 0;
+        for (const auto& child : node.children) add_child(props, child, arg_index);
+
+        const PluginDescriptor& desc = find_plugin(kind, type, options_.plugin_dirs, node.location);
+        check_schema(props, desc, node);
+        ObjectPtr obj = construct(desc, props, node);
+        report_unread(props, node);
+        if (const std::string* id = node.attribute("id")) register_id(*id, obj, node);
+        return obj;
+    }
+
+    ObjectPtr construct(const PluginDescriptor& desc, const Properties& props, const XmlNode& node) {
+        const std::string what = fmt::format("<{} type=\"{}\">", node.tag, desc.type_name);
+        Object* raw = nullptr;
+        try {
+            raw = desc.create(props);
+        } catch (const SceneError&) {
+            throw;
+        } catch (const std::bad_alloc&) {
+            throw SceneError(node.location, what + ": out of memory (are the sizes sensible?)");
+        } catch (const std::exception& e) {
+            throw SceneError(node.location, what + ": " + e.what());
+        }
+        ObjectPtr obj(raw);
+        obj->set_id(props.id());
+        obj->set_type_name(desc.type_name);
+        return obj;
+    }
+
+    void check_schema(Properties& props, const PluginDescriptor& desc, const XmlNode& node) {
+        std::vector<std::string> names;
+        for (const auto& p : desc.params) {
+            if (std::string(p.name) == "*") return;
+            names.push_back(p.name);
+        }
+        for (const auto& e : props.entries()) {
+            if (e.name.rfind("_arg_", 0) == 0) continue;
+            if (std::find(names.begin(), names.end(), e.name) != names.end()) continue;
+            const std::string msg = fmt::format(
+                "<{} type=\"{}\"> has no parameter \"{}\"{}; valid: {}", node.tag, desc.type_name,
+                e.name, did_you_mean(e.name, names), names.empty() ? "(none)" : join(names));
+            if (!options_.lenient) throw SceneError(e.location, msg);
+            log_warning(e.location, msg + " -- ignored (--lenient)");
+            e.read = true;  // reported already; the plugin never sees it read
+        }
+    }
+
+    void report_unread(const Properties& props, const XmlNode& node) {
+        for (const auto* e : props.unread()) {
+            std::string msg;
+            if (e->type == Properties::Type::Object)
+                msg = fmt::format("<{} type=\"{}\"> does not use the nested object{}", node.tag,
+                                  props.plugin_type(),
+                                  e->name.rfind("_arg_", 0) == 0 ? "" : " \"" + e->name + "\"");
+            else
+                msg = fmt::format("<{} type=\"{}\"> did not use parameter \"{}\"", node.tag,
+                                  props.plugin_type(), e->name);
+            if (!options_.lenient) throw SceneError(e->location, msg);
+            log_warning(e->location, msg + " -- ignored (--lenient)");
+        }
+    }
+
+    void register_id(const std::string& id, const ObjectPtr& obj, const XmlNode& node) {
+        if (id.empty()) throw SceneError(node.location, "empty id");
+        if (!ids_.emplace(id, obj).second)
+            throw SceneError(node.location, fmt::format("id \"{}\" is defined twice", id));
+    }
+
+    ObjectPtr resolve(const XmlNode& node) {
+        const std::string& id = require_attr(node, "id");
+        auto it = ids_.find(id);
+        if (it == ids_.end()) {
+            std::vector<std::string> known;
+            for (const auto& [k, v] : ids_) known.push_back(k);
+            throw SceneError(node.location, fmt::format("no object with id \"{}\" is defined before "
+                                                        "this reference{}",
+                                                        id, did_you_mean(id, known)));
+        }
+        return it->second;
+    }
+
+    void add_child(Properties& props, const XmlNode& c, int& arg_index) {
+        PluginKind kind;
+        if (kind_from_tag(c.tag, kind)) {
+            ObjectPtr obj = build(c, kind);
+            const std::string* name = c.attribute("name");
+            props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), obj, c.location);
+            return;
+        }
+        if (c.tag == "ref") {
+            check_attributes(c, {"id", "name"});
+            check_no_children(c);
+            ObjectPtr obj = resolve(c);
+            const std::string* name = c.attribute("name");
+            props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), obj, c.location);
+            return;
+        }
+        if (!kPropertyTags.count(c.tag))
+            throw SceneError(c.location,
+                             fmt::format("unknown tag <{}> inside <{}>; valid: {} ref {}", c.tag,
+                                         props.plugin_type().empty() ? "?" : props.plugin_type(),
+                                         join({kPropertyTags.begin(), kPropertyTags.end()}, " "),
+                                         kObjectTags));
+        const std::string& name = require_attr(c, "name");
+        if (name.empty()) throw SceneError(c.location, "empty parameter name");
+        if (c.tag != "transform") check_no_children(c);
+        if (c.tag == "boolean") {
+            check_attributes(c, {"name", "value"});
+            std::string v = require_attr(c, "value");
+            for (auto& ch : v) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+            if (v != "true" && v != "false")
+                throw SceneError(c.location, fmt::format("boolean \"{}\" must be true or false, not \"{}\"",
+                                                         name, require_attr(c, "value")));
+            props.set(name, Properties::Type::Bool, v == "true", c.location);
+        } else if (c.tag == "integer") {
+            check_attributes(c, {"name", "value"});
+            const std::string& v = require_attr(c, "value");
+            int64_t x = 0;
+            const char* b = v.data();
+            if (!v.empty() && v[0] == '+') ++b;
+            auto r = std::from_chars(b, v.data() + v.size(), x);
+            if (r.ec != std::errc() || r.ptr != v.data() + v.size())
+                throw SceneError(c.location, fmt::format("integer \"{}\": \"{}\" is not an integer{}", name, v,
+                                                         r.ec == std::errc::result_out_of_range ? " (out of range)" : ""));
+            props.set(name, Properties::Type::Integer, x, c.location);
+        } else if (c.tag == "float") {
+            check_attributes(c, {"name", "value"});
+            props.set(name, Properties::Type::Float, parse_number(c, require_attr(c, "value"), name.c_str()),
+                      c.location);
+        } else if (c.tag == "string") {
+            check_attributes(c, {"name", "value"});
+            std::string v = require_attr(c, "value");
+            if (name == "filename" && !v.empty()) {
+                fs::path p(v);
+                if (p.is_relative()) v = (fs::path(c.base_dir) / p).lexically_normal().string();
+            }
+            props.set(name, Properties::Type::String, v, c.location);
+        } else if (c.tag == "point" || c.tag == "vector") {
+            check_attributes(c, {"name", "value", "x", "y", "z"});
+            props.set(name, c.tag == "point" ? Properties::Type::Point : Properties::Type::Vector,
+                      parse_xyz(c, 0.f), c.location);
+        } else if (c.tag == "rgb" || c.tag == "srgb" || c.tag == "spectrum") {
+            check_attributes(c, {"name", "value"});
+            props.set(name, Properties::Type::Color, parse_color(c), c.location);
+        } else if (c.tag == "transform") {
+            check_attributes(c, {"name"});
+            props.set(name, Properties::Type::Transform, parse_transform(c), c.location);
+        }
+    }
+
+    std::unique_ptr<Scene> build_scene(const XmlNode& root) {
+        check_attributes(root, {"version"});
+        std::shared_ptr<Integrator> integrator;
+        std::shared_ptr<Sensor> sensor;
+        std::vector<std::shared_ptr<Shape>> shapes;
+        std::vector<std::shared_ptr<Emitter>> emitters;
+        for (const auto& c : root.children) {
+            if (c.tag == "alias") {
+                check_attributes(c, {"id", "as"});
+                check_no_children(c);
+                ObjectPtr obj = resolve(c);
+                register_id(require_attr(c, "as"), obj, c);
+                continue;
+            }
+            PluginKind kind;
+            if (!kind_from_tag(c.tag, kind))
+                throw SceneError(c.location, fmt::format("unknown tag <{}> in <scene>; valid: {} alias", c.tag,
+                                                         kObjectTags));
+            if (c.attribute("name"))
+                throw SceneError(c.location, "top-level objects take no name attribute");
+            ObjectPtr obj = build(c, kind);
+            switch (kind) {
+                case PluginKind::Integrator:
+                    if (integrator) throw SceneError(c.location, "the scene has more than one <integrator>");
+                    integrator = std::static_pointer_cast<Integrator>(obj);
+                    break;
+                case PluginKind::Sensor:
+                    if (sensor)
+                        throw SceneError(c.location, "the scene has more than one <sensor> (femto renders one)");
+                    sensor = std::static_pointer_cast<Sensor>(obj);
+                    break;
+                case PluginKind::Shape: shapes.push_back(std::static_pointer_cast<Shape>(obj)); break;
+                case PluginKind::Emitter:
+                    emitters.push_back(std::static_pointer_cast<Emitter>(obj));
+                    break;
+                default:
+                    if (!c.attribute("id"))
+                        log_warning(c.location, fmt::format("top-level <{}> without an id can never be used",
+                                                            c.tag));
+                    break;
+            }
+        }
+        if (!sensor) throw SceneError(root.location, "the scene has no <sensor>: add a camera");
+        if (shapes.empty() && emitters.empty())
+            throw SceneError(root.location, "the scene is empty: it has no shapes and no emitters");
+        if (!integrator) integrator = std::static_pointer_cast<Integrator>(create_default(
+                             PluginKind::Integrator, "path", root.location));
+        return std::make_unique<Scene>(integrator, sensor, std::move(shapes), std::move(emitters));
+    }
+
+private:
+    const LoadOptions& options_;
+    std::map<std::string, ObjectPtr> ids_;
+};
+
+}  // namespace
+
+ObjectPtr create_default(PluginKind kind, const std::string& type, const SourceLocation& loc) {
+    const LoadOptions& options = current_options();
+    const PluginDescriptor& desc = find_plugin(kind, type, options.plugin_dirs, loc);
+    Properties props(type, loc);
+    XmlNode node;
+    node.tag = kind_tag(kind);
+    node.location = loc;
+    return Instantiator(options).construct(desc, props, node);
+}
+
+}  // namespace detail
+
+std::unique_ptr<Scene> load_scene(const std::string& path, const LoadOptions& options) {
+    detail::OptionsScope scope(options);
+    const detail::XmlNode root = detail::parse_scene_file(path, options.defines);
+    return detail::Instantiator(options).build_scene(root);
+}
+
+std::unique_ptr<Scene> load_scene_string(const std::string& xml, const LoadOptions& options,
+                                         const std::string& base_dir) {
+    detail::OptionsScope scope(options);
+    const detail::XmlNode root = detail::parse_scene_string(xml, base_dir, options.defines);
+    return detail::Instantiator(options).build_scene(root);
+}
+
+ObjectPtr create_object(PluginKind kind, const std::string& type, const Properties& props_in,
+                        const LoadOptions& options) {
+    detail::OptionsScope scope(options);
+    Properties props = props_in;
+    detail::XmlNode node;
+    node.tag = kind_tag(kind);
+    node.location = props.location();
+    detail::Instantiator inst(options);
+    const PluginDescriptor& desc = detail::find_plugin(kind, type, options.plugin_dirs, props.location());
+    inst.check_schema(props, desc, node);
+    ObjectPtr obj = inst.construct(desc, props, node);
+    inst.report_unread(props, node);
+    return obj;
+}
+
+const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type, const LoadOptions& options) {
+    return detail::find_plugin(kind, type, options.plugin_dirs, SourceLocation{});
+}
+
+std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(const LoadOptions& options) {
+    return detail::list_plugins(options.plugin_dirs);
+}
+
+std::vector<std::string> loaded_plugin_files() { return detail::loaded_plugin_files(); }
+
+std::vector<std::string> plugin_search_path(const LoadOptions& options) {
+    return detail::plugin_search_path(options.plugin_dirs);
+}
+
+const char* version() { return FEMTO_VERSION; }
+
+}  // namespace femto

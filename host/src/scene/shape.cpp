@@ -1,0 +1,210 @@
+#include "femto/shape.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "femto/bsdf.h"
+#include "femto/emitter.h"
+#include "femto/warp.h"
+#include "scene/loader.h"
+
+namespace femto {
+
+Ray Hit::spawn_to(const Vec3& target) const {
+    const Vec3 d0 = target - p;
+    const Vec3 o = offset_origin(p, ng, d0);
+    const Vec3 d = target - o;
+    const float dist = length(d);
+    return Ray{o, d / dist, 0.f, dist * (1.f - 1e-4f)};
+}
+
+Shape::Shape(const Properties& props) : location_(props.location()) {
+    flip_normals_ = props.get_bool("flip_normals", false);
+    auto bsdfs = props.objects(PluginKind::Bsdf);
+    if (bsdfs.size() > 1) props.fail("bsdf", "a shape takes at most one <bsdf>");
+    bsdf_ = bsdfs.empty() ? std::static_pointer_cast<Bsdf>(detail::create_default(
+                                PluginKind::Bsdf, "diffuse", props.location()))
+                          : std::static_pointer_cast<Bsdf>(bsdfs[0]);
+    auto emitters = props.objects(PluginKind::Emitter);
+    if (emitters.size() > 1) props.fail("emitter", "a shape takes at most one <emitter>");
+    if (!emitters.empty()) {
+        emitter_ = std::static_pointer_cast<Emitter>(emitters[0]);
+        if (emitter_->is_delta())
+            throw SceneError(props.location(), "only area emitters can be attached to a shape; put "
+                                               "point, spot and collimated emitters at the top level");
+    }
+}
+
+Shape::~Shape() = default;
+
+void Shape::set_mesh(TriangleMesh mesh) {
+    if (mesh.indices.empty() || mesh.positions.empty())
+        throw SceneError(location_, "the shape has no triangles");
+    if (mesh.indices.size() % 3 != 0) throw SceneError(location_, "triangle index count is not a multiple of 3");
+    for (uint32_t i : mesh.indices)
+        if (i >= mesh.positions.size())
+            throw SceneError(location_, fmt::format("triangle index {} is out of range ({} vertices)", i,
+                                                    mesh.positions.size()));
+    for (const Vec3& p : mesh.positions)
+        if (!is_finite(p)) throw SceneError(location_, "the mesh has a non-finite vertex position");
+    if (!mesh.normals.empty()) {
+        if (mesh.normals.size() != mesh.positions.size())
+            throw SceneError(location_, "the mesh has a different number of normals and positions");
+        for (Vec3& n : mesh.normals) {
+            const float l = length(n);
+            n = (l > 0 && std::isfinite(l)) ? n / l : Vec3(0, 0, 1);
+        }
+    }
+    if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
+        throw SceneError(location_, "the mesh has a different number of uvs and positions");
+    mesh_ = std::move(mesh);
+    is_sphere_ = false;
+    const size_t n = mesh_.triangle_count();
+    std::vector<double> acc(n + 1, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+        const Vec3& a = mesh_.positions[mesh_.indices[3 * i]];
+        const Vec3& b = mesh_.positions[mesh_.indices[3 * i + 1]];
+        const Vec3& c = mesh_.positions[mesh_.indices[3 * i + 2]];
+        acc[i + 1] = acc[i] + 0.5 * double(length(cross(b - a, c - a)));
+    }
+    area_ = float(acc[n]);
+    if (!(area_ > 0)) throw SceneError(location_, "the mesh has zero surface area");
+    triangle_cdf_.resize(n + 1);
+    for (size_t i = 0; i <= n; ++i) triangle_cdf_[i] = float(acc[i] / acc[n]);
+    triangle_cdf_[n] = 1.f;
+}
+
+void Shape::set_sphere(const Vec3& center, float radius) {
+    if (!is_finite(center) || !(radius > 0) || !std::isfinite(radius))
+        throw SceneError(location_, fmt::format("a sphere needs a finite center and a positive radius "
+                                                "(got {})",
+                                                radius));
+    is_sphere_ = true;
+    center_ = center;
+    radius_ = radius;
+    area_ = 4.f * kPi * radius * radius;
+}
+
+void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, Hit& hit) const {
+    hit.t = t;
+    hit.shape = this;
+    hit.prim = prim;
+    Vec3 ns;
+    if (is_sphere_) {
+        const Vec3 local = normalize(ray.at(t) - center_);
+        hit.p = center_ + local * radius_;
+        hit.ng = local;
+        ns = local;
+        const float phi = std::atan2(local.y, local.x);
+        hit.uv = {(phi < 0 ? phi + 2 * kPi : phi) * kInvTwoPi, std::acos(clamp(local.z, -1.f, 1.f)) * kInvPi};
+    } else {
+        const uint32_t i0 = mesh_.indices[3 * prim], i1 = mesh_.indices[3 * prim + 1],
+                       i2 = mesh_.indices[3 * prim + 2];
+        const Vec3 &p0 = mesh_.positions[i0], &p1 = mesh_.positions[i1], &p2 = mesh_.positions[i2];
+        const float w = 1.f - u - v;
+        hit.p = p0 * w + p1 * u + p2 * v;
+        Vec3 ng = cross(p1 - p0, p2 - p0);
+        const float l = length(ng);
+        hit.ng = l > 0 ? ng / l : Vec3(0, 0, 1);
+        ns = hit.ng;
+        if (!mesh_.normals.empty()) {
+            const Vec3 n = mesh_.normals[i0] * w + mesh_.normals[i1] * u + mesh_.normals[i2] * v;
+            const float ln = length(n);
+            if (ln > 0) ns = n / ln;
+        }
+        if (!mesh_.uvs.empty())
+            hit.uv = mesh_.uvs[i0] * w + mesh_.uvs[i1] * u + mesh_.uvs[i2] * v;
+        else
+            hit.uv = {u, v};
+    }
+    if (flip_normals_) {
+        hit.ng = -hit.ng;
+        ns = -ns;
+    }
+    hit.sh = Frame(ns);
+    hit.wi = hit.sh.to_local(-ray.d);
+}
+
+ShapeSample Shape::sample_area(Vec2 u) const {
+    ShapeSample s;
+    if (is_sphere_) {
+        const Vec3 d = warp::square_to_uniform_sphere(u);
+        s.p = center_ + d * radius_;
+        s.n = flip_normals_ ? -d : d;
+    } else {
+        float ux = u.x;
+        const uint32_t tri = warp::sample_discrete_cdf(triangle_cdf_.data(),
+                                                       uint32_t(mesh_.triangle_count()), ux);
+        const Vec2 b = warp::square_to_uniform_triangle({ux, u.y});
+        const Vec3& p0 = mesh_.positions[mesh_.indices[3 * tri]];
+        const Vec3& p1 = mesh_.positions[mesh_.indices[3 * tri + 1]];
+        const Vec3& p2 = mesh_.positions[mesh_.indices[3 * tri + 2]];
+        s.p = p0 * (1.f - b.x - b.y) + p1 * b.x + p2 * b.y;
+        const Vec3 n = normalize(cross(p1 - p0, p2 - p0));
+        s.n = flip_normals_ ? -n : n;
+        s.uv = b;
+    }
+    s.pdf = 1.f / area_;
+    return s;
+}
+
+namespace {
+// Solid-angle pdf from an area pdf: pdf_A * d^2 / |cos theta at the sampled point|.
+float area_to_solid_angle(float pdf_area, const Vec3& ref, const Vec3& p, const Vec3& n) {
+    const Vec3 d = p - ref;
+    const float dist2 = squared_length(d);
+    if (!(dist2 > 0)) return 0.f;
+    const float cos = std::abs(dot(n, d)) / std::sqrt(dist2);
+    return cos > 0 ? pdf_area * dist2 / cos : 0.f;
+}
+}  // namespace
+
+ShapeSample Shape::sample_direct(const Vec3& ref, Vec2 u) const {
+    if (is_sphere_) {
+        const Vec3 to_center = center_ - ref;
+        const float dist2 = squared_length(to_center);
+        const float r2 = radius_ * radius_;
+        if (dist2 > r2 * 1.0001f) {
+            // Outside: sample the cone of directions the sphere subtends (uniform in solid angle).
+            const float dist = std::sqrt(dist2);
+            const float sin2_max = r2 / dist2;
+            const float cos_max = safe_sqrt(1.f - sin2_max);
+            const float one_minus_cos_max = sin2_max / (1.f + cos_max);
+            const float cos_t = 1.f - u.x * one_minus_cos_max;
+            const float sin2_t = std::max(0.f, 1.f - cos_t * cos_t);
+            const float phi = 2.f * kPi * u.y;
+            const Frame frame(to_center / dist);
+            const float sin_t = std::sqrt(sin2_t);
+            const Vec3 dir = frame.to_world({sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t});
+            // Nearest intersection of ref + s*dir with the sphere.
+            const float b = dist * cos_t;
+            const float s = b - safe_sqrt(r2 - dist2 * sin2_t);
+            ShapeSample out;
+            out.p = ref + dir * s;
+            const Vec3 n = normalize(out.p - center_);
+            out.p = center_ + n * radius_;
+            out.n = flip_normals_ ? -n : n;
+            out.pdf = 1.f / (2.f * kPi * one_minus_cos_max);
+            return out;
+        }
+    }
+    ShapeSample s = sample_area(u);
+    s.pdf = area_to_solid_angle(s.pdf, ref, s.p, s.n);
+    return s;
+}
+
+float Shape::pdf_direct(const Vec3& ref, const Hit& hit) const {
+    if (is_sphere_) {
+        const float dist2 = squared_length(center_ - ref);
+        const float r2 = radius_ * radius_;
+        if (dist2 > r2 * 1.0001f) {
+            const float sin2_max = r2 / dist2;
+            const float cos_max = safe_sqrt(1.f - sin2_max);
+            return 1.f / (2.f * kPi * sin2_max / (1.f + cos_max));
+        }
+    }
+    return area_to_solid_angle(1.f / area_, ref, hit.p, hit.ng);
+}
+
+}  // namespace femto

@@ -1,0 +1,276 @@
+#include "xml/parser.h"
+
+#include <fmt/format.h>
+#include <pugixml.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace femto::detail {
+
+const std::string* XmlNode::attribute(const std::string& name) const {
+    for (const auto& a : attributes)
+        if (a.name == name) return &a.value;
+    return nullptr;
+}
+std::string* XmlNode::attribute(const std::string& name) {
+    for (auto& a : attributes)
+        if (a.name == name) return &a.value;
+    return nullptr;
+}
+
+namespace {
+
+constexpr int kMaxIncludeDepth = 32;
+constexpr size_t kMaxSceneFileBytes = size_t(1) << 30;
+
+// Version differences are data: names that the generic camelCase -> snake_case rule gets wrong,
+// and plugin types that were renamed.
+const std::map<std::string, std::string> kIrregularNames = {
+    {"intIOR", "int_ior"}, {"extIOR", "ext_ior"}, {"toUV", "to_uv"}, {"fovAxis", "fov_axis"},
+    {"rrDepth", "rr_depth"}, {"uvScale", "uv_scale"},
+};
+struct TypeRename {
+    const char* tag;
+    const char* old_type;
+    const char* new_type;
+};
+constexpr TypeRename kTypeRenames[] = {
+    {"sampler", "sobol", "ldsampler"},
+};
+
+struct LineTable {
+    std::vector<size_t> starts{0};
+    explicit LineTable(const std::string& text) {
+        for (size_t i = 0; i < text.size(); ++i)
+            if (text[i] == '\n') starts.push_back(i + 1);
+    }
+    SourceLocation at(const std::string& file, ptrdiff_t offset) const {
+        if (offset < 0) offset = 0;
+        auto it = std::upper_bound(starts.begin(), starts.end(), size_t(offset));
+        const size_t line = size_t(it - starts.begin());
+        return {file, int(line), int(size_t(offset) - starts[line - 1] + 1)};
+    }
+};
+
+std::string read_file(const std::string& path, const SourceLocation& from) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+        throw SceneError(from, fmt::format("scene file \"{}\" does not exist or is not a file", path));
+    if (fs::file_size(path, ec) > kMaxSceneFileBytes)
+        throw SceneError(from, fmt::format("scene file \"{}\" is larger than 1 GiB", path));
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw SceneError(from, fmt::format("cannot read scene file \"{}\"", path));
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+XmlNode convert(const pugi::xml_node& node, const LineTable& lines, const std::string& file,
+                const std::string& base_dir) {
+    XmlNode out;
+    out.tag = node.name();
+    out.location = lines.at(file, node.offset_debug());
+    out.base_dir = base_dir;
+    for (const auto& a : node.attributes()) {
+        if (out.attribute(a.name()))
+            throw SceneError(out.location, fmt::format("attribute \"{}\" given twice", a.name()));
+        out.attributes.push_back({a.name(), a.value()});
+    }
+    for (const auto& child : node.children()) {
+        if (child.type() == pugi::node_element) {
+            out.children.push_back(convert(child, lines, file, base_dir));
+        } else if (child.type() == pugi::node_pcdata || child.type() == pugi::node_cdata) {
+            std::string text = child.value();
+            if (std::any_of(text.begin(), text.end(), [](unsigned char c) { return !std::isspace(c); }))
+                throw SceneError(lines.at(file, child.offset_debug()),
+                                 fmt::format("unexpected text inside <{}>", out.tag));
+        }
+    }
+    return out;
+}
+
+// Returns {major, minor} of a "x.y.z" version string, or throws.
+std::pair<int, int> parse_version(const XmlNode& scene) {
+    const std::string* v = scene.attribute("version");
+    if (!v)
+        throw SceneError(scene.location, "<scene> needs a version attribute, e.g. version=\"3.0.0\" "
+                                         "(femto reads Mitsuba 0.5/0.6 and 3.x files)");
+    int major = -1, minor = -1, patch = -1;
+    char tail = 0;
+    if (std::sscanf(v->c_str(), "%d.%d.%d%c", &major, &minor, &patch, &tail) != 3 || major < 0 ||
+        minor < 0 || patch < 0)
+        throw SceneError(scene.location, fmt::format("invalid scene version \"{}\" (expected "
+                                                     "major.minor.patch)",
+                                                     *v));
+    if (major > 3)
+        throw SceneError(scene.location, fmt::format("scene version {} is newer than femto "
+                                                     "understands (0.x and 3.x)",
+                                                     *v));
+    return {major, minor};
+}
+
+void upgrade_tree(XmlNode& node) {
+    if (std::string* name = node.attribute("name")) *name = upgrade_parameter_name(*name);
+    if (std::string* type = node.attribute("type")) *type = upgrade_plugin_type(node.tag, *type);
+    for (auto& c : node.children) upgrade_tree(c);
+}
+
+XmlNode parse_text(const std::string& text, const std::string& file, const std::string& base_dir,
+                   const SourceLocation& from) {
+    pugi::xml_document doc;
+    const pugi::xml_parse_result result =
+        doc.load_buffer(text.data(), text.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
+    const LineTable lines(text);
+    if (!result)
+        throw SceneError(lines.at(file, result.offset),
+                         fmt::format("malformed XML: {}", result.description()));
+    pugi::xml_node root = doc.document_element();
+    if (!root)
+        throw SceneError(from.file.empty() ? SourceLocation{file, 1, 1} : from, "the file holds no XML element");
+    XmlNode scene = convert(root, lines, file, base_dir);
+    if (scene.tag != "scene")
+        throw SceneError(scene.location,
+                         fmt::format("the root element must be <scene>, not <{}>", scene.tag));
+    if (parse_version(scene).first < 2) upgrade_tree(scene);
+    return scene;
+}
+
+void expand_includes(XmlNode& node, std::vector<std::string>& stack) {
+    std::vector<XmlNode> out;
+    out.reserve(node.children.size());
+    for (auto& child : node.children) {
+        if (child.tag != "include") {
+            expand_includes(child, stack);
+            out.push_back(std::move(child));
+            continue;
+        }
+        const std::string* filename = child.attribute("filename");
+        if (!filename || child.attributes.size() != 1 || !child.children.empty())
+            throw SceneError(child.location, "<include> takes exactly one attribute, filename");
+        fs::path p = *filename;
+        if (p.is_relative()) p = fs::path(child.base_dir) / p;
+        std::error_code ec;
+        const fs::path canon = fs::weakly_canonical(p, ec);
+        const std::string key = ec ? p.string() : canon.string();
+        if (std::find(stack.begin(), stack.end(), key) != stack.end())
+            throw SceneError(child.location, fmt::format("\"{}\" includes itself (include cycle)", *filename));
+        if (stack.size() >= size_t(kMaxIncludeDepth))
+            throw SceneError(child.location, "includes are nested too deeply (more than 32 levels)");
+        const std::string text = read_file(p.string(), child.location);
+        XmlNode included = parse_text(text, p.string(), p.parent_path().string(), child.location);
+        stack.push_back(key);
+        expand_includes(included, stack);
+        stack.pop_back();
+        for (auto& c : included.children) out.push_back(std::move(c));
+    }
+    node.children = std::move(out);
+}
+
+bool is_identifier_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+bool is_identifier_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+void collect_defaults(XmlNode& node, std::map<std::string, std::string>& params,
+                      const std::map<std::string, std::string>& defines) {
+    std::vector<XmlNode> kept;
+    for (auto& c : node.children) {
+        if (c.tag == "default") {
+            const std::string* name = c.attribute("name");
+            const std::string* value = c.attribute("value");
+            if (!name || !value || c.attributes.size() != 2 || !c.children.empty())
+                throw SceneError(c.location, "<default> takes exactly the attributes name and value");
+            if (name->empty() || !is_identifier_start((*name)[0]) ||
+                !std::all_of(name->begin(), name->end(), is_identifier_char))
+                throw SceneError(c.location, fmt::format("invalid parameter name \"{}\"", *name));
+            if (!defines.count(*name) && !params.count(*name)) params[*name] = *value;
+            continue;
+        }
+        collect_defaults(c, params, defines);
+        kept.push_back(std::move(c));
+    }
+    node.children = std::move(kept);
+}
+
+void substitute(XmlNode& node, const std::map<std::string, std::string>& params) {
+    for (auto& a : node.attributes) {
+        if (a.value.find('$') == std::string::npos) continue;
+        std::string out;
+        for (size_t i = 0; i < a.value.size(); ++i) {
+            if (a.value[i] != '$' || i + 1 >= a.value.size() || !is_identifier_start(a.value[i + 1])) {
+                out += a.value[i];
+                continue;
+            }
+            size_t j = i + 1;
+            while (j < a.value.size() && is_identifier_char(a.value[j])) ++j;
+            const std::string name = a.value.substr(i + 1, j - i - 1);
+            auto it = params.find(name);
+            if (it == params.end())
+                throw SceneError(node.location,
+                                 fmt::format("parameter ${} is not defined: add <default name=\"{}\" "
+                                             "value=\"...\"/> or pass -D {}=...",
+                                             name, name, name));
+            out += it->second;
+            i = j - 1;
+        }
+        a.value = std::move(out);
+    }
+    for (auto& c : node.children) substitute(c, params);
+}
+
+XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::string>>& defines,
+                   const std::string& top_file) {
+    std::vector<std::string> stack;
+    std::error_code ec;
+    stack.push_back(top_file.empty() ? std::string() : fs::weakly_canonical(top_file, ec).string());
+    expand_includes(scene, stack);
+    std::map<std::string, std::string> define_map(defines.begin(), defines.end());
+    std::map<std::string, std::string> params = define_map;
+    collect_defaults(scene, params, define_map);
+    substitute(scene, params);
+    return scene;
+}
+
+}  // namespace
+
+std::string upgrade_parameter_name(const std::string& name) {
+    if (auto it = kIrregularNames.find(name); it != kIrregularNames.end()) return it->second;
+    std::string out;
+    for (size_t i = 0; i < name.size(); ++i) {
+        const char c = name[i];
+        if (std::isupper(static_cast<unsigned char>(c))) {
+            if (i > 0 && name[i - 1] != '_') out += '_';
+            out += char(std::tolower(static_cast<unsigned char>(c)));
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
+
+std::string upgrade_plugin_type(const std::string& tag, const std::string& type) {
+    for (const auto& r : kTypeRenames)
+        if (tag == r.tag && type == r.old_type) return r.new_type;
+    return type;
+}
+
+XmlNode parse_scene_file(const std::string& path,
+                         const std::vector<std::pair<std::string, std::string>>& defines) {
+    const std::string text = read_file(path, SourceLocation{});
+    fs::path p(path);
+    std::string base = p.parent_path().string();
+    if (base.empty()) base = ".";
+    return run_passes(parse_text(text, path, base, SourceLocation{}), defines, path);
+}
+
+XmlNode parse_scene_string(const std::string& xml, const std::string& base_dir,
+                           const std::vector<std::pair<std::string, std::string>>& defines) {
+    return run_passes(parse_text(xml, "<string>", base_dir, SourceLocation{}), defines, "");
+}
+
+}  // namespace femto::detail

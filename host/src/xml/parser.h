@@ -1,0 +1,41 @@
+// Internal: the scene IR (XML elements with file/line/column) and the passes that run on it
+// before instantiation: include expansion, version upgrade, defaults and $param substitution.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "femto/error.h"
+
+namespace femto::detail {
+
+struct XmlAttribute {
+    std::string name, value;
+};
+
+struct XmlNode {
+    std::string tag;
+    std::vector<XmlAttribute> attributes;
+    std::vector<XmlNode> children;
+    SourceLocation location;
+    std::string base_dir;  ///< folder of the file this element came from
+
+    const std::string* attribute(const std::string& name) const;
+    std::string* attribute(const std::string& name);
+};
+
+/// Parses, upgrades and expands a scene file into the IR whose root is <scene>.
+/// `defines` are the -D name=value overrides.
+XmlNode parse_scene_file(const std::string& path,
+                         const std::vector<std::pair<std::string, std::string>>& defines);
+/// Same for XML text; relative paths resolve against `base_dir`.
+XmlNode parse_scene_string(const std::string& xml, const std::string& base_dir,
+                           const std::vector<std::pair<std::string, std::string>>& defines);
+
+/// camelCase -> snake_case with Mitsuba's irregular names (intIOR -> int_ior, ...).
+std::string upgrade_parameter_name(const std::string& name);
+/// Plugin type renamed between Mitsuba 0.x and femto/Mitsuba 3 for a tag, or the same name.
+std::string upgrade_plugin_type(const std::string& tag, const std::string& type);
+
+}  // namespace femto::detail

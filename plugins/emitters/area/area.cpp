@@ -1,0 +1,63 @@
+// area: a diffuse area light on the shape that holds it (Mitsuba's `area`).
+//
+// Uniform radiance leaves the front side of the surface only: the side the geometric normal
+// points to (the host has already flipped hit.ng and ShapeSample::n for flip_normals).
+// Points are sampled by the shape's own direct-lighting strategy (area sampling converted
+// to solid angle, or the visible cone for spheres), so pdf_direct() is the shape's pdf too.
+#include "femto/emitter.h"
+#include "femto/plugin.h"
+
+namespace femto {
+namespace {
+
+class AreaEmitter final : public Emitter {
+public:
+    explicit AreaEmitter(const Properties& props)
+        : radiance_(props.get_color("radiance", Color(1.f))) {
+        if (radiance_.r < 0 || radiance_.g < 0 || radiance_.b < 0)
+            props.fail("radiance", "the radiance must not be negative");
+    }
+
+    EmitterSample sample_direct(const Vec3& ref, Vec2 u) const override {
+        EmitterSample es;
+        if (!shape_) return es;
+        const ShapeSample ss = shape_->sample_direct(ref, u);
+        if (!(ss.pdf > 0) || !std::isfinite(ss.pdf)) return es;
+        const Vec3 d = ss.p - ref;
+        const float dist2 = squared_length(d);
+        if (!(dist2 > 0)) return es;
+        const float dist = std::sqrt(dist2);
+        const Vec3 wi = d / dist;
+        // The back side emits nothing: the sampled point must face the reference point.
+        if (!(dot(wi, ss.n) < 0)) return es;
+        es.p = ss.p;
+        es.n = ss.n;
+        es.wi = wi;
+        es.distance = dist;
+        es.pdf = ss.pdf;
+        es.weight = radiance_ / ss.pdf;
+        es.delta = false;
+        return es;
+    }
+
+    float pdf_direct(const Vec3& ref, const Hit& hit) const override {
+        if (!shape_ || !(dot(ref - hit.p, hit.ng) > 0)) return 0.f;
+        return shape_->pdf_direct(ref, hit);
+    }
+
+    Color eval(const Hit& hit, const Vec3& w) const override {
+        return dot(w, hit.ng) > 0 ? radiance_ : Color();
+    }
+
+    bool is_delta() const override { return false; }
+
+private:
+    Color radiance_;
+};
+
+}  // namespace
+}  // namespace femto
+
+FEMTO_PLUGIN(femto::AreaEmitter, femto::PluginKind::Emitter, "area",
+             "Diffuse area light: uniform radiance from the front side of its shape",
+             {{"radiance", "color", "1", "emitted radiance (W / (m^2 sr) per channel)"}})

@@ -1,0 +1,58 @@
+// point: an isotropic point light (Mitsuba's `point`).
+//
+// Placed by `position` or by `to_world` (at to_world(0, 0, 0)), not both. Radiant intensity
+// I (W/sr) gives the irradiance I / d^2 at distance d (normal incidence; the integrator
+// applies the cosine), returned as the weight of a delta sample with pdf 1.
+#include <cmath>
+
+#include "femto/emitter.h"
+#include "femto/plugin.h"
+
+namespace femto {
+namespace {
+
+class PointEmitter final : public Emitter {
+public:
+    explicit PointEmitter(const Properties& props)
+        : intensity_(props.get_color("intensity", Color(1.f))) {
+        if (intensity_.r < 0 || intensity_.g < 0 || intensity_.b < 0)
+            props.fail("intensity", "the intensity must not be negative");
+        if (props.has("position") && props.has("to_world"))
+            props.fail("position", "give either position or to_world, not both");
+        position_ = props.has("to_world") ? read_to_world(props).point(Vec3(0.f))
+                                          : props.get_point("position", Vec3(0.f));
+        if (!is_finite(position_)) props.fail("position", "the position must be finite");
+    }
+
+    EmitterSample sample_direct(const Vec3& ref, Vec2 /*u*/) const override {
+        EmitterSample es;
+        const Vec3 d = position_ - ref;
+        const float dist2 = squared_length(d);
+        if (!(dist2 > 0) || !std::isfinite(dist2)) return es;
+        const float dist = std::sqrt(dist2);
+        es.p = position_;
+        es.n = Vec3();
+        es.wi = d / dist;
+        es.distance = dist;
+        es.pdf = 1.f;
+        es.weight = intensity_ / dist2;
+        es.delta = true;
+        return es;
+    }
+
+    bool is_delta() const override { return true; }
+
+private:
+    Color intensity_;
+    Vec3 position_;
+};
+
+}  // namespace
+}  // namespace femto
+
+FEMTO_PLUGIN(femto::PointEmitter, femto::PluginKind::Emitter, "point",
+             "Isotropic point light",
+             {{"intensity", "color", "1", "radiant intensity (W/sr per channel)"},
+              {"position", "point", "(0, 0, 0)", "location (alternative to to_world)"},
+              {"to_world", "transform", "identity",
+               "places the light at to_world(0, 0, 0) (alternative to position)"}})

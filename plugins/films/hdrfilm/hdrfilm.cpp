@@ -1,0 +1,156 @@
+// Steady-state RGB film: filtered, weighted accumulation in double precision, written as an
+// OpenEXR file plus a tone-mapped PNG preview.
+#include <fmt/format.h>
+
+#include <atomic>
+#include <cmath>
+
+#include "femto/film.h"
+#include "femto/image_io.h"
+#include "femto/log.h"
+#include "femto/plugin.h"
+#include "femto/properties.h"
+
+namespace {
+
+using namespace femto;
+
+// Weighted sums of one pixel: sum(w * L) per channel and sum(w).
+struct PixelSum {
+    double rgb[3] = {0, 0, 0};
+    double weight = 0;
+};
+
+class HdrBlock final : public FilmBlock {
+public:
+    HdrBlock(const ReconstructionFilter& filter, int x0, int y0, int w, int h, int border)
+        : filter_(filter),
+          radius_(filter.radius()),
+          x0_(x0 - border),
+          y0_(y0 - border),
+          w_(w + 2 * border),
+          h_(h + 2 * border),
+          pixels_(size_t(w_) * size_t(h_)) {}
+
+    void put(Vec2 pos, const ContributionList& sample) override {
+        Color L;
+        for (const auto& c : sample.items()) L += c.radiance;
+        if (!L.is_finite()) {
+            ++invalid_;
+            return;
+        }
+        // Pixels whose centre lies within the filter radius of pos.
+        const int xa = int(std::ceil(pos.x - 0.5f - radius_)),
+                  xb = int(std::floor(pos.x - 0.5f + radius_));
+        const int ya = int(std::ceil(pos.y - 0.5f - radius_)),
+                  yb = int(std::floor(pos.y - 0.5f + radius_));
+        for (int y = std::max(ya, y0_); y <= std::min(yb, y0_ + h_ - 1); ++y) {
+            const float wy = filter_.eval(float(y) + 0.5f - pos.y);
+            if (wy == 0) continue;
+            for (int x = std::max(xa, x0_); x <= std::min(xb, x0_ + w_ - 1); ++x) {
+                const float w = wy * filter_.eval(float(x) + 0.5f - pos.x);
+                if (w == 0) continue;
+                PixelSum& p = pixels_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
+                for (int c = 0; c < 3; ++c) p.rgb[c] += double(w) * double(L[c]);
+                p.weight += w;
+            }
+        }
+    }
+
+    const ReconstructionFilter& filter_;
+    float radius_;
+    int x0_, y0_, w_, h_;
+    std::vector<PixelSum> pixels_;
+    uint64_t invalid_ = 0;
+};
+
+class HdrFilm final : public Film {
+public:
+    explicit HdrFilm(const Properties& props) : Film(props) {
+        const std::string pf = props.get_string("pixel_format", "rgb");
+        if (pf != "rgb")
+            props.fail("pixel_format", "hdrfilm writes RGB; pixel_format must be \"rgb\"");
+        const std::string ff = props.get_string("file_format", "openexr");
+        if (ff != "openexr" && ff != "exr" && ff != "png")
+            props.fail("file_format",
+                       "file_format must be openexr or png (femto always writes both "
+                       "name.exr and a name.png preview)");
+        if (props.get_bool("banner", false))
+            props.fail("banner", "femto does not draw banners; use banner=false");
+        exposure_ = float(props.get_float("exposure", 0.0));
+        border_ = std::max(0, int(std::ceil(rfilter_->radius() - 0.5f)));
+        pixels_.resize(size_t(width_) * size_t(height_));
+    }
+
+    std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
+        return std::make_unique<HdrBlock>(*rfilter_, x0, y0, w, h, border_);
+    }
+
+    // The renderer never merges overlapping blocks concurrently, so no lock is needed here.
+    void merge(const FilmBlock& block_in) override {
+        const auto& block = static_cast<const HdrBlock&>(block_in);
+        invalid_ += block.invalid_;
+        for (int by = 0; by < block.h_; ++by) {
+            const int y = block.y0_ + by;
+            if (y < 0 || y >= height_) continue;
+            for (int bx = 0; bx < block.w_; ++bx) {
+                const int x = block.x0_ + bx;
+                if (x < 0 || x >= width_) continue;
+                const PixelSum& src = block.pixels_[size_t(by) * size_t(block.w_) + size_t(bx)];
+                PixelSum& dst = pixels_[size_t(y) * size_t(width_) + size_t(x)];
+                for (int c = 0; c < 3; ++c) dst.rgb[c] += src.rgb[c];
+                dst.weight += src.weight;
+            }
+        }
+    }
+
+    std::vector<float> steady_image() const override {
+        std::vector<float> rgb(pixels_.size() * 3);
+        for (size_t i = 0; i < pixels_.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                rgb[3 * i + c] =
+                    pixels_[i].weight > 0 ? float(pixels_[i].rgb[c] / pixels_[i].weight) : 0.f;
+        return rgb;
+    }
+
+    std::vector<std::string> write(const std::string& out_base,
+                                   const RenderInfo& info) const override {
+        if (invalid_ > 0)
+            log_warning(fmt::format("{} samples with NaN or infinite radiance were discarded",
+                                    invalid_.load()));
+        const std::vector<float> rgb = steady_image();
+        const io::Attributes attrs = {
+            {"femto:version", info.femto_version},
+            {"femto:integrator", info.integrator},
+            {"femto:scene", info.scene_file},
+            {"femto:seed", std::to_string(info.seed)},
+            {"femto:samples", std::to_string(info.samples_per_pixel)},
+            {"femto:samples_requested", std::to_string(info.samples_requested)},
+            {"femto:render_seconds", fmt::format("{:.3f}", info.render_seconds)},
+            {"femto:interrupted", info.interrupted ? "true" : "false"},
+        };
+        const std::string exr = out_base + ".exr", png = out_base + ".png";
+        io::write_exr_rgb(exr, width_, height_, rgb.data(), attrs);
+        io::write_png_preview(png, width_, height_, rgb.data(), exposure_);
+        return {exr, png};
+    }
+
+private:
+    float exposure_ = 0;
+    int border_ = 0;
+    std::vector<PixelSum> pixels_;
+    std::atomic<uint64_t> invalid_{0};
+};
+
+}  // namespace
+
+FEMTO_PLUGIN(HdrFilm, femto::PluginKind::Film, "hdrfilm",
+             "Steady-state RGB film: name.exr (float) plus a name.png preview",
+             {{"width", "integer", "768", "image width in pixels"},
+              {"height", "integer", "576", "image height in pixels"},
+              {"rfilter", "rfilter", "gaussian", "reconstruction filter (nested)"},
+              {"exposure", "float", "0", "exposure of the PNG preview, in stops"},
+              {"pixel_format", "string", "rgb", "accepted for Mitsuba compatibility; only rgb"},
+              {"file_format", "string", "openexr",
+               "accepted for Mitsuba compatibility; EXR and PNG are always written"},
+              {"banner", "boolean", "false", "accepted for Mitsuba compatibility; must be false"}})

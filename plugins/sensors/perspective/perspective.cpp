@@ -1,0 +1,87 @@
+// Pinhole camera with Mitsuba's conventions: local +z looks forward, +y is up, +x is the
+// image's left (the `lookat` frame), the field of view is measured along `fov_axis`.
+#include <cmath>
+#include <string>
+
+#include "femto/plugin.h"
+#include "femto/sensor.h"
+
+namespace {
+
+using namespace femto;
+
+double parse_focal_length(const Properties& props) {
+    std::string s = props.get_string("focal_length", "50mm");
+    if (s.size() > 2 && s.substr(s.size() - 2) == "mm") s.resize(s.size() - 2);
+    char* end = nullptr;
+    const double f = std::strtod(s.c_str(), &end);
+    if (end == s.c_str() || *end != '\0' || !(f > 0) || !std::isfinite(f))
+        props.fail("focal_length", "focal_length must look like \"50mm\"");
+    return f;
+}
+
+class Perspective final : public Sensor {
+public:
+    explicit Perspective(const Properties& props) : Sensor(props) {
+        const double aspect = double(film_->width()) / film_->height();
+        std::string axis = props.get_string("fov_axis", "x");
+        if (axis == "smaller") axis = aspect > 1 ? "y" : "x";
+        if (axis == "larger") axis = aspect > 1 ? "x" : "y";
+        double fov;
+        if (props.has("fov")) {
+            if (props.has("focal_length"))
+                props.fail("focal_length", "give either fov or focal_length, not both");
+            fov = props.get_float("fov");
+            if (!(fov > 0 && fov < 180)) props.fail("fov", "fov must be in (0, 180) degrees");
+        } else {  // 35 mm film equivalent, as Mitsuba
+            const double f = parse_focal_length(props);
+            const double half =
+                axis == "x" ? 18.0 : (axis == "y" ? 12.0 : std::sqrt(18.0 * 18 + 12.0 * 12));
+            fov = 2 * std::atan(half / f) * 180 / M_PI;
+            if (axis != "x" && axis != "y" && axis != "diagonal") axis = "x";
+        }
+        const double t = std::tan(fov * M_PI / 360.0);
+        if (axis == "x") {
+            tan_x_ = t, tan_y_ = t / aspect;
+        } else if (axis == "y") {
+            tan_y_ = t, tan_x_ = t * aspect;
+        } else if (axis == "diagonal") {
+            const double diag = std::sqrt(aspect * aspect + 1);
+            tan_x_ = t * aspect / diag, tan_y_ = t / diag;
+        } else {
+            props.fail("fov_axis",
+                       "fov_axis must be x, y, diagonal, smaller or larger, not \"" + axis + "\"");
+        }
+        near_ = props.get_float("near_clip", 0.01);
+        far_ = props.get_float("far_clip", 10000.0);
+        if (!(near_ > 0) || !(far_ > near_))
+            props.fail("near_clip", "need 0 < near_clip < far_clip");
+        origin_ = to_world_.point(Vec3(0.f));
+    }
+
+    Ray sample_ray(Vec2 pos, Vec2) const override {
+        const float nx = pos.x / float(film_->width()), ny = pos.y / float(film_->height());
+        const Vec3 d_cam{float((1 - 2 * nx) * tan_x_), float((1 - 2 * ny) * tan_y_), 1.f};
+        const Vec3 d_world = to_world_.vector(d_cam);
+        const float len = length(d_world);
+        return Ray{origin_, d_world / len, float(near_) * len, float(far_) * len};
+    }
+
+private:
+    double tan_x_ = 0, tan_y_ = 0, near_ = 0, far_ = 0;
+    Vec3 origin_;
+};
+
+}  // namespace
+
+FEMTO_PLUGIN(Perspective, femto::PluginKind::Sensor, "perspective",
+             "Pinhole perspective camera (Mitsuba conventions)",
+             {{"to_world", "transform", "identity", "camera-to-world transform (use <lookat>)"},
+              {"fov", "float", "", "field of view in degrees, along fov_axis"},
+              {"fov_axis", "string", "x", "x, y, diagonal, smaller or larger"},
+              {"focal_length", "string", "50mm",
+               "35 mm-equivalent focal length, when fov is absent"},
+              {"near_clip", "float", "0.01", "near clipping distance"},
+              {"far_clip", "float", "10000", "far clipping distance"},
+              {"film", "film", "hdrfilm", "the film (nested)"},
+              {"sampler", "sampler", "independent", "the sampler (nested)"}})

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds femto (and a sanitizer build for the bad-input tests) and
+# runs every test through ctest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/deps.sh
+JOBS=$(nproc)
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DFEMTO_TESTS=ON
+cmake --build build -j "$JOBS"
+ctest --test-dir build --output-on-failure -j "$JOBS"
+# AddressSanitizer + UBSan build: the mutation test and the bad-input tests run under it.
+cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFEMTO_TESTS=ON -DFEMTO_SANITIZE=ON
+cmake --build build-sanitize -j "$JOBS"
+ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j "$JOBS" -L sanitize

@@ -1,0 +1,53 @@
+// Helpers for tests that build scenes from XML text.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "femto/error.h"
+#include "femto/host.h"
+
+namespace femto::test {
+
+/// A fresh, empty temporary folder per call.
+inline std::filesystem::path temp_dir(const std::string& name) {
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("femto-test-" + name + "-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+inline void write_text(const std::filesystem::path& path, const std::string& text) {
+    std::ofstream out(path);
+    out << text;
+}
+
+/// A minimal valid scene around `body` (a sensor with a small film is added unless `body`
+/// has one).
+inline std::string scene_xml(const std::string& body, const std::string& version = "3.0.0") {
+    std::string s = "<scene version=\"" + version + "\">\n";
+    if (body.find("<sensor") == std::string::npos)
+        s += "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/>"
+             "<integer name=\"height\" value=\"8\"/></film></sensor>\n";
+    return s + body + "\n</scene>\n";
+}
+
+inline const char* kRect = "<shape type=\"rectangle\"/>";
+
+/// Loads XML text and returns the SceneError's message (fails the test when none is thrown).
+inline std::string load_error(const std::string& xml, const LoadOptions& options = {},
+                              const std::string& base_dir = ".") {
+    try {
+        load_scene_string(xml, options, base_dir);
+    } catch (const SceneError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "expected a SceneError for:\n" << xml;
+    return {};
+}
+
+}  // namespace femto::test
