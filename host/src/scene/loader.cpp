@@ -345,10 +345,7 @@ public:
         } else if (c.tag == "string") {
             check_attributes(c, {"name", "value"});
             std::string v = require_attr(c, "value");
-            if (name == "filename" && !v.empty()) {
-                fs::path p(v);
-                if (p.is_relative()) v = (fs::path(c.base_dir) / p).lexically_normal().string();
-            }
+            if (name == "filename" && !v.empty()) v = resolve_path(c, v);
             props.set(name, Properties::Type::String, v, c.location);
         } else if (c.tag == "point" || c.tag == "vector") {
             check_attributes(c, {"name", "value", "x", "y", "z"});

@@ -10,7 +10,7 @@ namespace femto {
 
 namespace {
 constexpr int64_t kMaxFilmSide = 1 << 16;
-constexpr int64_t kMaxFilmPixels = int64_t(1) << 28;
+constexpr int64_t kMaxFilmPixels = int64_t(1) << 26;  // 8192 x 8192
 }  // namespace
 
 Transform read_to_world(const Properties& props) {
@@ -38,7 +38,7 @@ Film::Film(const Properties& props) {
     if (w < 1 || w > kMaxFilmSide) props.fail("width", fmt::format("width must be in [1, {}], got {}", kMaxFilmSide, w));
     if (h < 1 || h > kMaxFilmSide) props.fail("height", fmt::format("height must be in [1, {}], got {}", kMaxFilmSide, h));
     if (w * h > kMaxFilmPixels)
-        props.fail("width", fmt::format("{}x{} pixels is more than femto's limit of 2^28 pixels", w, h));
+        props.fail("width", fmt::format("{}x{} pixels is more than femto's limit of 2^26 pixels", w, h));
     width_ = int(w);
     height_ = int(h);
     auto filters = props.objects(PluginKind::ReconstructionFilter);

@@ -122,6 +122,11 @@ void upgrade_tree(XmlNode& node) {
     for (auto& c : node.children) upgrade_tree(c);
 }
 
+void set_root_dir(XmlNode& node, const std::string& root) {
+    node.root_dir = root;
+    for (auto& c : node.children) set_root_dir(c, root);
+}
+
 XmlNode parse_text(const std::string& text, const std::string& file, const std::string& base_dir,
                    const SourceLocation& from) {
     pugi::xml_document doc;
@@ -154,8 +159,7 @@ void expand_includes(XmlNode& node, std::vector<std::string>& stack) {
         const std::string* filename = child.attribute("filename");
         if (!filename || child.attributes.size() != 1 || !child.children.empty())
             throw SceneError(child.location, "<include> takes exactly one attribute, filename");
-        fs::path p = *filename;
-        if (p.is_relative()) p = fs::path(child.base_dir) / p;
+        const fs::path p = resolve_path(child, *filename);
         std::error_code ec;
         const fs::path canon = fs::weakly_canonical(p, ec);
         const std::string key = ec ? p.string() : canon.string();
@@ -165,6 +169,7 @@ void expand_includes(XmlNode& node, std::vector<std::string>& stack) {
             throw SceneError(child.location, "includes are nested too deeply (more than 32 levels)");
         const std::string text = read_file(p.string(), child.location);
         XmlNode included = parse_text(text, p.string(), p.parent_path().string(), child.location);
+        set_root_dir(included, child.root_dir);
         stack.push_back(key);
         expand_includes(included, stack);
         stack.pop_back();
@@ -228,6 +233,7 @@ XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::
     std::vector<std::string> stack;
     std::error_code ec;
     stack.push_back(top_file.empty() ? std::string() : fs::weakly_canonical(top_file, ec).string());
+    set_root_dir(scene, scene.base_dir);
     expand_includes(scene, stack);
     std::map<std::string, std::string> define_map(defines.begin(), defines.end());
     std::map<std::string, std::string> params = define_map;
@@ -237,6 +243,16 @@ XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::
 }
 
 }  // namespace
+
+std::string resolve_path(const XmlNode& node, const std::string& name) {
+    const fs::path p(name);
+    if (p.is_absolute()) return name;
+    const fs::path first = (fs::path(node.base_dir) / p).lexically_normal();
+    std::error_code ec;
+    if (fs::exists(first, ec) || node.root_dir.empty()) return first.string();
+    const fs::path second = (fs::path(node.root_dir) / p).lexically_normal();
+    return fs::exists(second, ec) ? second.string() : first.string();
+}
 
 std::string upgrade_parameter_name(const std::string& name) {
     if (auto it = kIrregularNames.find(name); it != kIrregularNames.end()) return it->second;

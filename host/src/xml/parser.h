@@ -20,6 +20,7 @@ struct XmlNode {
     std::vector<XmlNode> children;
     SourceLocation location;
     std::string base_dir;  ///< folder of the file this element came from
+    std::string root_dir;  ///< folder of the top-level scene file
 
     const std::string* attribute(const std::string& name) const;
     std::string* attribute(const std::string& name);
@@ -32,6 +33,11 @@ XmlNode parse_scene_file(const std::string& path,
 /// Same for XML text; relative paths resolve against `base_dir`.
 XmlNode parse_scene_string(const std::string& xml, const std::string& base_dir,
                            const std::vector<std::pair<std::string, std::string>>& defines);
+
+/// Resolves a relative file name written in `node` as Mitsuba does: next to the file that
+/// names it, else next to the top-level scene file. Returns the first candidate that exists
+/// (or the first candidate when none does, so that the error names it).
+std::string resolve_path(const XmlNode& node, const std::string& name);
 
 /// camelCase -> snake_case with Mitsuba's irregular names (intIOR -> int_ior, ...).
 std::string upgrade_parameter_name(const std::string& name);
