@@ -246,6 +246,14 @@ Chi2Result chi2_test(const Chi2Options& o, const Sample& sample, const Pdf& pdf)
     return res;
 }
 
+/// A stable seed derived from a test's name (FNV-1a), so that every test draws its own
+/// independent, reproducible samples.
+inline uint64_t seed_from_name(const std::string& name) {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    for (unsigned char c : name) h = (h ^ c) * 0x100000001b3ULL;
+    return h;
+}
+
 /// Šidák-corrected significance level of one of `test_count` tests run at an overall
 /// level of 1% (as Mitsuba's test suite; ~0.01 / test_count, the Bonferroni level).
 inline double corrected_significance(int test_count, double overall = 0.01) {

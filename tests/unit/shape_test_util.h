@@ -109,9 +109,9 @@ inline femto::Ray ray_toward(const femto::Vec3& from, const femto::Vec3& to) {
 inline ::testing::AssertionResult vec_near(const femto::Vec3& a, const femto::Vec3& b, double tol) {
     for (int k = 0; k < 3; ++k)
         if (!(std::abs(double(a[k]) - double(b[k])) <= tol))
-            return ::testing::AssertionFailure() << "(" << a.x << ", " << a.y << ", " << a.z
-                                                 << ") != (" << b.x << ", " << b.y << ", " << b.z
-                                                 << ") +- " << tol;
+            return ::testing::AssertionFailure()
+                   << "(" << a.x << ", " << a.y << ", " << a.z << ") != (" << b.x << ", " << b.y
+                   << ", " << b.z << ") +- " << tol;
     return ::testing::AssertionSuccess();
 }
 

@@ -45,9 +45,9 @@ constexpr double kPiD = 3.14159265358979323846;
 ::testing::AssertionResult color_near(const Color& a, const Color& b, double rel) {
     for (int k = 0; k < 3; ++k)
         if (!(std::abs(double(a[k]) - double(b[k])) <= rel * std::abs(double(b[k])) + 1e-30))
-            return ::testing::AssertionFailure() << "(" << a.r << ", " << a.g << ", " << a.b
-                                                 << ") != (" << b.r << ", " << b.g << ", " << b.b
-                                                 << ") +- " << rel << " relative";
+            return ::testing::AssertionFailure()
+                   << "(" << a.r << ", " << a.g << ", " << a.b << ") != (" << b.r << ", " << b.g
+                   << ", " << b.b << ") +- " << rel << " relative";
     return ::testing::AssertionSuccess();
 }
 
@@ -207,8 +207,8 @@ TEST(EmitterCollimated, InsideAndOutsideTheBeam) {
     // The irradiance does not fall off with distance.
     EXPECT_TRUE(color_near(e->sample_direct({0, -0.49f, 1000}, {}).weight, {1, 2, 3}, 0));
 
-    for (const Vec3& out : {Vec3(0.5f, 0.4f, 4), Vec3(0.6f, 0, 0.1f), Vec3(0, 0, -1),
-                            Vec3(0.1f, 0.1f, -0.001f)}) {
+    for (const Vec3& out :
+         {Vec3(0.5f, 0.4f, 4), Vec3(0.6f, 0, 0.1f), Vec3(0, 0, -1), Vec3(0.1f, 0.1f, -0.001f)}) {
         const EmitterSample s = e->sample_direct(out, {0.5f, 0.5f});
         EXPECT_EQ(s.pdf, 0.f) << out.x << " " << out.y << " " << out.z;
         EXPECT_TRUE(s.weight.is_black());
@@ -278,11 +278,11 @@ Properties facing_down_rectangle() {
 TEST(EmitterArea, SampleAndPdfAreConsistent) {
     const Color radiance(1, 2, 3);
     for (const Properties& sp : {facing_down_rectangle(), [] {
-             Properties s("sphere", {});
-             s.set_point("center", {0.5f, 0.2f, 3});
-             s.set_float("radius", 0.7);
-             return s;
-         }()}) {
+                                     Properties s("sphere", {});
+                                     s.set_point("center", {0.5f, 0.2f, 3});
+                                     s.set_float("radius", 0.7);
+                                     return s;
+                                 }()}) {
         const Lit lit = area_light(sp, radiance);
         ASSERT_TRUE(lit.emitter && lit.shape);
         EXPECT_FALSE(lit.emitter->is_delta());

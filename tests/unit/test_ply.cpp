@@ -47,7 +47,8 @@ struct Element {
 
 enum class Format { Ascii, Little, Big };
 
-template <typename T> void put(std::string& out, double v, bool big) {
+template <typename T>
+void put(std::string& out, double v, bool big) {
     const T x = static_cast<T>(v);
     unsigned char b[sizeof(T)];
     std::memcpy(b, &x, sizeof(T));
@@ -121,8 +122,8 @@ struct MeshOptions {
 
 std::vector<Element> pyramid(const MeshOptions& o = {}) {
     Element vertex{"vertex", {}, {}};
-    vertex.props = {{o.position_type, "x", ""}, {o.position_type, "y", ""},
-                    {o.position_type, "z", ""}};
+    vertex.props = {
+        {o.position_type, "x", ""}, {o.position_type, "y", ""}, {o.position_type, "z", ""}};
     if (o.extras) vertex.props.push_back({"double", "confidence", ""});
     if (o.normals)
         for (const char* n : {"nx", "ny", "nz"}) vertex.props.push_back({"float", n, ""});
@@ -169,8 +170,9 @@ std::vector<Element> pyramid(const MeshOptions& o = {}) {
     std::vector<Element> out = {vertex};
     if (o.extras) out.push_back(material);
     out.push_back(face);
-    if (o.extras) out.push_back(Element{"edge", {{"int", "vertex1", ""}, {"int", "vertex2", ""}},
-                                        {{{0}, {1}}, {{1}, {2}}}});
+    if (o.extras)
+        out.push_back(Element{
+            "edge", {{"int", "vertex1", ""}, {"int", "vertex2", ""}}, {{{0}, {1}}, {{1}, {2}}}});
     return out;
 }
 
@@ -239,7 +241,8 @@ TEST(PlyRoundTrip, IntegerTypesAndAlternativeNames) {
     }();
     for (const MeshOptions& o : variants)
         for (const Format f : {Format::Ascii, Format::Little, Format::Big}) {
-            SCOPED_TRACE(o.count_type + " " + o.index_type + " " + o.u + " " + std::to_string(int(f)));
+            SCOPED_TRACE(o.count_type + " " + o.index_type + " " + o.u + " " +
+                         std::to_string(int(f)));
             auto s = load(dir.write("mesh.ply", write_ply(pyramid(o), f)));
             ASSERT_TRUE(s);
             expect_pyramid(s->mesh());
@@ -296,7 +299,8 @@ void expect_error(const ScratchDir& dir, const std::string& content, const std::
     } catch (const femto::SceneError& e) {
         const std::string msg = e.what();
         EXPECT_NE(msg.find("bad.ply"), std::string::npos) << msg;
-        EXPECT_NE(msg.find(expected), std::string::npos) << "expected '" << expected << "' in: " << msg;
+        EXPECT_NE(msg.find(expected), std::string::npos)
+            << "expected '" << expected << "' in: " << msg;
     }
 }
 
@@ -391,8 +395,9 @@ TEST(PlyMalformed, AbsurdCounts) {
         "element vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\n"
         "element face 1\nproperty list uchar int vertex_indices\n";
     expect_error(dir, ascii_header(big_vertex) + kTriangleBody, "4000000000");
-    expect_error(dir, "ply\nformat binary_little_endian 1.0\n" + big_vertex + "end_header\n" +
-                          std::string(64, '\0'),
+    expect_error(dir,
+                 "ply\nformat binary_little_endian 1.0\n" + big_vertex + "end_header\n" +
+                     std::string(64, '\0'),
                  "4000000000");
     expect_error(dir,
                  "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\n"
@@ -403,26 +408,28 @@ TEST(PlyMalformed, AbsurdCounts) {
     expect_error(dir, ascii_header("element vertex 99999999999999999999999\n"), "count");
     // An element without properties takes no bytes, whatever its count: skipped at once.
     {
-        const std::string file = dir.write(
-            "empty_elem.ply", ascii_header("element nothing 18446744073709551615\n" +
-                                           kTriangleElements) +
-                                  kTriangleBody);
+        const std::string file =
+            dir.write("empty_elem.ply",
+                      ascii_header("element nothing 18446744073709551615\n" + kTriangleElements) +
+                          kTriangleBody);
         auto s = load(file);
         ASSERT_TRUE(s);
         EXPECT_EQ(s->mesh().triangle_count(), 1u);
     }
     // A list length of 2^32 - 1 in a small binary file.
-    std::string data = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
-                       "property float y\nproperty float z\nelement face 1\n"
-                       "property list uint int vertex_indices\nend_header\n";
+    std::string data =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+        "property float y\nproperty float z\nelement face 1\n"
+        "property list uint int vertex_indices\nend_header\n";
     for (int i = 0; i < 9; ++i) put<float>(data, i == 3 || i == 7 ? 1.0 : 0.0, false);
     put<uint32_t>(data, 4294967295.0, false);
     for (int i = 0; i < 3; ++i) put<int32_t>(data, i, false);
     expect_error(dir, data, "4294967295");
     // Same in an unknown element's list, which is skipped rather than read.
-    std::string skip = "ply\nformat binary_big_endian 1.0\nelement junk 1\n"
-                       "property list uint double stuff\n" +
-                       kTriangleElements + "end_header\n";
+    std::string skip =
+        "ply\nformat binary_big_endian 1.0\nelement junk 1\n"
+        "property list uint double stuff\n" +
+        kTriangleElements + "end_header\n";
     put<uint32_t>(skip, 4294967295.0, true);
     expect_error(dir, skip + std::string(64, '\0'), "4294967295");
 }
@@ -456,9 +463,15 @@ TEST(PlyMalformed, RandomCorruptionNeverCrashes) {
             for (int c = 0; c < changes; ++c) {
                 const size_t pos = rng() % bad.size();
                 switch (rng() % 3) {
-                    case 0: bad[pos] = char(rng() & 0xff); break;
-                    case 1: bad[pos] = char("0123456789 \n-.e"[rng() % 15]); break;
-                    default: bad.erase(pos, 1 + rng() % 8); break;
+                    case 0:
+                        bad[pos] = char(rng() & 0xff);
+                        break;
+                    case 1:
+                        bad[pos] = char("0123456789 \n-.e"[rng() % 15]);
+                        break;
+                    default:
+                        bad.erase(pos, 1 + rng() % 8);
+                        break;
                 }
                 if (bad.empty()) bad = "p";
             }

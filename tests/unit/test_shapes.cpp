@@ -245,12 +245,14 @@ TEST(ShapeCube, UnitCubeFollowsMitsuba) {
             Vec3 dir;
             dir[axis] = sign;
             Hit hit;
-            ASSERT_TRUE(brute_intersect(*s, ray_toward(dir * 5.f + Vec3(0.1f, 0.2f, 0.3f) * 0.5f,
-                                                       Vec3(0.1f, 0.2f, 0.3f) * 0.5f),
+            ASSERT_TRUE(brute_intersect(*s,
+                                        ray_toward(dir * 5.f + Vec3(0.1f, 0.2f, 0.3f) * 0.5f,
+                                                   Vec3(0.1f, 0.2f, 0.3f) * 0.5f),
                                         hit));
             EXPECT_TRUE(vec_near(hit.ng, dir, 0));
             EXPECT_NEAR(hit.t, 4.f, 0.3f);
-            ASSERT_TRUE(brute_intersect(*s, femto::Ray{Vec3(0.f), dir, 0.f, femto::kInfinity}, hit));
+            ASSERT_TRUE(
+                brute_intersect(*s, femto::Ray{Vec3(0.f), dir, 0.f, femto::kInfinity}, hit));
             EXPECT_TRUE(vec_near(hit.ng, dir, 0));
             EXPECT_NEAR(hit.t, 1.f, 1e-6);
         }
@@ -258,10 +260,8 @@ TEST(ShapeCube, UnitCubeFollowsMitsuba) {
 
 TEST(ShapeCube, NormalsUnderNonUniformScaleAndShear) {
     // A general affine map: non-uniform scale, shear and translation.
-    const Transform::Matrix mat = {{{2.0, 0.5, 0.0, 1.0},
-                                    {0.0, 1.0, 0.3, -2.0},
-                                    {0.2, 0.0, 3.0, 0.5},
-                                    {0.0, 0.0, 0.0, 1.0}}};
+    const Transform::Matrix mat = {
+        {{2.0, 0.5, 0.0, 1.0}, {0.0, 1.0, 0.3, -2.0}, {0.2, 0.0, 3.0, 0.5}, {0.0, 0.0, 0.0, 1.0}}};
     const Transform t = matrix(mat);
     Properties props("cube", {});
     props.set_transform("to_world", t);
@@ -366,10 +366,10 @@ TEST(ShapeSphere, ToWorldMovesCenterAndScalesRadius) {
 }
 
 TEST(ShapeSphere, RejectsNonUniformScaleAndBadRadius) {
-    for (const Transform& t :
-         {Transform::scale({1, 2, 1}),
-          Transform::rotate({1, 2, 3}, 40) * Transform::scale({1, 1, 1.01f}),
-          Transform(Transform::Matrix{{{1, 0.5, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}})}) {
+    for (const Transform& t : {Transform::scale({1, 2, 1}),
+                               Transform::rotate({1, 2, 3}, 40) * Transform::scale({1, 1, 1.01f}),
+                               Transform(Transform::Matrix{
+                                   {{1, 0.5, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}})}) {
         Properties props("sphere", {});
         props.set_transform("to_world", t);
         const std::string msg = error_of(props);
@@ -565,8 +565,9 @@ TEST(ShapeObj, Options) {
         for (size_t t = 0; t < m.triangle_count(); ++t)
             for (int k = 0; k < 3; ++k) {
                 const size_t i = m.indices[3 * t + k];
-                if (vec_near(m.normals[i], {0, 0, -1}, 1e-6))
+                if (vec_near(m.normals[i], {0, 0, -1}, 1e-6)) {
                     EXPECT_TRUE(vec_near(triangle_normal(m, t), {0, 0, -1}, 1e-6));
+                }
             }
     }
 }
@@ -590,8 +591,7 @@ TEST(ShapeObj, BadFiles) {
         EXPECT_NE(error_of(props).find("filename"), std::string::npos);  // required
     }
     EXPECT_NE(error_for("v 0 0 0\nv 1 0 0\nv 0 1 0\n").find("no faces"), std::string::npos);
-    EXPECT_NE(error_for("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").find("bad.obj"),
-              std::string::npos);
+    EXPECT_NE(error_for("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").find("bad.obj"), std::string::npos);
     EXPECT_NE(error_for("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/5 2/1 3/1\nvt 0 0\n").find("bad.obj"),
               std::string::npos);
     EXPECT_NE(error_for("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -7\n").find("bad.obj"),

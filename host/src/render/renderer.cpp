@@ -122,8 +122,11 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                                      film.rfilter().radius(), kTileSize / 2));
 
     // Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
-    const uint32_t pass_spp = std::max<uint32_t>(1, spp / 16);
+    // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp.
     const uint64_t pixels = uint64_t(W) * uint64_t(H);
+    constexpr uint64_t kMaxPassSamples = uint64_t(1) << 22;
+    const uint32_t pass_spp = uint32_t(std::max<uint64_t>(
+        1, std::min<uint64_t>((spp + 15) / 16, kMaxPassSamples / pixels)));
     Progress progress(options.progress, pixels * spp);
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
         [&] { return prototype.clone(); });

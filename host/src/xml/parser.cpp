@@ -76,7 +76,7 @@ XmlNode convert(const pugi::xml_node& node, const LineTable& lines, const std::s
                 const std::string& base_dir) {
     XmlNode out;
     out.tag = node.name();
-    out.location = lines.at(file, node.offset_debug());
+    out.location = lines.at(file, node.offset_debug() - 1);  // column of '<', not of the name
     out.base_dir = base_dir;
     for (const auto& a : node.attributes()) {
         if (out.attribute(a.name()))

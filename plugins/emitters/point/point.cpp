@@ -50,8 +50,7 @@ private:
 }  // namespace
 }  // namespace femto
 
-FEMTO_PLUGIN(femto::PointEmitter, femto::PluginKind::Emitter, "point",
-             "Isotropic point light",
+FEMTO_PLUGIN(femto::PointEmitter, femto::PluginKind::Emitter, "point", "Isotropic point light",
              {{"intensity", "color", "1", "radiant intensity (W/sr per channel)"},
               {"position", "point", "(0, 0, 0)", "location (alternative to to_world)"},
               {"to_world", "transform", "identity",

@@ -82,8 +82,7 @@ void finish_mesh(TriangleMesh& mesh, const std::vector<uint32_t>& position_ids,
     std::vector<Vec3> accum(position_count), fallback(position_count);
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         const uint32_t idx[3] = {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]};
-        const Vec3 p[3] = {mesh.positions[idx[0]], mesh.positions[idx[1]],
-                           mesh.positions[idx[2]]};
+        const Vec3 p[3] = {mesh.positions[idx[0]], mesh.positions[idx[1]], mesh.positions[idx[2]]};
         Vec3 fn = cross(p[1] - p[0], p[2] - p[0]);
         const float len = length(fn);
         if (!(len > 0) || !std::isfinite(len)) continue;  // degenerate: no orientation
@@ -228,8 +227,8 @@ private:
             if (pos >= data_.size()) return false;
             const char* begin = data_.data() + pos;
             const void* nl = std::memchr(begin, '\n', data_.size() - pos);
-            const size_t len = nl ? static_cast<size_t>(static_cast<const char*>(nl) - begin)
-                                  : data_.size() - pos;
+            const size_t len =
+                nl ? static_cast<size_t>(static_cast<const char*>(nl) - begin) : data_.size() - pos;
             line = std::string_view(begin, len);
             pos += len + (nl ? 1 : 0);
             return true;
@@ -267,7 +266,8 @@ private:
                     fail(where + "invalid count '" + shorten(tok[2]) + "' of element '" + e.name +
                          "' (a non-negative integer is expected)");
                 for (const auto& other : elements_)
-                    if (other.name == e.name) fail(where + "element '" + e.name + "' appears twice");
+                    if (other.name == e.name)
+                        fail(where + "element '" + e.name + "' appears twice");
                 elements_.push_back(std::move(e));
             } else if (tok[0] == "property") {
                 if (elements_.empty()) fail(where + "a property before any element");
@@ -289,8 +289,9 @@ private:
                              "int8 ... float64)");
                     p.name = std::string(tok[2]);
                 } else {
-                    fail(where + "expected \"property <type> <name>\" or \"property list "
-                                 "<count type> <type> <name>\"");
+                    fail(where +
+                         "expected \"property <type> <name>\" or \"property list "
+                         "<count type> <type> <name>\"");
                 }
                 elements_.back().props.push_back(std::move(p));
             } else if (tok[0] == "end_header") {
@@ -303,8 +304,8 @@ private:
         if (!done) fail("the header has no end_header line (truncated file?)");
         if (!have_format) fail("the header has no format line");
         pos_ = pos;
-        swap_bytes_ = (format_ == PlyFormat::BinaryBigEndian) !=
-                      (std::endian::native == std::endian::big);
+        swap_bytes_ =
+            (format_ == PlyFormat::BinaryBigEndian) != (std::endian::native == std::endian::big);
     }
 
     // -- values ------------------------------------------------------------------------------
@@ -319,18 +320,27 @@ private:
         pos_ += n;
         if (swap_bytes_) std::reverse(b, b + n);
         switch (t) {
-            case PlyType::Int8: return static_cast<int8_t>(b[0]);
-            case PlyType::UInt8: return b[0];
-            case PlyType::Int16: return load<int16_t>(b);
-            case PlyType::UInt16: return load<uint16_t>(b);
-            case PlyType::Int32: return load<int32_t>(b);
-            case PlyType::UInt32: return load<uint32_t>(b);
-            case PlyType::Float32: return load<float>(b);
-            case PlyType::Float64: return load<double>(b);
+            case PlyType::Int8:
+                return static_cast<int8_t>(b[0]);
+            case PlyType::UInt8:
+                return b[0];
+            case PlyType::Int16:
+                return load<int16_t>(b);
+            case PlyType::UInt16:
+                return load<uint16_t>(b);
+            case PlyType::Int32:
+                return load<int32_t>(b);
+            case PlyType::UInt32:
+                return load<uint32_t>(b);
+            case PlyType::Float32:
+                return load<float>(b);
+            case PlyType::Float64:
+                return load<double>(b);
         }
         return 0;
     }
-    template <typename T> static double load(const unsigned char* b) {
+    template <typename T>
+    static double load(const unsigned char* b) {
         T v;
         std::memcpy(&v, b, sizeof(T));
         return static_cast<double>(v);
@@ -359,8 +369,8 @@ private:
             } else {  // some writers print integers as "3.0"
                 const auto [end2, ec2] = std::from_chars(b, e, v);
                 if (ec2 != std::errc() || end2 != e || v != std::floor(v))
-                    data_fail("invalid " + std::string(info(t).name) + " value '" +
-                              shorten(tok) + "'");
+                    data_fail("invalid " + std::string(info(t).name) + " value '" + shorten(tok) +
+                              "'");
             }
             if (v < info(t).min || v > info(t).max)
                 data_fail("value " + shorten(tok) + " out of the range of type " + info(t).name);
@@ -368,8 +378,7 @@ private:
             const auto [end, ec] = std::from_chars(b, e, v);
             if (ec == std::errc::result_out_of_range)
                 data_fail("number '" + shorten(tok) + "' out of range");
-            if (ec != std::errc() || end != e)
-                data_fail("invalid number '" + shorten(tok) + "'");
+            if (ec != std::errc() || end != e) data_fail("invalid number '" + shorten(tok) + "'");
         }
         return v;
     }
@@ -385,9 +394,8 @@ private:
         const uint64_t count = static_cast<uint64_t>(n);
         // Binary entries take their size in bytes; ascii ones at least one character and a
         // separator (the last one possibly without).
-        const uint64_t capacity = format_ == PlyFormat::Ascii
-                                      ? remaining() / 2 + 1
-                                      : remaining() / info(p.type).size;
+        const uint64_t capacity =
+            format_ == PlyFormat::Ascii ? remaining() / 2 + 1 : remaining() / info(p.type).size;
         if (count > capacity)
             data_fail("list '" + p.name + "' of " + std::to_string(count) +
                       " entries runs past the end of the file (truncated or corrupt file)");
@@ -439,8 +447,9 @@ private:
         }
         if (!vertex_elem) fail("no 'vertex' element in the header");
         if (!face_elem)
-            fail("no 'face' element in the header (point clouds cannot be rendered as a "
-                 "surface)");
+            fail(
+                "no 'face' element in the header (point clouds cannot be rendered as a "
+                "surface)");
         if (vertex_elem->count > UINT32_MAX)
             fail("more than 2^32 - 1 vertices (" + std::to_string(vertex_elem->count) + ")");
         const uint64_t vertex_count = vertex_elem->count;
