@@ -25,14 +25,26 @@ std::mutex g_mutex;
 std::map<std::string, LoadedPlugin> g_by_path;  // libraries stay open for the process lifetime
 std::vector<std::string> g_load_order;
 
-std::string install_dir_near_libfemto() {
+// Folder holding this libfemto.
+fs::path libfemto_dir() {
     Dl_info info{};
     if (dladdr(reinterpret_cast<void*>(&plugin_search_path), &info) == 0 || !info.dli_fname)
         return {};
     std::error_code ec;
     const fs::path lib = fs::canonical(info.dli_fname, ec);
-    if (ec) return {};
-    return (lib.parent_path() / FEMTO_PLUGIN_INSTALL_SUBDIR).string();
+    return ec ? fs::path() : lib.parent_path();
+}
+
+// The build tree's plugins belong to the build tree's libfemto only (not to an installed copy).
+std::string build_dir_if_in_build_tree() {
+    std::error_code ec;
+    const fs::path build_lib = fs::weakly_canonical(FEMTO_BUILD_LIB_DIR, ec);
+    return !ec && libfemto_dir() == build_lib ? std::string(FEMTO_BUILD_PLUGIN_DIR) : std::string();
+}
+
+std::string install_dir_near_libfemto() {
+    const fs::path dir = libfemto_dir();
+    return dir.empty() ? std::string() : (dir / FEMTO_PLUGIN_INSTALL_SUBDIR).string();
 }
 
 // Opens (or returns the cached) plugin at `path`; throws SceneError on ABI problems.
@@ -82,7 +94,7 @@ std::vector<std::string> plugin_search_path(const std::vector<std::string>& extr
             if (x == d) return;
         dirs.push_back(d);
     };
-    add(FEMTO_BUILD_PLUGIN_DIR);
+    add(build_dir_if_in_build_tree());
     add(install_dir_near_libfemto());
     if (const char* env = std::getenv("FEMTO_PLUGIN_PATH")) {
         std::string s = env;

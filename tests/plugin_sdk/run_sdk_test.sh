@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs femto into a temporary prefix, builds tests/plugin_sdk against the installed SDK
+# and renders a scene naming the plugin, found through FEMTO_PLUGIN_PATH.
+# Usage: run_sdk_test.sh BUILD_DIR SOURCE_DIR WORK_DIR
+set -euo pipefail
+build=$1 src=$2 work=$3
+rm -rf "$work" && mkdir -p "$work"
+cmake --install "$build" --prefix "$work/install" > "$work/install.log"
+cmake -S "$src/tests/plugin_sdk" -B "$work/sdk-build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$work/install" > "$work/configure.log"
+cmake --build "$work/sdk-build" > "$work/build.log"
+[ -f "$work/sdk-build/ao.so" ] || { echo "FAIL: ao.so was not built"; exit 1; }
+export FEMTO_PLUGIN_PATH="$work/sdk-build"
+femto="$work/install/bin/femto"
+"$femto" plugins ao | grep -q "Ambient occlusion" || { echo "FAIL: femto plugins does not list ao"; exit 1; }
+"$femto" render "$src/tests/plugin_sdk/scene.xml" -o "$work/ao" -q
+stats=$(oiiotool "$work/ao.exr" --printstats)
+min=$(echo "$stats" | sed -n 's/.*Stats Min: *\([0-9.e+-]*\).*/\1/p' | head -1)
+max=$(echo "$stats" | sed -n 's/.*Stats Max: *\([0-9.e+-]*\).*/\1/p' | head -1)
+echo "AO min $min max $max"
+# Unoccluded plane far from the sphere: exactly 1. Near the contact: clearly occluded. The
+# sphere's top sees the open sky (1) as well.
+awk -v a="$min" -v b="$max" 'BEGIN { exit !(b == 1 && a < 0.6) }' || { echo "FAIL: AO range [$min, $max]"; exit 1; }
+# Without the plugin path the type is unknown: a clean error, exit 2.
+set +e
+FEMTO_PLUGIN_PATH= "$femto" render "$src/tests/plugin_sdk/scene.xml" -o "$work/none" -q 2> "$work/err.txt"
+code=$?
+set -e
+[ $code -eq 2 ] && grep -q 'unknown <integrator> plugin "ao"' "$work/err.txt" || { cat "$work/err.txt"; echo "FAIL: expected exit 2"; exit 1; }
+echo PASS
