@@ -9,9 +9,9 @@
 //    each weight is a float with relative rounding < 1e-6 after a few operations.
 //  - Deterministic comparisons of two float code paths for the same quantity (sample() vs
 //    eval()/pdf(), f(wi, wo) vs f(wo, wi), the plugin's Fresnel term vs a double-precision
-//    reference) allow a relative error of 1e-3 / 1e-4 / 1e-5 as stated at each test: well
-//    above float rounding accumulated over the ~50 operations involved (< 1e-5 relative),
-//    and far below any modelling error (a missing factor is O(1)).
+//    reference) allow the relative error stated at each test, derived from float rounding
+//    over the operations involved (and its conditioning, where a test says so), and far
+//    below any modelling error (a missing factor is O(1)).
 //  - Quadrature (adaptive Simpson from chi2.h) is run to a tolerance stated where it is used.
 #include <gtest/gtest.h>
 
@@ -147,13 +147,19 @@ double rel_diff(double a, double b) {
 
 class BsdfConsistency : public ::testing::TestWithParam<Material> {};
 
+// sample() computes its weight and pdf from the sampled microfacet normal m, eval()/pdf()
+// from the half vector h = normalize(wi + wo) of the float wo = 2 (wi.m) m - wi. That sum
+// cancels when wi.m is small, so h carries a relative error ~ (float epsilon) / (wi.h); over
+// 1e6 samples per material the observed |rel. error| * (wi.h) stayed below 2e-5. Allowed:
+// 1e-4 + 1e-4 / (wi.h) (5x that bound; 3e-4 for a typical wi.h = 0.5, still far below any
+// modelling error). Diffuse lobes have no half vector (wi.h = 1 is used).
 TEST_P(BsdfConsistency, SampleAgreesWithEvalAndPdf) {
     const std::shared_ptr<Bsdf> bsdf = GetParam().make();
     ASSERT_TRUE(bsdf);
     femto::Pcg32 rng(seed_from_name(GetParam().name), 7);
-    double max_pdf_err = 0, max_weight_err = 0;
+    double max_pdf_err = 0, max_weight_err = 0;  // in units of the allowed error
     int checked = 0;
-    for (int i = 0; i < 20000; ++i) {
+    for (int i = 0; i < 100000; ++i) {
         const Vec3 wi = random_direction(rng);
         const float u_lobe = rng.next_float();
         const Vec2 u(rng.next_float(), rng.next_float());
@@ -161,23 +167,28 @@ TEST_P(BsdfConsistency, SampleAgreesWithEvalAndPdf) {
         if (!s.valid()) continue;
         ASSERT_TRUE(s.weight.is_finite() && std::isfinite(s.pdf)) << "wi.z = " << wi.z;
         ASSERT_NEAR(length(s.wo), 1.0, 1e-5);
-        if (!GetParam().two_sided) ASSERT_GT(wi.z, 0.f) << "a one-sided material sampled from below";
+        if (!GetParam().two_sided) {
+            ASSERT_GT(wi.z, 0.f) << "a one-sided material sampled from below";
+        }
         if (s.sampled_lobe & femto::kBsdfDelta) continue;
         ASSERT_TRUE(s.sampled_lobe & bsdf->flags());
         const float pdf = bsdf->pdf(kHit, wi, s.wo);
         const Color f = bsdf->eval(kHit, wi, s.wo);
         ASSERT_GT(pdf, 0.f) << "pdf() is zero where sample() went";
-        max_pdf_err = std::max(max_pdf_err, rel_diff(s.pdf, pdf));
+        const double wi_h = (s.sampled_lobe & femto::kBsdfGlossyReflection)
+                                ? std::abs(dot(wi, normalize(wi + s.wo)))
+                                : 1.0;
+        const double tol = 1e-4 + 1e-4 / std::max(wi_h, 1e-12);
+        max_pdf_err = std::max(max_pdf_err, rel_diff(s.pdf, pdf) / tol);
         for (int c = 0; c < 3; ++c)
-            max_weight_err = std::max(max_weight_err, rel_diff(s.weight[c], f[c] / pdf));
+            max_weight_err = std::max(max_weight_err, rel_diff(s.weight[c], f[c] / pdf) / tol);
         ++checked;
     }
-    std::printf("[consistency] %s: %d samples, max rel. error pdf %.2e, weight %.2e\n",
+    std::printf("[consistency] %s: %d samples, max rel. error / allowed: pdf %.3f, weight %.3f\n",
                 GetParam().name.c_str(), checked, max_pdf_err, max_weight_err);
-    EXPECT_GT(checked, 5000);
-    // Two float code paths for the same value (see the header): 1e-3 relative.
-    EXPECT_LE(max_pdf_err, 1e-3);
-    EXPECT_LE(max_weight_err, 1e-3);
+    EXPECT_GT(checked, 25000);
+    EXPECT_LE(max_pdf_err, 1.0);
+    EXPECT_LE(max_weight_err, 1.0);
 }
 
 TEST_P(BsdfConsistency, Reciprocity) {
@@ -324,8 +335,9 @@ TEST_P(BsdfFurnace, AlbedoAtMostOne) {
                     e.mean[0], e.se[0]);
         for (int c = 0; c < 3; ++c) {
             EXPECT_LE(e.mean[c], 1.0 + 3.0 * e.se[c] + 1e-6) << fc.name << " at " << theta;
-            if (fc.conserving)
+            if (fc.conserving) {
                 EXPECT_NEAR(e.mean[c], 1.0, 4.0 * e.se[c] + 1e-6) << fc.name << " at " << theta;
+            }
         }
     }
 }

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -143,8 +144,6 @@ public:
             props.fail("filename", "cannot read OBJ file " + quoted + ": " +
                                        (err.empty() ? std::string("parse error") : err));
         }
-        while (!warn.empty() && (warn.back() == '\n' || warn.back() == '\r')) warn.pop_back();
-        if (!warn.empty()) log_warning(props.location_of("filename"), quoted + ": " + warn);
 
         const size_t n_pos = attrib.vertices.size() / 3;
         const size_t n_nrm = attrib.normals.size() / 3;
@@ -234,6 +233,15 @@ public:
             if (!is_finite(mesh.positions[i]))
                 props.fail("filename", quoted + ": vertex " + std::to_string(position_ids[i] + 1) +
                                            " has a non-finite coordinate");
+        // tinyobjloader's warnings, once the file is known to be usable. Those about
+        // materials are dropped: materials are ignored on purpose (see the top of this file).
+        std::istringstream warnings(warn);
+        for (std::string line; std::getline(warnings, line);) {
+            while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+            if (!line.empty() && line.find("material") == std::string::npos &&
+                line.find(".mtl") == std::string::npos)
+                log_warning(props.location_of("filename"), quoted + ": " + line);
+        }
         if (!any_uv) mesh.uvs.clear();
         if (!any_normal) mesh.normals.clear();
         finish_mesh(mesh, position_ids, n_pos, to_world, face_normals);
