@@ -97,6 +97,17 @@ compat_veach)
   # PNG goes through the OpenColorIO sRGB transform).
   [ "$(grep -c '^warning' stderr.txt)" -eq 2 ] && grep -q '"gamma"' stderr.txt || { cat stderr.txt >&2; fail "unexpected warnings"; }
   [ -s out/veach.exr ] || fail "no output";;
+progress_tty)
+  # On a terminal (a pseudo-terminal from script(1)) the progress line shows percent,
+  # elapsed time, ETA and the sample rate; with --quiet or without a terminal it is absent.
+  script -qec "'$femto' render '$scene' -o out/p -D spp=16 -D res=64" /dev/null > tty.txt 2>&1 ||
+    { cat tty.txt >&2; fail "render on a pty failed"; }
+  grep -q 'Rendering \[#*' tty.txt && grep -q '100.0%' tty.txt && grep -q 'ETA' tty.txt &&
+    grep -q 'M samples/s' tty.txt || { cat tty.txt >&2; fail "no progress line on a terminal"; }
+  script -qec "'$femto' render '$scene' -o out/q -D spp=16 -D res=64 --quiet" /dev/null > quiet.txt 2>&1
+  ! grep -q 'Rendering' quiet.txt || fail "--quiet still shows progress"
+  "$femto" render "$scene" -o out/r -D spp=4 -D res=32 2> piped.txt
+  ! grep -q 'Rendering \[' piped.txt || fail "progress shown when stderr is not a terminal";;
 *) fail "unknown case";;
 esac
 echo "PASS [$case_name]"

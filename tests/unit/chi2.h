@@ -126,11 +126,11 @@ double integrate_2d(const F& f, double x0, double x1, double y0, double y1, doub
 // The chi-square test
 
 struct Chi2Options {
-    int nx = 64, ny = 128;                ///< bins along x and y
+    int nx = 64, ny = 128;  ///< bins along x and y
     double x0 = -1, x1 = 1, y0 = 0, y1 = 2 * kPi;
     size_t samples = 1000000;
     uint64_t seed = 1;
-    double min_expected = 5.0;            ///< bins expecting fewer samples are pooled
+    double min_expected = 5.0;  ///< bins expecting fewer samples are pooled
     /// Quadrature tolerance per bin: max(abs, rel * bin mass). A bin of mass m has a Poisson
     /// standard deviation of sqrt(N m) counts, i.e. sqrt(m / N) in mass; the defaults stay
     /// below 1% of it for every m >= 5 / N (expected counts below 5 are pooled anyway).
@@ -286,7 +286,8 @@ inline femto::Vec3 direction_deg(double theta_deg, double phi = 0.0) {
 
 /// Builds a BSDF through the plugin host exactly as the scene loader would.
 inline std::shared_ptr<femto::Bsdf> make_bsdf(const femto::Properties& props) {
-    femto::ObjectPtr obj = femto::create_object(femto::PluginKind::Bsdf, props.plugin_type(), props);
+    femto::ObjectPtr obj =
+        femto::create_object(femto::PluginKind::Bsdf, props.plugin_type(), props);
     if (!obj || obj->kind() != femto::PluginKind::Bsdf) return nullptr;
     return std::static_pointer_cast<femto::Bsdf>(obj);
 }

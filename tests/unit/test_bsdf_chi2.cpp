@@ -30,8 +30,8 @@ using namespace femto_test;
 struct BsdfChi2Case {
     std::string name;
     std::function<Properties()> props;
-    double theta_deg;        ///< polar angle of wi (> 90: arriving from below)
-    double phi = 0.7;        ///< azimuth of wi (not 0, so anisotropy is seen at an angle)
+    double theta_deg;  ///< polar angle of wi (> 90: arriving from below)
+    double phi = 0.7;  ///< azimuth of wi (not 0, so anisotropy is seen at an angle)
     std::vector<Properties> children = {};  ///< nested BSDFs (twosided)
 };
 
@@ -42,7 +42,8 @@ std::vector<BsdfChi2Case> make_cases() {
     const double angles[] = {0.0, 45.0, 80.0};
 
     for (double a : angles)
-        cases.push_back({"diffuse_" + angle_name(a), [] {
+        cases.push_back({"diffuse_" + angle_name(a),
+                         [] {
                              Properties p("diffuse", {});
                              p.set_color("reflectance", femto::Color(0.3f, 0.6f, 0.9f));
                              return p;
@@ -80,13 +81,15 @@ std::vector<BsdfChi2Case> make_cases() {
 
     // Plastic: the diffuse part, conditioned on non-delta samples.
     for (double a : angles)
-        cases.push_back({"plastic_" + angle_name(a), [] {
+        cases.push_back({"plastic_" + angle_name(a),
+                         [] {
                              Properties p("plastic", {});
                              p.set_color("diffuse_reflectance", femto::Color(0.2f, 0.5f, 0.8f));
                              return p;
                          },
                          a});
-    cases.push_back({"plastic_diamond_nonlinear_60deg", [] {
+    cases.push_back({"plastic_diamond_nonlinear_60deg",
+                     [] {
                          Properties p("plastic", {});
                          p.set_string("int_ior", "diamond");
                          p.set_bool("nonlinear", true);
@@ -107,15 +110,25 @@ std::vector<BsdfChi2Case> make_cases() {
         p.set_float("alpha", 0.3);
         return p;
     };
-    cases.push_back({"twosided_diffuse_back_135deg", [] { return Properties("twosided", {}); },
-                     135.0, 0.7, {diffuse()}});
-    cases.push_back({"twosided_ggx_back_120deg", [] { return Properties("twosided", {}); },
-                     120.0, 0.7, {rough("ggx")}});
+    cases.push_back({"twosided_diffuse_back_135deg",
+                     [] { return Properties("twosided", {}); },
+                     135.0,
+                     0.7,
+                     {diffuse()}});
+    cases.push_back({"twosided_ggx_back_120deg",
+                     [] { return Properties("twosided", {}); },
+                     120.0,
+                     0.7,
+                     {rough("ggx")}});
     cases.push_back({"twosided_front_diffuse_back_beckmann_150deg",
-                     [] { return Properties("twosided", {}); }, 150.0, 0.7,
+                     [] { return Properties("twosided", {}); },
+                     150.0,
+                     0.7,
                      {diffuse(), rough("beckmann")}});
     cases.push_back({"twosided_front_diffuse_back_beckmann_30deg",
-                     [] { return Properties("twosided", {}); }, 30.0, 0.7,
+                     [] { return Properties("twosided", {}); },
+                     30.0,
+                     0.7,
                      {diffuse(), rough("beckmann")}});
     return cases;
 }

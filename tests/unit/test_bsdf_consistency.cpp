@@ -112,21 +112,21 @@ std::vector<Material> smooth_materials() {
                          [=] { return build(rough_props(dist, 0.1, 0.45, visible, "Al")); }});
         }
     m.push_back({"plastic", [] {
-                     return build(plastic_props(Color(0.2f, 0.5f, 0.8f), Color(1.f), "polypropylene",
-                                                false));
+                     return build(plastic_props(Color(0.2f, 0.5f, 0.8f), Color(1.f),
+                                                "polypropylene", false));
                  }});
     m.push_back({"plastic_nonlinear_diamond", [] {
-                     return build(plastic_props(Color(0.9f, 0.6f, 0.3f), Color(0.7f), "diamond", true));
+                     return build(
+                         plastic_props(Color(0.9f, 0.6f, 0.3f), Color(0.7f), "diamond", true));
                  }});
     m.push_back({"twosided_diffuse",
-                 [] {
-                     return build(Properties("twosided", {}), {diffuse_props(Color(0.6f))});
-                 },
+                 [] { return build(Properties("twosided", {}), {diffuse_props(Color(0.6f))}); },
                  true});
     m.push_back({"twosided_diffuse_ggx",
                  [] {
-                     return build(Properties("twosided", {}),
-                                  {diffuse_props(Color(0.6f)), rough_props("ggx", 0.3, 0.3, true, "none")});
+                     return build(
+                         Properties("twosided", {}),
+                         {diffuse_props(Color(0.6f)), rough_props("ggx", 0.3, 0.3, true, "none")});
                  },
                  true});
     return m;
@@ -280,29 +280,33 @@ Estimate albedo(const Bsdf& bsdf, const Vec3& wi, int n, uint64_t seed) {
 struct FurnaceCase {
     std::string name;
     std::function<std::shared_ptr<Bsdf>()> make;
-    bool conserving;                ///< expected albedo exactly 1 (else only <= 1)
-    std::vector<double> thetas_deg; ///< incident polar angles (> 90 = from below)
+    bool conserving;                 ///< expected albedo exactly 1 (else only <= 1)
+    std::vector<double> thetas_deg;  ///< incident polar angles (> 90 = from below)
 };
 
 std::vector<FurnaceCase> furnace_cases() {
     const std::vector<double> front = {0, 30, 60, 85, 89};
     std::vector<FurnaceCase> c;
     c.push_back({"diffuse", [] { return build(diffuse_props(Color(1.f))); }, true, front});
-    c.push_back({"conductor_none",
-                 [] { return build(Properties("conductor", {})); }, true, front});
-    c.push_back({"dielectric", [] { return build(dielectric_props(1.5, 1.0)); }, true,
+    c.push_back({"conductor_none", [] { return build(Properties("conductor", {})); }, true, front});
+    c.push_back({"dielectric",
+                 [] { return build(dielectric_props(1.5, 1.0)); },
+                 true,
                  {0, 30, 60, 85, 89, 120, 135, 150, 180}});
-    c.push_back({"plastic_white",
-                 [] { return build(plastic_props(Color(1.f), Color(1.f), "polypropylene", false)); },
-                 true, front});
+    c.push_back(
+        {"plastic_white",
+         [] { return build(plastic_props(Color(1.f), Color(1.f), "polypropylene", false)); }, true,
+         front});
     c.push_back({"plastic_white_nonlinear_diamond",
                  [] { return build(plastic_props(Color(1.f), Color(1.f), "diamond", true)); }, true,
                  front});
-    c.push_back({"plastic_grey",
-                 [] { return build(plastic_props(Color(0.5f), Color(1.f), "polypropylene", false)); },
-                 false, front});
+    c.push_back(
+        {"plastic_grey",
+         [] { return build(plastic_props(Color(0.5f), Color(1.f), "polypropylene", false)); },
+         false, front});
     c.push_back({"twosided_diffuse",
-                 [] { return build(Properties("twosided", {}), {diffuse_props(Color(1.f))}); }, true,
+                 [] { return build(Properties("twosided", {}), {diffuse_props(Color(1.f))}); },
+                 true,
                  {10, 60, 120, 170}});
     c.push_back({"null", [] { return build(Properties("null", {})); }, true, {0, 60, 120}});
     for (const char* dist : {"beckmann", "ggx"})
@@ -391,24 +395,45 @@ TEST(BsdfAlbedo, RoughConductorSamplersAgreeWithQuadrature) {
         for (double alpha : {0.1, 0.5})
             for (double theta : {30.0, 75.0}) {
                 const Vec3 wi = direction_deg(theta, 0.3);
-                const std::shared_ptr<Bsdf> vis = build(rough_props(dist, alpha, alpha, true, "Cu"));
+                const std::shared_ptr<Bsdf> vis =
+                    build(rough_props(dist, alpha, alpha, true, "Cu"));
                 const std::shared_ptr<Bsdf> full =
                     build(rough_props(dist, alpha, alpha, false, "Cu"));
                 const Color ref = integrate_eval(*vis, wi);
                 const Color ref_full = integrate_eval(*full, wi);
-                const uint64_t seed = seed_from_name(dist) + static_cast<uint64_t>(theta * 100 + alpha * 10);
+                const uint64_t seed =
+                    seed_from_name(dist) + static_cast<uint64_t>(theta * 100 + alpha * 10);
                 const Estimate ev = albedo(*vis, wi, 200000, seed);
                 const Estimate ef = albedo(*full, wi, 200000, seed + 1);
-                std::printf("[albedo] %s alpha %g at %g deg: quadrature %.5f, visible %.5f +- %.5f, "
-                            "full %.5f +- %.5f (red)\n",
-                            dist, alpha, theta, ref[0], ev.mean[0], ev.se[0], ef.mean[0], ef.se[0]);
+                std::printf(
+                    "[albedo] %s alpha %g at %g deg: quadrature %.5f, visible %.5f +- %.5f, "
+                    "full %.5f +- %.5f (red)\n",
+                    dist, alpha, theta, ref[0], ev.mean[0], ev.se[0], ef.mean[0], ef.se[0]);
                 for (int c = 0; c < 3; ++c) {
-                    EXPECT_NEAR(ref[c], ref_full[c], 1e-5);  // the same eval(): quadrature error only
+                    EXPECT_NEAR(ref[c], ref_full[c],
+                                1e-5);  // the same eval(): quadrature error only
                     // 4 standard errors plus the quadrature error bound (3e-6, rounded up).
                     EXPECT_NEAR(ev.mean[c], ref[c], 4 * ev.se[c] + 1e-5) << dist << alpha << theta;
                     EXPECT_NEAR(ef.mean[c], ref[c], 4 * ef.se[c] + 1e-5) << dist << alpha << theta;
                 }
             }
+}
+
+// An analytic albedo: a GGX mirror (F = 1) with alpha = 1 seen at normal incidence. With
+// u uniform, tan^2(theta_m) = u / (1 - u) samples D(m) cos(theta_m) (= the visible normals,
+// as G1(wi) = 1), theta_o = 2 theta_m stays above the horizon for u < 1/2, and
+// G1(wo) = 2 cos(theta_o) / (1 + cos(theta_o)) = (1 - 2u) / (1 - u), so
+// E = integral_0^1/2 (1 - 2u) / (1 - u) du = 1 - ln 2.
+TEST(BsdfAlbedo, GgxAlphaOneNormalIncidenceIsOneMinusLnTwo) {
+    for (bool visible : {true, false}) {
+        const std::shared_ptr<Bsdf> bsdf = build(rough_props("ggx", 1.0, 1.0, visible, "none"));
+        const Estimate e = albedo(*bsdf, Vec3(0, 0, 1), 400000, visible ? 5 : 6);
+        std::printf("[albedo] ggx alpha 1, normal incidence (%s): %.5f +- %.5f, 1 - ln 2 = %.5f\n",
+                    visible ? "visible" : "full", e.mean[0], e.se[0], 1.0 - std::log(2.0));
+        EXPECT_NEAR(e.mean[0], 1.0 - std::log(2.0), 4 * e.se[0]);
+        const Color q = integrate_eval(*bsdf, Vec3(0, 0, 1));
+        EXPECT_NEAR(q[0], 1.0 - std::log(2.0), 1e-5);  // quadrature error bound 3e-6
+    }
 }
 
 TEST(BsdfAlbedo, PlasticEqualsSpecularFresnelPlusDiffuseIntegral) {
@@ -439,8 +464,8 @@ struct DielectricStats {
     int n = 0;
 };
 
-DielectricStats dielectric_stats(const Bsdf& bsdf, const Vec3& wi, double n_i, double n_t,
-                                 int n, uint64_t seed) {
+DielectricStats dielectric_stats(const Bsdf& bsdf, const Vec3& wi, double n_i, double n_t, int n,
+                                 uint64_t seed) {
     DielectricStats st;
     femto::Pcg32 rng(seed, 5);
     int reflected = 0;
@@ -609,7 +634,8 @@ TEST(BsdfConductor, FresnelMatchesComplexAmplitudes) {
                 EXPECT_EQ(s.pdf, 1.f);
                 EXPECT_EQ(s.wo, Vec3(-wi.x, -wi.y, wi.z));
                 for (int ch = 0; ch < 3; ++ch) {
-                    const double ref = conductor_reference(wi.z, c.eta[ch] / c.ext, c.k[ch] / c.ext);
+                    const double ref =
+                        conductor_reference(wi.z, c.eta[ch] / c.ext, c.k[ch] / c.ext);
                     EXPECT_NEAR(s.weight[ch], ref, 1e-5 * std::max(1.0, ref))
                         << "theta " << theta << " channel " << ch;
                 }
@@ -618,16 +644,25 @@ TEST(BsdfConductor, FresnelMatchesComplexAmplitudes) {
 }
 
 TEST(BsdfConductor, PresetsAndNormalIncidence) {
-    // Presets are the documented RGB triples: normal incidence R = ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
+    // Presets are the documented RGB triples: normal incidence R = ((n-1)^2 + k^2) / ((n+1)^2 +
+    // k^2).
     struct Preset {
         const char* name;
         Color eta, k;
     };
     const Preset presets[] = {
-        {"Au", {0.1431189557f, 0.3749570432f, 1.4424785571f}, {3.9831604247f, 2.3857207478f, 1.6032152899f}},
-        {"Ag", {0.1552646489f, 0.1167232965f, 0.1383806959f}, {4.8283433224f, 3.1222459278f, 2.1469504455f}},
-        {"Cu", {0.2004376970f, 0.9240334304f, 1.1022119527f}, {3.9129485033f, 2.4528477015f, 2.1421879552f}},
-        {"Al", {1.6574599595f, 0.8803689579f, 0.5212287346f}, {9.2238691996f, 6.2695232477f, 4.8370012281f}},
+        {"Au",
+         {0.1431189557f, 0.3749570432f, 1.4424785571f},
+         {3.9831604247f, 2.3857207478f, 1.6032152899f}},
+        {"Ag",
+         {0.1552646489f, 0.1167232965f, 0.1383806959f},
+         {4.8283433224f, 3.1222459278f, 2.1469504455f}},
+        {"Cu",
+         {0.2004376970f, 0.9240334304f, 1.1022119527f},
+         {3.9129485033f, 2.4528477015f, 2.1421879552f}},
+        {"Al",
+         {1.6574599595f, 0.8803689579f, 0.5212287346f},
+         {9.2238691996f, 6.2695232477f, 4.8370012281f}},
     };
     for (const Preset& pr : presets) {
         Properties p("conductor", {});

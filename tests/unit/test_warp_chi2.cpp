@@ -68,9 +68,9 @@ TEST(WarpChi2, UniformHemisphere) {
 }
 
 TEST(WarpChi2, UniformSphere) {
-    const Chi2Result r = direction_test(femto::warp::square_to_uniform_sphere,
-                                        [](const Vec3&) { return femto::warp::uniform_sphere_pdf(); },
-                                        "uniform sphere");
+    const Chi2Result r = direction_test(
+        femto::warp::square_to_uniform_sphere,
+        [](const Vec3&) { return femto::warp::uniform_sphere_pdf(); }, "uniform sphere");
     expect_pass(r, "uniform sphere");
 }
 
@@ -199,12 +199,12 @@ TEST(Chi2Harness, RejectsSlightlyWrongDensity) {
     // Cosine-distributed samples tested against the normalised density (n + 1) cos^n / (2 pi)
     // with n = 1.1 instead of 1: a 10% change of the exponent must be rejected decisively.
     const double n = 1.1;
-    const Chi2Result r =
-        direction_test(femto::warp::square_to_cosine_hemisphere,
-                       [&](const Vec3& v) {
-                           return v.z > 0 ? (n + 1) * std::pow(double(v.z), n) / (2 * kPi) : 0.0;
-                       },
-                       "wrong density");
+    const Chi2Result r = direction_test(
+        femto::warp::square_to_cosine_hemisphere,
+        [&](const Vec3& v) {
+            return v.z > 0 ? (n + 1) * std::pow(double(v.z), n) / (2 * kPi) : 0.0;
+        },
+        "wrong density");
     std::printf("[chi2] wrong density: %s\n", r.describe().c_str());
     EXPECT_LT(r.p_value, 1e-6) << r.describe();
 }

@@ -38,16 +38,32 @@ struct IorEntry {
 };
 /// Mitsuba's table of dielectric indices of refraction (Hecht, Optics; ~589 nm, 0-20 C).
 constexpr IorEntry kIorTable[] = {
-    {"vacuum", 1.0f},         {"helium", 1.000036f},        {"hydrogen", 1.000132f},
-    {"air", 1.000277f},       {"carbon dioxide", 1.00045f}, {"water", 1.3330f},
-    {"acetone", 1.36f},       {"ethanol", 1.361f},          {"carbon tetrachloride", 1.461f},
-    {"glycerol", 1.4729f},    {"benzene", 1.501f},          {"silicone oil", 1.52045f},
-    {"bromine", 1.661f},      {"water ice", 1.31f},         {"fused quartz", 1.458f},
-    {"pyrex", 1.470f},        {"acrylic glass", 1.49f},     {"polypropylene", 1.49f},
-    {"bk7", 1.5046f},         {"sodium chloride", 1.544f},  {"amber", 1.55f},
-    {"pet", 1.5750f},         {"diamond", 2.419f},
+    {"vacuum", 1.0f},
+    {"helium", 1.000036f},
+    {"hydrogen", 1.000132f},
+    {"air", 1.000277f},
+    {"carbon dioxide", 1.00045f},
+    {"water", 1.3330f},
+    {"acetone", 1.36f},
+    {"ethanol", 1.361f},
+    {"carbon tetrachloride", 1.461f},
+    {"glycerol", 1.4729f},
+    {"benzene", 1.501f},
+    {"silicone oil", 1.52045f},
+    {"bromine", 1.661f},
+    {"water ice", 1.31f},
+    {"fused quartz", 1.458f},
+    {"pyrex", 1.470f},
+    {"acrylic glass", 1.49f},
+    {"polypropylene", 1.49f},
+    {"bk7", 1.5046f},
+    {"sodium chloride", 1.544f},
+    {"amber", 1.55f},
+    {"pet", 1.5750f},
+    {"diamond", 2.419f},
     // femto aliases (not in Mitsuba's table)
-    {"acrylic", 1.49f},       {"glass", 1.5046f},
+    {"acrylic", 1.49f},
+    {"glass", 1.5046f},
 };
 
 std::string to_lower(std::string s) {
@@ -64,7 +80,8 @@ float read_ior(const Properties& props, const std::string& name, float def) {
         for (const IorEntry& e : kIorTable)
             if (value == e.name) return e.value;
         std::string valid;
-        for (const IorEntry& e : kIorTable) valid += std::string(valid.empty() ? "" : ", ") + e.name;
+        for (const IorEntry& e : kIorTable)
+            valid += std::string(valid.empty() ? "" : ", ") + e.name;
         props.fail(name, "unknown index of refraction \"" + value + "\" for \"" + name +
                              "\"; give a number or one of: " + valid);
     }
@@ -104,7 +121,7 @@ public:
     explicit Dielectric(const Properties& props)
         : specular_reflectance_(get_texture(props, "specular_reflectance", Color(1.f))),
           specular_transmittance_(get_texture(props, "specular_transmittance", Color(1.f))) {
-        const float int_ior = read_ior(props, "int_ior", 1.5046f);  // bk7
+        const float int_ior = read_ior(props, "int_ior", 1.5046f);    // bk7
         const float ext_ior = read_ior(props, "ext_ior", 1.000277f);  // air
         eta_ = int_ior / ext_ior;
     }
@@ -141,13 +158,12 @@ private:
 
 }  // namespace
 
-FEMTO_PLUGIN(Dielectric, femto::PluginKind::Bsdf, "dielectric",
-             "Smooth dielectric interface (glass, water): Fresnel-weighted reflection and "
-             "refraction",
-             {{"int_ior", "float|string", "bk7",
-               "interior index of refraction (number or name: water, bk7, diamond, ...)"},
-              {"ext_ior", "float|string", "air", "exterior index of refraction (number or name)"},
-              {"specular_reflectance", "color|texture", "1",
-               "factor on the reflection (physically 1)"},
-              {"specular_transmittance", "color|texture", "1",
-               "factor on the transmission (physically 1)"}})
+FEMTO_PLUGIN(
+    Dielectric, femto::PluginKind::Bsdf, "dielectric",
+    "Smooth dielectric interface (glass, water): Fresnel-weighted reflection and "
+    "refraction",
+    {{"int_ior", "float|string", "bk7",
+      "interior index of refraction (number or name: water, bk7, diamond, ...)"},
+     {"ext_ior", "float|string", "air", "exterior index of refraction (number or name)"},
+     {"specular_reflectance", "color|texture", "1", "factor on the reflection (physically 1)"},
+     {"specular_transmittance", "color|texture", "1", "factor on the transmission (physically 1)"}})

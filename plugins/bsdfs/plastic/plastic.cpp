@@ -43,16 +43,32 @@ struct IorEntry {
 };
 /// Mitsuba's table of dielectric indices of refraction (Hecht, Optics; ~589 nm, 0-20 C).
 constexpr IorEntry kIorTable[] = {
-    {"vacuum", 1.0f},         {"helium", 1.000036f},        {"hydrogen", 1.000132f},
-    {"air", 1.000277f},       {"carbon dioxide", 1.00045f}, {"water", 1.3330f},
-    {"acetone", 1.36f},       {"ethanol", 1.361f},          {"carbon tetrachloride", 1.461f},
-    {"glycerol", 1.4729f},    {"benzene", 1.501f},          {"silicone oil", 1.52045f},
-    {"bromine", 1.661f},      {"water ice", 1.31f},         {"fused quartz", 1.458f},
-    {"pyrex", 1.470f},        {"acrylic glass", 1.49f},     {"polypropylene", 1.49f},
-    {"bk7", 1.5046f},         {"sodium chloride", 1.544f},  {"amber", 1.55f},
-    {"pet", 1.5750f},         {"diamond", 2.419f},
+    {"vacuum", 1.0f},
+    {"helium", 1.000036f},
+    {"hydrogen", 1.000132f},
+    {"air", 1.000277f},
+    {"carbon dioxide", 1.00045f},
+    {"water", 1.3330f},
+    {"acetone", 1.36f},
+    {"ethanol", 1.361f},
+    {"carbon tetrachloride", 1.461f},
+    {"glycerol", 1.4729f},
+    {"benzene", 1.501f},
+    {"silicone oil", 1.52045f},
+    {"bromine", 1.661f},
+    {"water ice", 1.31f},
+    {"fused quartz", 1.458f},
+    {"pyrex", 1.470f},
+    {"acrylic glass", 1.49f},
+    {"polypropylene", 1.49f},
+    {"bk7", 1.5046f},
+    {"sodium chloride", 1.544f},
+    {"amber", 1.55f},
+    {"pet", 1.5750f},
+    {"diamond", 2.419f},
     // femto aliases (not in Mitsuba's table)
-    {"acrylic", 1.49f},       {"glass", 1.5046f},
+    {"acrylic", 1.49f},
+    {"glass", 1.5046f},
 };
 
 std::string to_lower(std::string s) {
@@ -69,7 +85,8 @@ float read_ior(const Properties& props, const std::string& name, float def) {
         for (const IorEntry& e : kIorTable)
             if (value == e.name) return e.value;
         std::string valid;
-        for (const IorEntry& e : kIorTable) valid += std::string(valid.empty() ? "" : ", ") + e.name;
+        for (const IorEntry& e : kIorTable)
+            valid += std::string(valid.empty() ? "" : ", ") + e.name;
         props.fail(name, "unknown index of refraction \"" + value + "\" for \"" + name +
                              "\"; give a number or one of: " + valid);
     }
@@ -195,8 +212,8 @@ public:
         if (wi.z <= 0.f || wo.z <= 0.f) return Color(0.f);
         const float f_i = fresnel_dielectric(wi.z, eta_).r;
         const float f_o = fresnel_dielectric(wo.z, eta_).r;
-        return diffuse(hit) * (warp::cosine_hemisphere_pdf(wo) * inv_eta2_ * (1.f - f_i) *
-                               (1.f - f_o));
+        return diffuse(hit) *
+               (warp::cosine_hemisphere_pdf(wo) * inv_eta2_ * (1.f - f_i) * (1.f - f_o));
     }
 
     float pdf(const Hit&, const Vec3& wi, const Vec3& wo) const override {
