@@ -11,14 +11,22 @@ constexpr struct {
     PluginKind kind;
     const char* tag;
 } kKindTags[] = {
-    {PluginKind::Integrator, "integrator"}, {PluginKind::Sensor, "sensor"},
-    {PluginKind::Film, "film"},             {PluginKind::ReconstructionFilter, "rfilter"},
-    {PluginKind::TemporalFilter, "tfilter"}, {PluginKind::Sampler, "sampler"},
-    {PluginKind::Shape, "shape"},           {PluginKind::Bsdf, "bsdf"},
-    {PluginKind::Emitter, "emitter"},       {PluginKind::Texture, "texture"},
-    {PluginKind::Medium, "medium"},         {PluginKind::Phase, "phase"},
-    {PluginKind::Volume, "volume"},         {PluginKind::Distance, "distance"},
-    {PluginKind::Connection, "connection"}, {PluginKind::Angular, "angular"},
+    {PluginKind::Integrator, "integrator"},
+    {PluginKind::Sensor, "sensor"},
+    {PluginKind::Film, "film"},
+    {PluginKind::ReconstructionFilter, "rfilter"},
+    {PluginKind::TemporalFilter, "tfilter"},
+    {PluginKind::Sampler, "sampler"},
+    {PluginKind::Shape, "shape"},
+    {PluginKind::Bsdf, "bsdf"},
+    {PluginKind::Emitter, "emitter"},
+    {PluginKind::Texture, "texture"},
+    {PluginKind::Medium, "medium"},
+    {PluginKind::Phase, "phase"},
+    {PluginKind::Volume, "volume"},
+    {PluginKind::Distance, "distance"},
+    {PluginKind::Connection, "connection"},
+    {PluginKind::Angular, "angular"},
 };
 }  // namespace
 
@@ -39,15 +47,24 @@ bool kind_from_tag(const std::string& tag, PluginKind& kind) {
 
 const char* Properties::type_name(Type t) {
     switch (t) {
-        case Type::Bool: return "boolean";
-        case Type::Integer: return "integer";
-        case Type::Float: return "float";
-        case Type::String: return "string";
-        case Type::Point: return "point";
-        case Type::Vector: return "vector";
-        case Type::Color: return "color";
-        case Type::Transform: return "transform";
-        case Type::Object: return "object";
+        case Type::Bool:
+            return "boolean";
+        case Type::Integer:
+            return "integer";
+        case Type::Float:
+            return "float";
+        case Type::String:
+            return "string";
+        case Type::Point:
+            return "point";
+        case Type::Vector:
+            return "vector";
+        case Type::Color:
+            return "color";
+        case Type::Transform:
+            return "transform";
+        case Type::Object:
+            return "object";
     }
     return "?";
 }

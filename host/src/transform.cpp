@@ -31,7 +31,8 @@ Matrix invert(const Matrix& m) {
     double scale = 0;
     for (const auto& row : m)
         for (double v : row) scale = std::max(scale, std::abs(v));
-    if (!(scale > 0) || !std::isfinite(scale)) throw std::domain_error("matrix is zero or not finite");
+    if (!(scale > 0) || !std::isfinite(scale))
+        throw std::domain_error("matrix is zero or not finite");
     for (int c = 0; c < 4; ++c) {
         int pivot = c;
         for (int r = c + 1; r < 4; ++r)
@@ -131,7 +132,8 @@ Vec3 Transform::vector(const Vec3& v) const {
 
 Vec3 Transform::normal(const Vec3& n) const {
     Vec3 r;
-    for (int i = 0; i < 3; ++i) r[i] = float(inv_[0][i] * n.x + inv_[1][i] * n.y + inv_[2][i] * n.z);
+    for (int i = 0; i < 3; ++i)
+        r[i] = float(inv_[0][i] * n.x + inv_[1][i] * n.y + inv_[2][i] * n.z);
     return r;
 }
 

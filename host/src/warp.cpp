@@ -52,7 +52,8 @@ Vec2 square_to_uniform_triangle(Vec2 u) {
 uint32_t sample_discrete_cdf(const float* cdf, uint32_t n, float& u) {
     // First index i with cdf[i+1] > u.
     const float* it = std::upper_bound(cdf + 1, cdf + n + 1, u);
-    uint32_t i = static_cast<uint32_t>(std::min<std::ptrdiff_t>(it - (cdf + 1), std::ptrdiff_t(n) - 1));
+    uint32_t i =
+        static_cast<uint32_t>(std::min<std::ptrdiff_t>(it - (cdf + 1), std::ptrdiff_t(n) - 1));
     while (i > 0 && cdf[i + 1] - cdf[i] <= 0) --i;  // never pick an empty interval
     const float width = cdf[i + 1] - cdf[i];
     u = width > 0 ? std::min((u - cdf[i]) / width, 0x1.fffffep-1f) : 0.f;

@@ -24,7 +24,8 @@ public:
         const femto::Frame frame(n);
         int visible = 0;
         for (int64_t i = 0; i < samples_; ++i) {
-            const femto::Vec3 d = frame.to_world(femto::warp::square_to_cosine_hemisphere(sampler.next_2d()));
+            const femto::Vec3 d =
+                frame.to_world(femto::warp::square_to_cosine_hemisphere(sampler.next_2d()));
             femto::Ray r = hit.spawn(d);
             r.tmax = max_distance_;
             if (!scene.occluded(r)) ++visible;

@@ -19,11 +19,32 @@ std::string read(const std::string& path) {
     return ss.str();
 }
 
-const char* const kSnippets[] = {"<",     ">",       "\"",  "/>",     "$",       "$res",      "0",
-                                 "-1",    "1e40",    "nan", "inf",    "-0",      "99999999",  "4294967297",
-                                 "&amp;", "<shape",  "</",  "id=\"white\"", "<ref id=\"x\"/>",
-                                 "<include filename=\"scene.xml\"/>", "type=\"sphere\"", "name=\"\"",
-                                 "<float name=\"radius\" value=\"-2\"/>", "\x01", "\xff\xfe", "]]>"};
+const char* const kSnippets[] = {"<",
+                                 ">",
+                                 "\"",
+                                 "/>",
+                                 "$",
+                                 "$res",
+                                 "0",
+                                 "-1",
+                                 "1e40",
+                                 "nan",
+                                 "inf",
+                                 "-0",
+                                 "99999999",
+                                 "4294967297",
+                                 "&amp;",
+                                 "<shape",
+                                 "</",
+                                 "id=\"white\"",
+                                 "<ref id=\"x\"/>",
+                                 "<include filename=\"scene.xml\"/>",
+                                 "type=\"sphere\"",
+                                 "name=\"\"",
+                                 "<float name=\"radius\" value=\"-2\"/>",
+                                 "\x01",
+                                 "\xff\xfe",
+                                 "]]>"};
 
 std::string mutate(const std::string& base, femto::Pcg32& rng) {
     std::string s = base;
@@ -32,12 +53,22 @@ std::string mutate(const std::string& base, femto::Pcg32& rng) {
         const size_t pos = rng.next_u32() % s.size();
         const size_t len = 1 + rng.next_u32() % 24;
         switch (rng.next_u32() % 6) {
-            case 0: s.erase(pos, len); break;                                  // delete
-            case 1: s.insert(pos, kSnippets[rng.next_u32() % std::size(kSnippets)]); break;
-            case 2: s.insert(pos, s.substr(rng.next_u32() % s.size(), len)); break;  // duplicate
-            case 3: s[pos] = char(rng.next_u32() & 0xff); break;                // flip a byte
-            case 4: s.resize(pos); break;                                       // truncate
-            case 5: {  // replace a number
+            case 0:
+                s.erase(pos, len);
+                break;  // delete
+            case 1:
+                s.insert(pos, kSnippets[rng.next_u32() % std::size(kSnippets)]);
+                break;
+            case 2:
+                s.insert(pos, s.substr(rng.next_u32() % s.size(), len));
+                break;  // duplicate
+            case 3:
+                s[pos] = char(rng.next_u32() & 0xff);
+                break;  // flip a byte
+            case 4:
+                s.resize(pos);
+                break;  // truncate
+            case 5: {   // replace a number
                 const size_t d = s.find_first_of("0123456789", pos);
                 if (d == std::string::npos) break;
                 size_t end = s.find_first_not_of("0123456789.", d);
@@ -74,12 +105,14 @@ TEST(Mutation, CorruptedDemoScenesGiveCleanErrors) {
         } catch (const std::exception& e) {
             FAIL() << "mutation " << i << " threw a non-SceneError: " << e.what() << "\n" << xml;
         }
-        const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double secs =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         ASSERT_LT(secs, 20.0) << "mutation " << i << " took " << secs << " s to load:\n" << xml;
     }
-    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::printf("%d mutations: %d loaded, %d rejected with a SceneError, %.1f s\n", kMutations, loaded,
-                rejected, total);
+    const double total =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("%d mutations: %d loaded, %d rejected with a SceneError, %.1f s\n", kMutations,
+                loaded, rejected, total);
     EXPECT_GT(rejected, kMutations / 2);  // the mutations do break the scene
     EXPECT_GT(loaded, 0);                 // and some are harmless
 }

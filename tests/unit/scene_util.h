@@ -31,7 +31,8 @@ inline void write_text(const std::filesystem::path& path, const std::string& tex
 inline std::string scene_xml(const std::string& body, const std::string& version = "3.0.0") {
     std::string s = "<scene version=\"" + version + "\">\n";
     if (body.find("<sensor") == std::string::npos)
-        s += "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/>"
+        s += "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" "
+             "value=\"8\"/>"
              "<integer name=\"height\" value=\"8\"/></film></sensor>\n";
     return s + body + "\n</scene>\n";
 }

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <functional>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,9 @@ struct BsdfChi2Case {
     double phi = 0.7;  ///< azimuth of wi (not 0, so anisotropy is seen at an angle)
     std::vector<Properties> children = {};  ///< nested BSDFs (twosided)
 };
+
+// gtest prints a parameter into the ctest name: print the case name (not the struct's bytes).
+void PrintTo(const BsdfChi2Case& c, std::ostream* os) { *os << c.name; }
 
 std::string angle_name(double deg) { return std::to_string(static_cast<int>(deg)) + "deg"; }
 

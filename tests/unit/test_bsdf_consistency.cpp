@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <ostream>
 #include <set>
 #include <string>
 #include <vector>
@@ -96,6 +97,9 @@ struct Material {
     std::function<std::shared_ptr<Bsdf>()> make;
     bool two_sided = false;  ///< scatters from both sides (else zero when wi.z <= 0)
 };
+
+// gtest prints a parameter into the ctest name: print the case name (not the struct's bytes).
+void PrintTo(const Material& m, std::ostream* os) { *os << m.name; }
 
 /// Materials with a non-delta component.
 std::vector<Material> smooth_materials() {
@@ -283,6 +287,8 @@ struct FurnaceCase {
     bool conserving;                 ///< expected albedo exactly 1 (else only <= 1)
     std::vector<double> thetas_deg;  ///< incident polar angles (> 90 = from below)
 };
+
+void PrintTo(const FurnaceCase& c, std::ostream* os) { *os << c.name; }
 
 std::vector<FurnaceCase> furnace_cases() {
     const std::vector<double> front = {0, 30, 60, 85, 89};

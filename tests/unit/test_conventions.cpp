@@ -19,9 +19,9 @@ void expect_near(const Vec3& a, const Vec3& b, float tol = 1e-5f) {
 TEST(Conventions, LookatFrame) {
     // Mitsuba: columns are left = cross(up, dir), new_up = cross(dir, left), dir, origin.
     const Transform t = Transform::look_at({1, 2, 3}, {1, 2, 2}, {0, 1, 0});
-    expect_near(t.vector({0, 0, 1}), {0, 0, -1});   // local +z looks at the target
-    expect_near(t.vector({1, 0, 0}), {-1, 0, 0});   // local +x is the viewer's left
-    expect_near(t.vector({0, 1, 0}), {0, 1, 0});    // local +y is up
+    expect_near(t.vector({0, 0, 1}), {0, 0, -1});  // local +z looks at the target
+    expect_near(t.vector({1, 0, 0}), {-1, 0, 0});  // local +x is the viewer's left
+    expect_near(t.vector({0, 1, 0}), {0, 1, 0});   // local +y is up
     expect_near(t.point({0, 0, 0}), {1, 2, 3});
     // An up vector not perpendicular to the view direction is orthogonalised.
     const Transform t2 = Transform::look_at({0, 0, 0}, {0, 0, 5}, {0, 1, 1});
@@ -37,8 +37,9 @@ TEST(Conventions, RotationIsRightHandedInDegrees) {
 TEST(Conventions, TransformsApplyInDocumentOrder) {
     // scale, then translate: (1,0,0) -> (2,0,0) -> (3,0,0); the other order gives (4,0,0).
     auto first_vertex_x = [](const std::string& ops) {
-        auto scene = load_scene_string(scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\">" + ops +
-                                                 "</transform></shape>"));
+        auto scene =
+            load_scene_string(scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\">" +
+                                        ops + "</transform></shape>"));
         float max_x = -1e30f;
         for (const Vec3& p : scene->shapes()[0]->mesh().positions) max_x = std::max(max_x, p.x);
         return max_x;
@@ -46,14 +47,15 @@ TEST(Conventions, TransformsApplyInDocumentOrder) {
     EXPECT_NEAR(first_vertex_x("<scale value=\"2\"/><translate x=\"1\"/>"), 3.f, 1e-6f);
     EXPECT_NEAR(first_vertex_x("<translate x=\"1\"/><scale value=\"2\"/>"), 4.f, 1e-6f);
     // <matrix> lists rows.
-    EXPECT_NEAR(first_vertex_x("<matrix value=\"1 0 0 5  0 1 0 0  0 0 1 0  0 0 0 1\"/>"), 6.f, 1e-6f);
+    EXPECT_NEAR(first_vertex_x("<matrix value=\"1 0 0 5  0 1 0 0  0 0 1 0  0 0 0 1\"/>"), 6.f,
+                1e-6f);
 }
 
 TEST(Conventions, RectangleAndCube) {
     // The cube sits far from the rectangle so that the ray below only meets the rectangle.
-    auto scene = load_scene_string(scene_xml(
-        "<shape type=\"rectangle\"/><shape type=\"cube\"><transform name=\"to_world\">"
-        "<translate x=\"10\"/></transform></shape>"));
+    auto scene = load_scene_string(
+        scene_xml("<shape type=\"rectangle\"/><shape type=\"cube\"><transform name=\"to_world\">"
+                  "<translate x=\"10\"/></transform></shape>"));
     const Shape& rect = *scene->shapes()[0];
     EXPECT_NEAR(rect.surface_area(), 4.f, 1e-6f);
     for (const Vec3& p : rect.mesh().positions) {
@@ -78,7 +80,8 @@ TEST(Conventions, PerspectiveCameraOrientation) {
     // Identity to_world: the camera looks along +z; the image's left edge sees +x, the top +y.
     auto scene = load_scene_string(scene_xml(
         "<sensor type=\"perspective\"><float name=\"fov\" value=\"90\"/><film type=\"hdrfilm\">"
-        "<integer name=\"width\" value=\"20\"/><integer name=\"height\" value=\"10\"/></film></sensor>"
+        "<integer name=\"width\" value=\"20\"/><integer name=\"height\" "
+        "value=\"10\"/></film></sensor>"
         "<shape type=\"rectangle\"/>"));
     const Sensor& s = scene->sensor();
     expect_near(s.sample_ray({10, 5}, {}).d, {0, 0, 1});

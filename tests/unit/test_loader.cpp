@@ -30,24 +30,29 @@ TEST(Loader, UpgradesMitsuba06Names) {
     EXPECT_EQ(detail::upgrade_parameter_name("max_depth"), "max_depth");
     EXPECT_EQ(detail::upgrade_plugin_type("sampler", "sobol"), "ldsampler");
     // A 0.6 file with camelCase names loads; the same names in a 3.x file are errors.
-    const std::string body = "<integrator type=\"path\"><integer name=\"maxDepth\" value=\"3\"/></integrator>" +
-                             std::string(kRect);
+    const std::string body =
+        "<integrator type=\"path\"><integer name=\"maxDepth\" value=\"3\"/></integrator>" +
+        std::string(kRect);
     EXPECT_NO_THROW(load_scene_string(scene_xml(body, "0.6.0")));
-    EXPECT_NE(load_error(scene_xml(body, "3.0.0")).find("did you mean \"max_depth\""), std::string::npos);
+    EXPECT_NE(load_error(scene_xml(body, "3.0.0")).find("did you mean \"max_depth\""),
+              std::string::npos);
 }
 
 TEST(Loader, DefaultsSubstitutionAndDefines) {
     const std::string xml = scene_xml(
         "<default name=\"w\" value=\"16\"/>"
         "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"$w\"/>"
-        "<integer name=\"height\" value=\"$w\"/></film></sensor>" + std::string(kRect));
+        "<integer name=\"height\" value=\"$w\"/></film></sensor>" +
+        std::string(kRect));
     EXPECT_EQ(load_scene_string(xml)->sensor().film().width(), 16);
     LoadOptions opts;
     opts.defines = {{"w", "24"}};
     EXPECT_EQ(load_scene_string(xml, opts)->sensor().film().height(), 24);
-    const std::string msg = load_error(scene_xml(
-        "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"$nope\"/>"
-        "</film></sensor>" + std::string(kRect)));
+    const std::string msg =
+        load_error(scene_xml("<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer "
+                             "name=\"width\" value=\"$nope\"/>"
+                             "</film></sensor>" +
+                             std::string(kRect)));
     EXPECT_NE(msg.find("$nope is not defined"), std::string::npos) << msg;
     EXPECT_NE(msg.find("<string>:2:"), std::string::npos) << msg;  // file:line:col
 }
@@ -59,8 +64,8 @@ TEST(Loader, IncludeIsRelativeToTheIncludingFile) {
                      "<scene version=\"0.6.0\"><include filename=\"more/b.xml\"/></scene>");
     test::write_text(dir / "parts" / "more" / "b.xml",
                      "<scene version=\"0.6.0\"><bsdf type=\"diffuse\" id=\"grey\"/></scene>");
-    test::write_text(dir / "main.xml",
-                     scene_xml("<include filename=\"parts/a.xml\"/><shape type=\"rectangle\"><ref id=\"grey\"/></shape>"));
+    test::write_text(dir / "main.xml", scene_xml("<include filename=\"parts/a.xml\"/><shape "
+                                                 "type=\"rectangle\"><ref id=\"grey\"/></shape>"));
     auto scene = load_scene((dir / "main.xml").string());
     EXPECT_EQ(scene->shapes()[0]->bsdf()->id(), "grey");
     // A missing include names the including file and line.
@@ -73,46 +78,56 @@ TEST(Loader, IncludeIsRelativeToTheIncludingFile) {
         EXPECT_NE(std::string(e.what()).find("nothere.xml"), std::string::npos) << e.what();
     }
     // An include cycle is an error, not a hang.
-    test::write_text(dir / "cycle.xml", "<scene version=\"3.0.0\"><include filename=\"cycle.xml\"/></scene>");
+    test::write_text(dir / "cycle.xml",
+                     "<scene version=\"3.0.0\"><include filename=\"cycle.xml\"/></scene>");
     EXPECT_THROW(load_scene((dir / "cycle.xml").string()), SceneError);
 }
 
 TEST(Loader, RefAndAlias) {
-    auto scene = load_scene_string(scene_xml(
-        "<bsdf type=\"diffuse\" id=\"a\"/><alias id=\"a\" as=\"b\"/>"
-        "<shape type=\"rectangle\"><ref id=\"b\"/></shape>"));
+    auto scene =
+        load_scene_string(scene_xml("<bsdf type=\"diffuse\" id=\"a\"/><alias id=\"a\" as=\"b\"/>"
+                                    "<shape type=\"rectangle\"><ref id=\"b\"/></shape>"));
     EXPECT_EQ(scene->shapes()[0]->bsdf()->id(), "a");
-    const std::string msg = load_error(scene_xml("<shape type=\"rectangle\"><ref id=\"whte\"/></shape>"
-                                                 "<bsdf type=\"diffuse\" id=\"white\"/>"));
+    const std::string msg =
+        load_error(scene_xml("<shape type=\"rectangle\"><ref id=\"whte\"/></shape>"
+                             "<bsdf type=\"diffuse\" id=\"white\"/>"));
     EXPECT_NE(msg.find("no object with id \"whte\""), std::string::npos) << msg;
-    EXPECT_NE(load_error(scene_xml("<bsdf type=\"diffuse\" id=\"x\"/><bsdf type=\"diffuse\" id=\"x\"/>" +
-                                   std::string(kRect)))
-                  .find("defined twice"),
-              std::string::npos);
+    EXPECT_NE(
+        load_error(scene_xml("<bsdf type=\"diffuse\" id=\"x\"/><bsdf type=\"diffuse\" id=\"x\"/>" +
+                             std::string(kRect)))
+            .find("defined twice"),
+        std::string::npos);
 }
 
 TEST(Loader, StrictParameters) {
     // Unknown parameter: located error with the closest valid name.
-    std::string msg = load_error(scene_xml("<shape type=\"rectangle\"><boolean name=\"flip_normal\" value=\"true\"/></shape>"));
+    std::string msg = load_error(scene_xml(
+        "<shape type=\"rectangle\"><boolean name=\"flip_normal\" value=\"true\"/></shape>"));
     EXPECT_NE(msg.find("<string>:3:"), std::string::npos) << msg;
     EXPECT_NE(msg.find("did you mean \"flip_normals\""), std::string::npos) << msg;
     // ... which --lenient turns into a warning.
     LoadOptions lenient;
     lenient.lenient = true;
     EXPECT_NO_THROW(load_scene_string(
-        scene_xml("<shape type=\"rectangle\"><boolean name=\"flip_normal\" value=\"true\"/></shape>"), lenient));
+        scene_xml(
+            "<shape type=\"rectangle\"><boolean name=\"flip_normal\" value=\"true\"/></shape>"),
+        lenient));
     // Wrong type.
-    msg = load_error(scene_xml("<shape type=\"rectangle\"><string name=\"flip_normals\" value=\"yes\"/></shape>"));
+    msg = load_error(scene_xml(
+        "<shape type=\"rectangle\"><string name=\"flip_normals\" value=\"yes\"/></shape>"));
     EXPECT_NE(msg.find("must be a boolean"), std::string::npos) << msg;
     // Unknown plugin, with suggestion.
     msg = load_error(scene_xml("<shape type=\"rectangel\"/>"));
-    EXPECT_NE(msg.find("unknown <shape> plugin \"rectangel\" (did you mean \"rectangle\"?)"), std::string::npos)
+    EXPECT_NE(msg.find("unknown <shape> plugin \"rectangel\" (did you mean \"rectangle\"?)"),
+              std::string::npos)
         << msg;
     // A plugin of the wrong kind.
     msg = load_error(scene_xml("<shape type=\"diffuse\"/>"));
-    EXPECT_NE(msg.find("is a <bsdf> plugin, but it is used as a <shape>"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("is a <bsdf> plugin, but it is used as a <shape>"), std::string::npos)
+        << msg;
     // Unknown tag and attribute.
-    msg = load_error(scene_xml("<shape type=\"rectangle\"><colour name=\"x\" value=\"1\"/></shape>"));
+    msg =
+        load_error(scene_xml("<shape type=\"rectangle\"><colour name=\"x\" value=\"1\"/></shape>"));
     EXPECT_NE(msg.find("unknown tag <colour>"), std::string::npos) << msg;
     msg = load_error(scene_xml("<shape type=\"rectangle\" idd=\"x\"/>"));
     EXPECT_NE(msg.find("unknown attribute \"idd\""), std::string::npos) << msg;
@@ -123,48 +138,65 @@ TEST(Loader, StrictParameters) {
 
 TEST(Loader, BadValues) {
     auto film = [](const std::string& w) {
-        return scene_xml("<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"" + w +
-                         "\"/></film></sensor>" + std::string(kRect));
+        return scene_xml(
+            "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"" +
+            w + "\"/></film></sensor>" + std::string(kRect));
     };
     EXPECT_NE(load_error(film("0")).find("width must be in [1, 65536]"), std::string::npos);
     EXPECT_NE(load_error(film("-5")).find("width must be in"), std::string::npos);
     EXPECT_NE(load_error(film("1e9")).find("not an integer"), std::string::npos);
     EXPECT_NE(load_error(film("99999999999999999999")).find("out of range"), std::string::npos);
-    EXPECT_NE(load_error(scene_xml("<sensor type=\"perspective\"><float name=\"fov\" value=\"nan\"/></sensor>" +
-                                   std::string(kRect)))
-                  .find("non-finite"),
-              std::string::npos);
-    EXPECT_NE(load_error(scene_xml("<sensor type=\"perspective\"><float name=\"fov\" value=\"inf\"/></sensor>" +
-                                   std::string(kRect)))
-                  .find("non-finite"),
-              std::string::npos);
-    EXPECT_NE(load_error(scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\"><scale x=\"0\"/>"
-                                   "</transform></shape>"))
-                  .find("degenerate transform"),
-              std::string::npos);
-    EXPECT_NE(load_error(scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\">"
-                                   "<lookat origin=\"0,0,0\" target=\"0,0,0\" up=\"0,1,0\"/></transform></shape>"))
-                  .find("degenerate transform"),
-              std::string::npos);
-    EXPECT_NE(load_error(scene_xml("<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"1, 2\"/></bsdf>")).find(
-                  "needs 1 or 3 numbers"),
-              std::string::npos);
+    EXPECT_NE(
+        load_error(
+            scene_xml("<sensor type=\"perspective\"><float name=\"fov\" value=\"nan\"/></sensor>" +
+                      std::string(kRect)))
+            .find("non-finite"),
+        std::string::npos);
+    EXPECT_NE(
+        load_error(
+            scene_xml("<sensor type=\"perspective\"><float name=\"fov\" value=\"inf\"/></sensor>" +
+                      std::string(kRect)))
+            .find("non-finite"),
+        std::string::npos);
+    EXPECT_NE(
+        load_error(
+            scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\"><scale x=\"0\"/>"
+                      "</transform></shape>"))
+            .find("degenerate transform"),
+        std::string::npos);
+    EXPECT_NE(
+        load_error(
+            scene_xml(
+                "<shape type=\"rectangle\"><transform name=\"to_world\">"
+                "<lookat origin=\"0,0,0\" target=\"0,0,0\" up=\"0,1,0\"/></transform></shape>"))
+            .find("degenerate transform"),
+        std::string::npos);
+    EXPECT_NE(
+        load_error(
+            scene_xml("<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"1, 2\"/></bsdf>"))
+            .find("needs 1 or 3 numbers"),
+        std::string::npos);
 }
 
 TEST(Loader, MalformedAndEmpty) {
-    std::string msg = load_error("<scene version=\"3.0.0\">\n  <shape type=\"rectangle\">\n</scene>");
+    std::string msg =
+        load_error("<scene version=\"3.0.0\">\n  <shape type=\"rectangle\">\n</scene>");
     EXPECT_NE(msg.find("malformed XML"), std::string::npos) << msg;
     EXPECT_NE(msg.find("<string>:3:"), std::string::npos) << msg;
-    EXPECT_NE(load_error("<scene version=\"3.0.0\"><sensor type=\"perspective\"/></scene>").find("empty"),
+    EXPECT_NE(
+        load_error("<scene version=\"3.0.0\"><sensor type=\"perspective\"/></scene>").find("empty"),
+        std::string::npos);
+    EXPECT_NE(load_error("<scene version=\"3.0.0\"></scene>").find("no <sensor>"),
               std::string::npos);
-    EXPECT_NE(load_error("<scene version=\"3.0.0\"></scene>").find("no <sensor>"), std::string::npos);
     EXPECT_NE(load_error("<scene></scene>").find("version"), std::string::npos);
-    EXPECT_NE(load_error("<notascene version=\"3.0.0\"/>").find("must be <scene>"), std::string::npos);
+    EXPECT_NE(load_error("<notascene version=\"3.0.0\"/>").find("must be <scene>"),
+              std::string::npos);
     EXPECT_NE(load_error("").find("malformed XML"), std::string::npos);
 }
 
 TEST(Loader, MissingMeshFileIsLocated) {
-    const std::string msg = load_error(scene_xml("<shape type=\"obj\"><string name=\"filename\" value=\"no/such.obj\"/></shape>"));
+    const std::string msg = load_error(
+        scene_xml("<shape type=\"obj\"><string name=\"filename\" value=\"no/such.obj\"/></shape>"));
     EXPECT_NE(msg.find("<string>:3:"), std::string::npos) << msg;
     EXPECT_NE(msg.find("such.obj"), std::string::npos) << msg;
 }
@@ -172,7 +204,8 @@ TEST(Loader, MissingMeshFileIsLocated) {
 TEST(Loader, LazyPluginLoading) {
     load_scene_string(scene_xml(kRect));
     for (const auto& f : loaded_plugin_files()) {
-        EXPECT_EQ(f.find("roughconductor"), std::string::npos) << "a plugin the scene never names was loaded: " << f;
+        EXPECT_EQ(f.find("roughconductor"), std::string::npos)
+            << "a plugin the scene never names was loaded: " << f;
         EXPECT_EQ(f.find("ply.so"), std::string::npos) << f;
     }
 }

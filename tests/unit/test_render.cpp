@@ -35,11 +35,17 @@ std::string furnace_scene(double albedo, double radiance, const std::string& int
     return "<scene version=\"3.0.0\">" + integrator +
            "<sensor type=\"perspective\"><float name=\"fov\" value=\"60\"/>"
            "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"16\"/></sampler>"
-           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"32\"/><integer name=\"height\" value=\"32\"/>"
+           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"32\"/><integer name=\"height\" "
+           "value=\"32\"/>"
            "<rfilter type=\"box\"/></film></sensor>"
-           "<shape type=\"sphere\"><float name=\"radius\" value=\"3\"/><boolean name=\"flip_normals\" value=\"true\"/>"
-           "<bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"" + std::to_string(albedo) + "\"/></bsdf>"
-           "<emitter type=\"area\"><float name=\"radiance\" value=\"" + std::to_string(radiance) + "\"/></emitter>"
+           "<shape type=\"sphere\"><float name=\"radius\" value=\"3\"/><boolean "
+           "name=\"flip_normals\" value=\"true\"/>"
+           "<bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"" +
+           std::to_string(albedo) +
+           "\"/></bsdf>"
+           "<emitter type=\"area\"><float name=\"radiance\" value=\"" +
+           std::to_string(radiance) +
+           "\"/></emitter>"
            "</shape></scene>";
 }
 
@@ -49,7 +55,8 @@ TEST(Render, FurnaceMatchesGeometricSeries) {
     // Inside a closed diffuse sphere of albedo rho emitting Le everywhere, L = Le / (1 - rho).
     for (double rho : {0.3, 0.7}) {
         auto scene = load_scene_string(furnace_scene(
-            rho, 1.0, "<integrator type=\"path\"><integer name=\"max_depth\" value=\"-1\"/></integrator>"));
+            rho, 1.0,
+            "<integrator type=\"path\"><integer name=\"max_depth\" value=\"-1\"/></integrator>"));
         RenderOptions opt;
         opt.seed = 7;
         render(*scene, opt);
@@ -69,7 +76,8 @@ TEST(Render, PointLightOverLambertianPlane) {
         "<sensor type=\"orthographic\"><transform name=\"to_world\"><scale x=\"2\" y=\"2\"/>"
         "<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/></transform>"
         "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"64\"/></sampler>"
-        "<film type=\"hdrfilm\"><integer name=\"width\" value=\"16\"/><integer name=\"height\" value=\"16\"/>"
+        "<film type=\"hdrfilm\"><integer name=\"width\" value=\"16\"/><integer name=\"height\" "
+        "value=\"16\"/>"
         "<rfilter type=\"box\"/></film></sensor>"
         "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"10\"/></transform>"
         "<bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.6\"/></bsdf></shape>"
@@ -111,7 +119,8 @@ TEST(Render, DeterministicForSeedAndThreads) {
     const std::string xml = femto::test::scene_xml(
         "<shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0\" z=\"4\"/>"
         "<emitter type=\"area\"><float name=\"radiance\" value=\"2\"/></emitter></shape>"
-        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/><translate z=\"6\"/></transform></shape>");
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/><translate "
+        "z=\"6\"/></transform></shape>");
     auto render_with = [&](int threads, uint64_t seed) {
         auto scene = load_scene_string(xml);
         RenderOptions opt;
@@ -121,7 +130,8 @@ TEST(Render, DeterministicForSeedAndThreads) {
         render(*scene, opt);
         return scene->sensor().film().steady_image();
     };
-    const auto a = render_with(2, 1), b = render_with(2, 1), c = render_with(1, 1), d = render_with(2, 2);
+    const auto a = render_with(2, 1), b = render_with(2, 1), c = render_with(1, 1),
+               d = render_with(2, 2);
     EXPECT_EQ(a, b);  // bit for bit
     EXPECT_EQ(a, c);  // the tile merge order makes it independent of the thread count too
     EXPECT_NE(a, d);  // and the seed matters

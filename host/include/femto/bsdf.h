@@ -15,7 +15,7 @@
 namespace femto {
 
 enum BsdfFlags : uint32_t {
-    kBsdfNull = 1u << 0,           ///< index-matched pass-through (the `null` material)
+    kBsdfNull = 1u << 0,  ///< index-matched pass-through (the `null` material)
     kBsdfDiffuseReflection = 1u << 1,
     kBsdfGlossyReflection = 1u << 2,
     kBsdfDeltaReflection = 1u << 3,
@@ -29,10 +29,10 @@ enum BsdfFlags : uint32_t {
 
 struct BsdfSample {
     Vec3 wo;
-    float pdf = 0.f;           ///< solid-angle pdf (a discrete probability for delta lobes)
-    float eta = 1.f;           ///< relative index of refraction crossed (1 for reflection)
-    uint32_t sampled_lobe = 0; ///< one of BsdfFlags
-    Color weight;              ///< eval / pdf; black when sampling failed
+    float pdf = 0.f;            ///< solid-angle pdf (a discrete probability for delta lobes)
+    float eta = 1.f;            ///< relative index of refraction crossed (1 for reflection)
+    uint32_t sampled_lobe = 0;  ///< one of BsdfFlags
+    Color weight;               ///< eval / pdf; black when sampling failed
     bool valid() const { return pdf > 0.f; }
 };
 

@@ -19,9 +19,24 @@ struct Color {
     constexpr Color operator/(const Color& o) const { return {r / o.r, g / o.g, b / o.b}; }
     constexpr Color operator*(float s) const { return {r * s, g * s, b * s}; }
     constexpr Color operator/(float s) const { return {r / s, g / s, b / s}; }
-    constexpr Color& operator+=(const Color& o) { r += o.r; g += o.g; b += o.b; return *this; }
-    constexpr Color& operator*=(const Color& o) { r *= o.r; g *= o.g; b *= o.b; return *this; }
-    constexpr Color& operator*=(float s) { r *= s; g *= s; b *= s; return *this; }
+    constexpr Color& operator+=(const Color& o) {
+        r += o.r;
+        g += o.g;
+        b += o.b;
+        return *this;
+    }
+    constexpr Color& operator*=(const Color& o) {
+        r *= o.r;
+        g *= o.g;
+        b *= o.b;
+        return *this;
+    }
+    constexpr Color& operator*=(float s) {
+        r *= s;
+        g *= s;
+        b *= s;
+        return *this;
+    }
     constexpr bool operator==(const Color& o) const { return r == o.r && g == o.g && b == o.b; }
     constexpr bool is_black() const { return r == 0 && g == 0 && b == 0; }
     constexpr float max_component() const { return std::max({r, g, b}); }

@@ -10,13 +10,13 @@ namespace femto {
 
 /// Result of sampling an emitter for direct lighting of a reference point.
 struct EmitterSample {
-    Vec3 p;             ///< point on the emitter
-    Vec3 n;             ///< its normal (zero for point-like emitters)
-    Vec3 wi;            ///< unit direction from the reference point toward the emitter
-    float distance = 0; ///< distance to p (infinite for distant emitters)
-    float pdf = 0;      ///< solid-angle pdf (1 for delta emitters); 0 = no contribution
-    Color weight;       ///< incident radiance / pdf (irradiance for delta emitters)
-    bool delta = false; ///< true when no BSDF sample can hit this emitter (MIS weight 1)
+    Vec3 p;              ///< point on the emitter
+    Vec3 n;              ///< its normal (zero for point-like emitters)
+    Vec3 wi;             ///< unit direction from the reference point toward the emitter
+    float distance = 0;  ///< distance to p (infinite for distant emitters)
+    float pdf = 0;       ///< solid-angle pdf (1 for delta emitters); 0 = no contribution
+    Color weight;        ///< incident radiance / pdf (irradiance for delta emitters)
+    bool delta = false;  ///< true when no BSDF sample can hit this emitter (MIS weight 1)
 };
 
 class Emitter : public Object {

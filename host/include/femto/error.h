@@ -25,7 +25,8 @@ class SceneError : public std::runtime_error {
 public:
     SceneError(const SourceLocation& loc, const std::string& message)
         : std::runtime_error(loc.file.empty() ? message : loc.str() + ": " + message),
-          location_(loc), message_(message) {}
+          location_(loc),
+          message_(message) {}
     explicit SceneError(const std::string& message) : SceneError(SourceLocation{}, message) {}
     const SourceLocation& location() const { return location_; }
     const std::string& message() const { return message_; }

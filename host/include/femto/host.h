@@ -42,18 +42,19 @@ ObjectPtr create_object(PluginKind kind, const std::string& type, const Properti
 const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
                                     const LoadOptions& options = {});
 /// Every plugin found on the search path (this loads them all).
-std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(const LoadOptions& options = {});
+std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(
+    const LoadOptions& options = {});
 /// Paths of the plugin libraries opened so far (lazy loading means: only those named).
 std::vector<std::string> loaded_plugin_files();
 /// The folders searched for plugins, in order.
 std::vector<std::string> plugin_search_path(const LoadOptions& options = {});
 
 struct RenderOptions {
-    uint32_t spp = 0;          ///< 0 = the sampler's sample_count
-    int threads = 0;           ///< 0 = all cores
+    uint32_t spp = 0;  ///< 0 = the sampler's sample_count
+    int threads = 0;   ///< 0 = all cores
     uint64_t seed = 0;
-    bool progress = false;     ///< progress line on stderr
-    std::string scene_file;    ///< recorded in the outputs
+    bool progress = false;   ///< progress line on stderr
+    std::string scene_file;  ///< recorded in the outputs
     /// When set and becomes true, rendering stops at the end of the current pass.
     const std::atomic<bool>* stop = nullptr;
 };
@@ -71,7 +72,8 @@ struct RenderStats {
 /// given seed and thread count).
 RenderStats render(Scene& scene, const RenderOptions& options);
 /// RenderInfo for the film's write(), from a finished render.
-RenderInfo make_render_info(const Scene& scene, const RenderOptions& options, const RenderStats& stats);
+RenderInfo make_render_info(const Scene& scene, const RenderOptions& options,
+                            const RenderStats& stats);
 
 const char* version();
 

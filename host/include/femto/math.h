@@ -41,9 +41,24 @@ struct Vec3 {
     constexpr Vec3 operator*(float s) const { return {x * s, y * s, z * s}; }
     constexpr Vec3 operator/(float s) const { return {x / s, y / s, z / s}; }
     constexpr Vec3 operator*(const Vec3& b) const { return {x * b.x, y * b.y, z * b.z}; }
-    constexpr Vec3& operator+=(const Vec3& b) { x += b.x; y += b.y; z += b.z; return *this; }
-    constexpr Vec3& operator-=(const Vec3& b) { x -= b.x; y -= b.y; z -= b.z; return *this; }
-    constexpr Vec3& operator*=(float s) { x *= s; y *= s; z *= s; return *this; }
+    constexpr Vec3& operator+=(const Vec3& b) {
+        x += b.x;
+        y += b.y;
+        z += b.z;
+        return *this;
+    }
+    constexpr Vec3& operator-=(const Vec3& b) {
+        x -= b.x;
+        y -= b.y;
+        z -= b.z;
+        return *this;
+    }
+    constexpr Vec3& operator*=(float s) {
+        x *= s;
+        y *= s;
+        z *= s;
+        return *this;
+    }
     constexpr bool operator==(const Vec3& b) const { return x == b.x && y == b.y && z == b.z; }
 };
 constexpr Vec3 operator*(float s, const Vec3& v) { return v * s; }
@@ -99,7 +114,10 @@ inline Vec3 offset_origin(const Vec3& p, const Vec3& ng, const Vec3& dir) {
     return p + ng * (dot(ng, dir) >= 0 ? scale : -scale);
 }
 
-template <typename T> constexpr T clamp(T v, T lo, T hi) { return std::min(std::max(v, lo), hi); }
+template <typename T>
+constexpr T clamp(T v, T lo, T hi) {
+    return std::min(std::max(v, lo), hi);
+}
 inline float safe_sqrt(float v) { return std::sqrt(std::max(0.f, v)); }
 inline float radians(float deg) { return deg * (kPi / 180.f); }
 

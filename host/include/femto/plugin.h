@@ -46,15 +46,16 @@ extern "C" {
 typedef const femto::PluginDescriptor* (*femto_plugin_descriptor_fn)();
 }
 
-#define FEMTO_PLUGIN(CLASS, KIND, TYPE_NAME, DESCRIPTION, ...)                               \
-    extern "C" __attribute__((visibility("default"))) const femto::PluginDescriptor*        \
-    femto_plugin_descriptor() {                                                             \
-        static const femto::PluginDescriptor descriptor{                                    \
-            femto::kPluginAbiVersion,                                                       \
-            KIND,                                                                           \
-            TYPE_NAME,                                                                      \
-            DESCRIPTION,                                                                    \
-            std::vector<femto::ParamSpec> __VA_ARGS__,                                      \
+#define FEMTO_PLUGIN(CLASS, KIND, TYPE_NAME, DESCRIPTION, ...)                                  \
+    extern "C" __attribute__((visibility("default"))) const femto::PluginDescriptor*            \
+    femto_plugin_descriptor() {                                                                 \
+        static const femto::PluginDescriptor descriptor{                                        \
+            femto::kPluginAbiVersion,                                                           \
+            KIND,                                                                               \
+            TYPE_NAME,                                                                          \
+            DESCRIPTION,                                                                        \
+            std::vector<femto::ParamSpec>                                                       \
+                __VA_ARGS__,                                                                    \
             [](const femto::Properties& props) -> femto::Object* { return new CLASS(props); }}; \
-        return &descriptor;                                                                 \
+        return &descriptor;                                                                     \
     }

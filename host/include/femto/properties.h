@@ -23,7 +23,8 @@ class Properties {
 public:
     enum class Type { Bool, Integer, Float, String, Point, Vector, Color, Transform, Object };
     /// Points and vectors share the Vec3 alternative; `type` tells them apart.
-    using Value = std::variant<bool, int64_t, double, std::string, Vec3, Color, Transform, ObjectPtr>;
+    using Value =
+        std::variant<bool, int64_t, double, std::string, Vec3, Color, Transform, ObjectPtr>;
     struct Entry {
         std::string name;
         Type type;

@@ -29,7 +29,8 @@ struct Bounds3 {
 class Scene {
 public:
     Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sensor,
-          std::vector<std::shared_ptr<Shape>> shapes, std::vector<std::shared_ptr<Emitter>> emitters);
+          std::vector<std::shared_ptr<Shape>> shapes,
+          std::vector<std::shared_ptr<Emitter>> emitters);
     ~Scene();
     Scene(const Scene&) = delete;
     Scene& operator=(const Scene&) = delete;

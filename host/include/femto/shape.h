@@ -12,6 +12,7 @@
 #include "femto/math.h"
 #include "femto/object.h"
 #include "femto/properties.h"
+#include "femto/transform.h"
 
 namespace femto {
 
@@ -21,14 +22,14 @@ class Shape;
 
 /// A ray-surface intersection, everything an integrator needs at a path vertex.
 struct Hit {
-    float t = kInfinity;   ///< ray distance
-    Vec3 p;                ///< position
-    Vec3 ng;               ///< geometric normal (unit; points to the shape's "outside")
-    Frame sh;              ///< shading frame (sh.n is the interpolated normal)
-    Vec2 uv;               ///< surface parameterization
-    Vec3 wi;               ///< direction toward the ray origin, in the shading frame
+    float t = kInfinity;  ///< ray distance
+    Vec3 p;               ///< position
+    Vec3 ng;              ///< geometric normal (unit; points to the shape's "outside")
+    Frame sh;             ///< shading frame (sh.n is the interpolated normal)
+    Vec2 uv;              ///< surface parameterization
+    Vec3 wi;              ///< direction toward the ray origin, in the shading frame
     const Shape* shape = nullptr;
-    uint32_t prim = 0;     ///< triangle index (0 for spheres)
+    uint32_t prim = 0;  ///< triangle index (0 for spheres)
 
     Vec3 to_world(const Vec3& v) const { return sh.to_world(v); }
     Vec3 to_local(const Vec3& v) const { return sh.to_local(v); }
@@ -102,6 +103,19 @@ private:
     std::shared_ptr<Bsdf> bsdf_;
     std::shared_ptr<Emitter> emitter_;
 };
+
+/// Moves a mesh read in object space to world space (what the obj and ply shapes share):
+///  - positions through `to_world`; if it flips handedness (det < 0) the winding is reversed
+///    so the geometric normal cross(p1-p0, p2-p0) keeps pointing to the side the transformed
+///    normals point to (the outside, for a closed mesh wound as Mitsuba expects);
+///  - file normals through the inverse transpose, normalized; a zero-length or non-finite one
+///    counts as missing;
+///  - missing normals: angle-weighted average of the adjacent face normals (Max 1999, as
+///    Mitsuba 3), accumulated per file position `position_ids[v]` (of `position_count`) so
+///    vertices split only by their uv stay smooth across the seam;
+///  - `face_normals`: no vertex normals at all (flat shading from the geometric normal).
+void mesh_to_world(TriangleMesh& mesh, const std::vector<uint32_t>& position_ids,
+                   size_t position_count, const Transform& to_world, bool face_normals);
 
 /// Reads a `to_world` transform, rejecting degenerate (singular) ones with a located error.
 Transform read_to_world(const Properties& props);

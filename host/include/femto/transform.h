@@ -30,9 +30,9 @@ public:
     Transform operator*(const Transform& other) const;
     Transform inverse() const { return Transform(inv_, m_); }
 
-    Vec3 point(const Vec3& p) const;     ///< applies translation and the projective divide
-    Vec3 vector(const Vec3& v) const;    ///< ignores translation
-    Vec3 normal(const Vec3& n) const;    ///< inverse transpose, not normalized
+    Vec3 point(const Vec3& p) const;   ///< applies translation and the projective divide
+    Vec3 vector(const Vec3& v) const;  ///< ignores translation
+    Vec3 normal(const Vec3& n) const;  ///< inverse transpose, not normalized
     const Matrix& matrix() const { return m_; }
     const Matrix& inverse_matrix() const { return inv_; }
     bool is_identity() const;

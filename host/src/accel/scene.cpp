@@ -55,7 +55,8 @@ struct Scene::Accel {
 };
 
 Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sensor,
-             std::vector<std::shared_ptr<Shape>> shapes, std::vector<std::shared_ptr<Emitter>> emitters)
+             std::vector<std::shared_ptr<Shape>> shapes,
+             std::vector<std::shared_ptr<Emitter>> emitters)
     : accel_(std::make_unique<Accel>()),
       integrator_(std::move(integrator)),
       sensor_(std::move(sensor)),
@@ -80,8 +81,8 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
         RTCGeometry geom;
         if (shape.is_sphere()) {
             geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                                  RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+                geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
             const Vec3 c = shape.sphere_center();
             v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = shape.sphere_radius();
             bounds_.expand(c - Vec3(shape.sphere_radius()));
@@ -89,11 +90,13 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
         } else {
             const TriangleMesh& m = shape.mesh();
             geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-                geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
+            auto* v = static_cast<float*>(
+                rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                        3 * sizeof(float), m.positions.size()));
             std::memcpy(v, m.positions.data(), m.positions.size() * sizeof(Vec3));
-            auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-                geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m.triangle_count()));
+            auto* idx = static_cast<uint32_t*>(
+                rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                        3 * sizeof(uint32_t), m.triangle_count()));
             std::memcpy(idx, m.indices.data(), m.indices.size() * sizeof(uint32_t));
             for (const Vec3& p : m.positions) bounds_.expand(p);
         }
@@ -126,7 +129,8 @@ bool Scene::intersect(const Ray& ray, Hit& hit) const {
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(accel_->scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    accel_->by_geom_id[rh.hit.geomID]->fill_hit(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, hit);
+    accel_->by_geom_id[rh.hit.geomID]->fill_hit(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v,
+                                                hit);
     return true;
 }
 

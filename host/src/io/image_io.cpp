@@ -52,7 +52,8 @@ std::string exe_relative_config() {
         std::error_code ec;
         const fs::path lib = fs::canonical(info.dli_fname, ec);
         if (!ec) {
-            const fs::path installed = lib.parent_path().parent_path() / "share" / FEMTO_OCIO_INSTALL_SUBDIR;
+            const fs::path installed =
+                lib.parent_path().parent_path() / "share" / FEMTO_OCIO_INSTALL_SUBDIR;
             if (fs::exists(installed, ec)) return installed.string();
         }
     }
@@ -72,7 +73,8 @@ OCIO::ConstCPUProcessorRcPtr display_processor() {
         }
     });
     if (!processor)
-        throw std::runtime_error(fmt::format("OpenColorIO config {}: {}", ocio_config_path(), error));
+        throw std::runtime_error(
+            fmt::format("OpenColorIO config {}: {}", ocio_config_path(), error));
     return processor;
 }
 
@@ -110,7 +112,8 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
     commit(tmp, path);
 }
 
-void write_png_preview(const std::string& path, int width, int height, const float* rgb, float exposure) {
+void write_png_preview(const std::string& path, int width, int height, const float* rgb,
+                       float exposure) {
     const size_t n = size_t(width) * size_t(height);
     std::vector<float> buf(rgb, rgb + 3 * n);
     const float scale = std::exp2(exposure);
@@ -133,21 +136,23 @@ void write_png_preview(const std::string& path, int width, int height, const flo
     commit(tmp, path);
 }
 
-std::vector<float> read_image_rgb(const std::string& path, int& width, int& height, bool srgb_8bit) {
+std::vector<float> read_image_rgb(const std::string& path, int& width, int& height,
+                                  bool srgb_8bit) {
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw SceneError(fmt::format("cannot read image \"{}\": {}", path, OIIO::geterror()));
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 ||
         int64_t(spec.width) * spec.height > (int64_t(1) << 28))
-        throw SceneError(fmt::format("image \"{}\" has an unsupported size {}x{}x{}", path, spec.width,
-                                     spec.height, spec.nchannels));
+        throw SceneError(fmt::format("image \"{}\" has an unsupported size {}x{}x{}", path,
+                                     spec.width, spec.height, spec.nchannels));
     width = spec.width;
     height = spec.height;
     const int nc = spec.nchannels;
     std::vector<float> pixels(size_t(width) * height * nc);
     if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, pixels.data()))
         throw SceneError(fmt::format("cannot read image \"{}\": {}", path, in->geterror()));
-    const bool decode = srgb_8bit && (spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16);
+    const bool decode = srgb_8bit && (spec.format == OIIO::TypeDesc::UINT8 ||
+                                      spec.format == OIIO::TypeDesc::UINT16);
     std::vector<float> rgb(size_t(width) * height * 3);
     for (size_t i = 0; i < size_t(width) * height; ++i)
         for (int c = 0; c < 3; ++c) {

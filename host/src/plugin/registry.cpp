@@ -52,7 +52,8 @@ const LoadedPlugin& open_plugin(const std::string& path, const SourceLocation& l
     if (auto it = g_by_path.find(path); it != g_by_path.end()) return it->second;
     void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle) throw SceneError(loc, fmt::format("cannot load plugin {}: {}", path, dlerror()));
-    auto fn = reinterpret_cast<femto_plugin_descriptor_fn>(dlsym(handle, "femto_plugin_descriptor"));
+    auto fn =
+        reinterpret_cast<femto_plugin_descriptor_fn>(dlsym(handle, "femto_plugin_descriptor"));
     if (!fn) {
         dlclose(handle);
         throw SceneError(loc, fmt::format("{} is not a femto plugin: it does not export "
@@ -117,7 +118,8 @@ const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
     const auto dirs = plugin_search_path(extra_dirs);
     bool valid_name = !type.empty();
     for (char c : type)
-        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) valid_name = false;
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'))
+            valid_name = false;
     if (valid_name)
         for (const auto& dir : dirs) {
             const fs::path candidate = fs::path(dir) / (type + ".so");
@@ -125,15 +127,16 @@ const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
             if (!fs::exists(candidate, ec)) continue;
             const LoadedPlugin& p = open_plugin(candidate.string(), loc);
             if (p.descriptor->kind != kind)
-                throw SceneError(loc, fmt::format("plugin \"{}\" ({}) is a <{}> plugin, but it is "
-                                                  "used as a <{}>",
-                                                  type, p.path, kind_tag(p.descriptor->kind),
-                                                  kind_tag(kind)));
+                throw SceneError(
+                    loc, fmt::format("plugin \"{}\" ({}) is a <{}> plugin, but it is "
+                                     "used as a <{}>",
+                                     type, p.path, kind_tag(p.descriptor->kind), kind_tag(kind)));
             return *p.descriptor;
         }
-    throw SceneError(loc, fmt::format("unknown <{}> plugin \"{}\"{}; searched: {}", kind_tag(kind), type,
-                                      did_you_mean(type, available_types(dirs)),
-                                      dirs.empty() ? std::string("(no plugin folder exists)") : join(dirs)));
+    throw SceneError(
+        loc, fmt::format("unknown <{}> plugin \"{}\"{}; searched: {}", kind_tag(kind), type,
+                         did_you_mean(type, available_types(dirs)),
+                         dirs.empty() ? std::string("(no plugin folder exists)") : join(dirs)));
 }
 
 std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(

@@ -44,7 +44,8 @@ std::string format_duration(double s) {
 
 class Progress {
 public:
-    Progress(bool enabled, uint64_t total) : enabled_(enabled), total_(total), start_(Clock::now()) {}
+    Progress(bool enabled, uint64_t total)
+        : enabled_(enabled), total_(total), start_(Clock::now()) {}
     void advance(uint64_t n) {
         const uint64_t done = done_.fetch_add(n) + n;
         if (!enabled_) return;
@@ -113,20 +114,21 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     std::vector<Tile> by_colour[4];
     for (int ty = 0; ty * kTileSize < H; ++ty)
         for (int tx = 0; tx * kTileSize < W; ++tx)
-            by_colour[(ty % 2) * 2 + (tx % 2)].push_back(
-                {tx * kTileSize, ty * kTileSize, std::min(kTileSize, W - tx * kTileSize),
-                 std::min(kTileSize, H - ty * kTileSize)});
+            by_colour[(ty % 2) * 2 + (tx % 2)].push_back({tx * kTileSize, ty * kTileSize,
+                                                          std::min(kTileSize, W - tx * kTileSize),
+                                                          std::min(kTileSize, H - ty * kTileSize)});
     if (film.rfilter().radius() > kTileSize / 2)
-        throw SceneError(fmt::format("the reconstruction filter's radius ({} px) is larger than femto "
-                                     "supports ({} px)",
-                                     film.rfilter().radius(), kTileSize / 2));
+        throw SceneError(
+            fmt::format("the reconstruction filter's radius ({} px) is larger than femto "
+                        "supports ({} px)",
+                        film.rfilter().radius(), kTileSize / 2));
 
     // Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
     // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp.
     const uint64_t pixels = uint64_t(W) * uint64_t(H);
     constexpr uint64_t kMaxPassSamples = uint64_t(1) << 22;
-    const uint32_t pass_spp = uint32_t(std::max<uint64_t>(
-        1, std::min<uint64_t>((spp + 15) / 16, kMaxPassSamples / pixels)));
+    const uint32_t pass_spp = uint32_t(
+        std::max<uint64_t>(1, std::min<uint64_t>((spp + 15) / 16, kMaxPassSamples / pixels)));
     Progress progress(options.progress, pixels * spp);
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
         [&] { return prototype.clone(); });
@@ -175,7 +177,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     return stats;
 }
 
-RenderInfo make_render_info(const Scene& scene, const RenderOptions& options, const RenderStats& stats) {
+RenderInfo make_render_info(const Scene& scene, const RenderOptions& options,
+                            const RenderStats& stats) {
     RenderInfo info;
     info.scene_file = options.scene_file;
     info.integrator = scene.integrator().type_name();

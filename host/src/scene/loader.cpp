@@ -36,8 +36,9 @@ struct OptionsScope {
     ~OptionsScope() { t_options = saved; }
 };
 
-const std::set<std::string> kPropertyTags = {"boolean", "integer", "float", "string", "point",
-                                             "vector",  "rgb",     "srgb",  "spectrum", "transform"};
+const std::set<std::string> kPropertyTags = {"boolean",  "integer",  "float", "string",
+                                             "point",    "vector",   "rgb",   "srgb",
+                                             "spectrum", "transform"};
 const char* const kObjectTags =
     "integrator sensor film sampler rfilter tfilter shape bsdf emitter medium phase texture "
     "volume distance connection angular";
@@ -53,8 +54,10 @@ std::vector<double> parse_numbers(const XmlNode& node, const std::string& text, 
         double v = 0;
         auto res = std::from_chars(p, end, v);
         if (res.ec != std::errc() ||
-            (res.ptr < end && !std::isspace(static_cast<unsigned char>(*res.ptr)) && *res.ptr != ','))
-            throw SceneError(node.location, fmt::format("{}: \"{}\" is not a number list", what, text));
+            (res.ptr < end && !std::isspace(static_cast<unsigned char>(*res.ptr)) &&
+             *res.ptr != ','))
+            throw SceneError(node.location,
+                             fmt::format("{}: \"{}\" is not a number list", what, text));
         if (!std::isfinite(v))
             throw SceneError(node.location, fmt::format("{}: \"{}\" contains a non-finite number "
                                                         "(NaN or infinity)",
@@ -68,13 +71,16 @@ std::vector<double> parse_numbers(const XmlNode& node, const std::string& text, 
 double parse_number(const XmlNode& node, const std::string& text, const char* what) {
     auto v = parse_numbers(node, text, what);
     if (v.size() != 1)
-        throw SceneError(node.location, fmt::format("{}: expected one number, got \"{}\"", what, text));
+        throw SceneError(node.location,
+                         fmt::format("{}: expected one number, got \"{}\"", what, text));
     return v[0];
 }
 
 const std::string& require_attr(const XmlNode& node, const char* name) {
     const std::string* v = node.attribute(name);
-    if (!v) throw SceneError(node.location, fmt::format("<{}> needs the attribute \"{}\"", node.tag, name));
+    if (!v)
+        throw SceneError(node.location,
+                         fmt::format("<{}> needs the attribute \"{}\"", node.tag, name));
     return *v;
 }
 
@@ -102,13 +108,15 @@ Vec3 parse_xyz(const XmlNode& node, float def) {
         auto n = parse_numbers(node, *v, node.tag.c_str());
         if (n.size() == 1) return Vec3(float(n[0]));
         if (n.size() != 3)
-            throw SceneError(node.location, fmt::format("<{}> value needs 1 or 3 numbers", node.tag));
+            throw SceneError(node.location,
+                             fmt::format("<{}> value needs 1 or 3 numbers", node.tag));
         return {float(n[0]), float(n[1]), float(n[2])};
     }
     Vec3 r(def);
     const char* axes[] = {"x", "y", "z"};
     for (int i = 0; i < 3; ++i)
-        if (const std::string* a = node.attribute(axes[i])) r[i] = float(parse_number(node, *a, axes[i]));
+        if (const std::string* a = node.attribute(axes[i]))
+            r[i] = float(parse_number(node, *a, axes[i]));
     return r;
 }
 
@@ -155,18 +163,21 @@ Transform parse_transform(const XmlNode& node) {
                     for (int i = 0; i < 9; ++i) mm[i / 3][i % 3] = v[i];
                     mm[3][3] = 1;
                 } else {
-                    throw SceneError(op.location, fmt::format("<matrix> needs 16 (or 9) numbers, got {}",
-                                                              v.size()));
+                    throw SceneError(
+                        op.location,
+                        fmt::format("<matrix> needs 16 (or 9) numbers, got {}", v.size()));
                 }
                 m = Transform(mm);
             } else {
-                throw SceneError(op.location, fmt::format("unknown transform operation <{}>; valid: "
-                                                          "translate, rotate, scale, lookat, matrix",
-                                                          op.tag));
+                throw SceneError(op.location,
+                                 fmt::format("unknown transform operation <{}>; valid: "
+                                             "translate, rotate, scale, lookat, matrix",
+                                             op.tag));
             }
             t = m * t;  // document order: later operations apply after earlier ones
         } catch (const std::domain_error& e) {
-            throw SceneError(op.location, fmt::format("degenerate transform <{}>: {}", op.tag, e.what()));
+            throw SceneError(op.location,
+                             fmt::format("degenerate transform <{}>: {}", op.tag, e.what()));
         }
     }
     return t;
@@ -176,13 +187,15 @@ Color parse_color(const XmlNode& node) {
     const std::string& value = require_attr(node, "value");
     if (node.tag == "srgb" && !value.empty() && value[0] == '#') {
         if (value.size() != 7)
-            throw SceneError(node.location, fmt::format("srgb \"{}\" must look like #rrggbb", value));
+            throw SceneError(node.location,
+                             fmt::format("srgb \"{}\" must look like #rrggbb", value));
         Color c;
         for (int i = 0; i < 3; ++i) {
             unsigned v = 0;
             auto r = std::from_chars(value.data() + 1 + 2 * i, value.data() + 3 + 2 * i, v, 16);
             if (r.ec != std::errc() || r.ptr != value.data() + 3 + 2 * i)
-                throw SceneError(node.location, fmt::format("srgb \"{}\" is not a hex colour", value));
+                throw SceneError(node.location,
+                                 fmt::format("srgb \"{}\" is not a hex colour", value));
             c[i] = srgb_to_linear(float(v) / 255.f);
         }
         return c;
@@ -198,7 +211,8 @@ Color parse_color(const XmlNode& node) {
     else if (n.size() == 3)
         c = Color(float(n[0]), float(n[1]), float(n[2]));
     else
-        throw SceneError(node.location, fmt::format("<{}> needs 1 or 3 numbers, got {}", node.tag, n.size()));
+        throw SceneError(node.location,
+                         fmt::format("<{}> needs 1 or 3 numbers, got {}", node.tag, n.size()));
     if (node.tag == "srgb")
         for (int i = 0; i < 3; ++i) c[i] = srgb_to_linear(c[i]);
     return c;
@@ -224,7 +238,8 @@ public:
         return obj;
     }
 
-    ObjectPtr construct(const PluginDescriptor& desc, const Properties& props, const XmlNode& node) {
+    ObjectPtr construct(const PluginDescriptor& desc, const Properties& props,
+                        const XmlNode& node) {
         const std::string what = fmt::format("<{} type=\"{}\">", node.tag, desc.type_name);
         Object* raw = nullptr;
         try {
@@ -287,9 +302,10 @@ public:
         if (it == ids_.end()) {
             std::vector<std::string> known;
             for (const auto& [k, v] : ids_) known.push_back(k);
-            throw SceneError(node.location, fmt::format("no object with id \"{}\" is defined before "
-                                                        "this reference{}",
-                                                        id, did_you_mean(id, known)));
+            throw SceneError(node.location,
+                             fmt::format("no object with id \"{}\" is defined before "
+                                         "this reference{}",
+                                         id, did_you_mean(id, known)));
         }
         return it->second;
     }
@@ -311,11 +327,11 @@ public:
             return;
         }
         if (!kPropertyTags.count(c.tag))
-            throw SceneError(c.location,
-                             fmt::format("unknown tag <{}> inside <{}>; valid: {} ref {}", c.tag,
-                                         props.plugin_type().empty() ? "?" : props.plugin_type(),
-                                         join({kPropertyTags.begin(), kPropertyTags.end()}, " "),
-                                         kObjectTags));
+            throw SceneError(
+                c.location,
+                fmt::format("unknown tag <{}> inside <{}>; valid: {} ref {}", c.tag,
+                            props.plugin_type().empty() ? "?" : props.plugin_type(),
+                            join({kPropertyTags.begin(), kPropertyTags.end()}, " "), kObjectTags));
         const std::string& name = require_attr(c, "name");
         if (name.empty()) throw SceneError(c.location, "empty parameter name");
         if (c.tag != "transform") check_no_children(c);
@@ -324,8 +340,9 @@ public:
             std::string v = require_attr(c, "value");
             for (auto& ch : v) ch = char(std::tolower(static_cast<unsigned char>(ch)));
             if (v != "true" && v != "false")
-                throw SceneError(c.location, fmt::format("boolean \"{}\" must be true or false, not \"{}\"",
-                                                         name, require_attr(c, "value")));
+                throw SceneError(c.location,
+                                 fmt::format("boolean \"{}\" must be true or false, not \"{}\"",
+                                             name, require_attr(c, "value")));
             props.set(name, Properties::Type::Bool, v == "true", c.location);
         } else if (c.tag == "integer") {
             check_attributes(c, {"name", "value"});
@@ -335,13 +352,15 @@ public:
             if (!v.empty() && v[0] == '+') ++b;
             auto r = std::from_chars(b, v.data() + v.size(), x);
             if (r.ec != std::errc() || r.ptr != v.data() + v.size())
-                throw SceneError(c.location, fmt::format("integer \"{}\": \"{}\" is not an integer{}", name, v,
-                                                         r.ec == std::errc::result_out_of_range ? " (out of range)" : ""));
+                throw SceneError(
+                    c.location,
+                    fmt::format("integer \"{}\": \"{}\" is not an integer{}", name, v,
+                                r.ec == std::errc::result_out_of_range ? " (out of range)" : ""));
             props.set(name, Properties::Type::Integer, x, c.location);
         } else if (c.tag == "float") {
             check_attributes(c, {"name", "value"});
-            props.set(name, Properties::Type::Float, parse_number(c, require_attr(c, "value"), name.c_str()),
-                      c.location);
+            props.set(name, Properties::Type::Float,
+                      parse_number(c, require_attr(c, "value"), name.c_str()), c.location);
         } else if (c.tag == "string") {
             check_attributes(c, {"name", "value"});
             std::string v = require_attr(c, "value");
@@ -376,37 +395,44 @@ public:
             }
             PluginKind kind;
             if (!kind_from_tag(c.tag, kind))
-                throw SceneError(c.location, fmt::format("unknown tag <{}> in <scene>; valid: {} alias", c.tag,
-                                                         kObjectTags));
+                throw SceneError(c.location,
+                                 fmt::format("unknown tag <{}> in <scene>; valid: {} alias", c.tag,
+                                             kObjectTags));
             if (c.attribute("name"))
                 throw SceneError(c.location, "top-level objects take no name attribute");
             ObjectPtr obj = build(c, kind);
             switch (kind) {
                 case PluginKind::Integrator:
-                    if (integrator) throw SceneError(c.location, "the scene has more than one <integrator>");
+                    if (integrator)
+                        throw SceneError(c.location, "the scene has more than one <integrator>");
                     integrator = std::static_pointer_cast<Integrator>(obj);
                     break;
                 case PluginKind::Sensor:
                     if (sensor)
-                        throw SceneError(c.location, "the scene has more than one <sensor> (femto renders one)");
+                        throw SceneError(
+                            c.location, "the scene has more than one <sensor> (femto renders one)");
                     sensor = std::static_pointer_cast<Sensor>(obj);
                     break;
-                case PluginKind::Shape: shapes.push_back(std::static_pointer_cast<Shape>(obj)); break;
+                case PluginKind::Shape:
+                    shapes.push_back(std::static_pointer_cast<Shape>(obj));
+                    break;
                 case PluginKind::Emitter:
                     emitters.push_back(std::static_pointer_cast<Emitter>(obj));
                     break;
                 default:
                     if (!c.attribute("id"))
-                        log_warning(c.location, fmt::format("top-level <{}> without an id can never be used",
-                                                            c.tag));
+                        log_warning(
+                            c.location,
+                            fmt::format("top-level <{}> without an id can never be used", c.tag));
                     break;
             }
         }
         if (!sensor) throw SceneError(root.location, "the scene has no <sensor>: add a camera");
         if (shapes.empty() && emitters.empty())
             throw SceneError(root.location, "the scene is empty: it has no shapes and no emitters");
-        if (!integrator) integrator = std::static_pointer_cast<Integrator>(create_default(
-                             PluginKind::Integrator, "path", root.location));
+        if (!integrator)
+            integrator = std::static_pointer_cast<Integrator>(
+                create_default(PluginKind::Integrator, "path", root.location));
         return std::make_unique<Scene>(integrator, sensor, std::move(shapes), std::move(emitters));
     }
 
@@ -450,18 +476,21 @@ ObjectPtr create_object(PluginKind kind, const std::string& type, const Properti
     node.tag = kind_tag(kind);
     node.location = props.location();
     detail::Instantiator inst(options);
-    const PluginDescriptor& desc = detail::find_plugin(kind, type, options.plugin_dirs, props.location());
+    const PluginDescriptor& desc =
+        detail::find_plugin(kind, type, options.plugin_dirs, props.location());
     inst.check_schema(props, desc, node);
     ObjectPtr obj = inst.construct(desc, props, node);
     inst.report_unread(props, node);
     return obj;
 }
 
-const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type, const LoadOptions& options) {
+const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
+                                    const LoadOptions& options) {
     return detail::find_plugin(kind, type, options.plugin_dirs, SourceLocation{});
 }
 
-std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(const LoadOptions& options) {
+std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(
+    const LoadOptions& options) {
     return detail::list_plugins(options.plugin_dirs);
 }
 

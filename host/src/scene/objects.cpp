@@ -27,25 +27,31 @@ Sensor::Sensor(const Properties& props) {
     if (films.size() > 1) props.fail("film", "a sensor takes at most one <film>");
     if (samplers.size() > 1) props.fail("sampler", "a sensor takes at most one <sampler>");
     film_ = std::static_pointer_cast<Film>(
-        films.empty() ? detail::create_default(PluginKind::Film, "hdrfilm", props.location()) : films[0]);
+        films.empty() ? detail::create_default(PluginKind::Film, "hdrfilm", props.location())
+                      : films[0]);
     sampler_ = std::static_pointer_cast<Sampler>(
-        samplers.empty() ? detail::create_default(PluginKind::Sampler, "independent", props.location())
-                         : samplers[0]);
+        samplers.empty()
+            ? detail::create_default(PluginKind::Sampler, "independent", props.location())
+            : samplers[0]);
 }
 
 Film::Film(const Properties& props) {
     const int64_t w = props.get_int("width", 768), h = props.get_int("height", 576);
-    if (w < 1 || w > kMaxFilmSide) props.fail("width", fmt::format("width must be in [1, {}], got {}", kMaxFilmSide, w));
-    if (h < 1 || h > kMaxFilmSide) props.fail("height", fmt::format("height must be in [1, {}], got {}", kMaxFilmSide, h));
+    if (w < 1 || w > kMaxFilmSide)
+        props.fail("width", fmt::format("width must be in [1, {}], got {}", kMaxFilmSide, w));
+    if (h < 1 || h > kMaxFilmSide)
+        props.fail("height", fmt::format("height must be in [1, {}], got {}", kMaxFilmSide, h));
     if (w * h > kMaxFilmPixels)
-        props.fail("width", fmt::format("{}x{} pixels is more than femto's limit of 2^26 pixels", w, h));
+        props.fail("width",
+                   fmt::format("{}x{} pixels is more than femto's limit of 2^26 pixels", w, h));
     width_ = int(w);
     height_ = int(h);
     auto filters = props.objects(PluginKind::ReconstructionFilter);
     if (filters.size() > 1) props.fail("rfilter", "a film takes at most one <rfilter>");
     rfilter_ = std::static_pointer_cast<ReconstructionFilter>(
-        filters.empty() ? detail::create_default(PluginKind::ReconstructionFilter, "gaussian", props.location())
-                        : filters[0]);
+        filters.empty()
+            ? detail::create_default(PluginKind::ReconstructionFilter, "gaussian", props.location())
+            : filters[0]);
 }
 
 double Film::max_path_length() const { return std::numeric_limits<double>::infinity(); }

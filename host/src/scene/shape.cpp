@@ -31,8 +31,9 @@ Shape::Shape(const Properties& props) : location_(props.location()) {
     if (!emitters.empty()) {
         emitter_ = std::static_pointer_cast<Emitter>(emitters[0]);
         if (emitter_->is_delta())
-            throw SceneError(props.location(), "only area emitters can be attached to a shape; put "
-                                               "point, spot and collimated emitters at the top level");
+            throw SceneError(props.location(),
+                             "only area emitters can be attached to a shape; put "
+                             "point, spot and collimated emitters at the top level");
     }
 }
 
@@ -41,11 +42,13 @@ Shape::~Shape() = default;
 void Shape::set_mesh(TriangleMesh mesh) {
     if (mesh.indices.empty() || mesh.positions.empty())
         throw SceneError(location_, "the shape has no triangles");
-    if (mesh.indices.size() % 3 != 0) throw SceneError(location_, "triangle index count is not a multiple of 3");
+    if (mesh.indices.size() % 3 != 0)
+        throw SceneError(location_, "triangle index count is not a multiple of 3");
     for (uint32_t i : mesh.indices)
         if (i >= mesh.positions.size())
-            throw SceneError(location_, fmt::format("triangle index {} is out of range ({} vertices)", i,
-                                                    mesh.positions.size()));
+            throw SceneError(location_,
+                             fmt::format("triangle index {} is out of range ({} vertices)", i,
+                                         mesh.positions.size()));
     for (const Vec3& p : mesh.positions)
         if (!is_finite(p)) throw SceneError(location_, "the mesh has a non-finite vertex position");
     if (!mesh.normals.empty()) {
@@ -77,9 +80,10 @@ void Shape::set_mesh(TriangleMesh mesh) {
 
 void Shape::set_sphere(const Vec3& center, float radius) {
     if (!is_finite(center) || !(radius > 0) || !std::isfinite(radius))
-        throw SceneError(location_, fmt::format("a sphere needs a finite center and a positive radius "
-                                                "(got {})",
-                                                radius));
+        throw SceneError(location_,
+                         fmt::format("a sphere needs a finite center and a positive radius "
+                                     "(got {})",
+                                     radius));
     is_sphere_ = true;
     center_ = center;
     radius_ = radius;
@@ -97,7 +101,8 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         hit.ng = local;
         ns = local;
         const float phi = std::atan2(local.y, local.x);
-        hit.uv = {(phi < 0 ? phi + 2 * kPi : phi) * kInvTwoPi, std::acos(clamp(local.z, -1.f, 1.f)) * kInvPi};
+        hit.uv = {(phi < 0 ? phi + 2 * kPi : phi) * kInvTwoPi,
+                  std::acos(clamp(local.z, -1.f, 1.f)) * kInvPi};
     } else {
         const uint32_t i0 = mesh_.indices[3 * prim], i1 = mesh_.indices[3 * prim + 1],
                        i2 = mesh_.indices[3 * prim + 2];
@@ -134,8 +139,8 @@ ShapeSample Shape::sample_area(Vec2 u) const {
         s.n = flip_normals_ ? -d : d;
     } else {
         float ux = u.x;
-        const uint32_t tri = warp::sample_discrete_cdf(triangle_cdf_.data(),
-                                                       uint32_t(mesh_.triangle_count()), ux);
+        const uint32_t tri =
+            warp::sample_discrete_cdf(triangle_cdf_.data(), uint32_t(mesh_.triangle_count()), ux);
         const Vec2 b = warp::square_to_uniform_triangle({ux, u.y});
         const Vec3& p0 = mesh_.positions[mesh_.indices[3 * tri]];
         const Vec3& p1 = mesh_.positions[mesh_.indices[3 * tri + 1]];

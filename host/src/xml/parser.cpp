@@ -1,13 +1,13 @@
 #include "xml/parser.h"
 
 #include <fmt/format.h>
-#include <pugixml.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <pugixml.hpp>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -33,8 +33,8 @@ constexpr size_t kMaxSceneFileBytes = size_t(1) << 30;
 // Version differences are data: names that the generic camelCase -> snake_case rule gets wrong,
 // and plugin types that were renamed.
 const std::map<std::string, std::string> kIrregularNames = {
-    {"intIOR", "int_ior"}, {"extIOR", "ext_ior"}, {"toUV", "to_uv"}, {"fovAxis", "fov_axis"},
-    {"rrDepth", "rr_depth"}, {"uvScale", "uv_scale"},
+    {"intIOR", "int_ior"},   {"extIOR", "ext_ior"},   {"toUV", "to_uv"},
+    {"fovAxis", "fov_axis"}, {"rrDepth", "rr_depth"}, {"uvScale", "uv_scale"},
 };
 struct TypeRename {
     const char* tag;
@@ -62,7 +62,8 @@ struct LineTable {
 std::string read_file(const std::string& path, const SourceLocation& from) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec))
-        throw SceneError(from, fmt::format("scene file \"{}\" does not exist or is not a file", path));
+        throw SceneError(from,
+                         fmt::format("scene file \"{}\" does not exist or is not a file", path));
     if (fs::file_size(path, ec) > kMaxSceneFileBytes)
         throw SceneError(from, fmt::format("scene file \"{}\" is larger than 1 GiB", path));
     std::ifstream in(path, std::ios::binary);
@@ -88,7 +89,8 @@ XmlNode convert(const pugi::xml_node& node, const LineTable& lines, const std::s
             out.children.push_back(convert(child, lines, file, base_dir));
         } else if (child.type() == pugi::node_pcdata || child.type() == pugi::node_cdata) {
             std::string text = child.value();
-            if (std::any_of(text.begin(), text.end(), [](unsigned char c) { return !std::isspace(c); }))
+            if (std::any_of(text.begin(), text.end(),
+                            [](unsigned char c) { return !std::isspace(c); }))
                 throw SceneError(lines.at(file, child.offset_debug()),
                                  fmt::format("unexpected text inside <{}>", out.tag));
         }
@@ -100,8 +102,9 @@ XmlNode convert(const pugi::xml_node& node, const LineTable& lines, const std::s
 std::pair<int, int> parse_version(const XmlNode& scene) {
     const std::string* v = scene.attribute("version");
     if (!v)
-        throw SceneError(scene.location, "<scene> needs a version attribute, e.g. version=\"3.0.0\" "
-                                         "(femto reads Mitsuba 0.5/0.6 and 3.x files)");
+        throw SceneError(scene.location,
+                         "<scene> needs a version attribute, e.g. version=\"3.0.0\" "
+                         "(femto reads Mitsuba 0.5/0.6 and 3.x files)");
     int major = -1, minor = -1, patch = -1;
     char tail = 0;
     if (std::sscanf(v->c_str(), "%d.%d.%d%c", &major, &minor, &patch, &tail) != 3 || major < 0 ||
@@ -130,15 +133,16 @@ void set_root_dir(XmlNode& node, const std::string& root) {
 XmlNode parse_text(const std::string& text, const std::string& file, const std::string& base_dir,
                    const SourceLocation& from) {
     pugi::xml_document doc;
-    const pugi::xml_parse_result result =
-        doc.load_buffer(text.data(), text.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
+    const pugi::xml_parse_result result = doc.load_buffer(
+        text.data(), text.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
     const LineTable lines(text);
     if (!result)
         throw SceneError(lines.at(file, result.offset),
                          fmt::format("malformed XML: {}", result.description()));
     pugi::xml_node root = doc.document_element();
     if (!root)
-        throw SceneError(from.file.empty() ? SourceLocation{file, 1, 1} : from, "the file holds no XML element");
+        throw SceneError(from.file.empty() ? SourceLocation{file, 1, 1} : from,
+                         "the file holds no XML element");
     XmlNode scene = convert(root, lines, file, base_dir);
     if (scene.tag != "scene")
         throw SceneError(scene.location,
@@ -164,9 +168,11 @@ void expand_includes(XmlNode& node, std::vector<std::string>& stack) {
         const fs::path canon = fs::weakly_canonical(p, ec);
         const std::string key = ec ? p.string() : canon.string();
         if (std::find(stack.begin(), stack.end(), key) != stack.end())
-            throw SceneError(child.location, fmt::format("\"{}\" includes itself (include cycle)", *filename));
+            throw SceneError(child.location,
+                             fmt::format("\"{}\" includes itself (include cycle)", *filename));
         if (stack.size() >= size_t(kMaxIncludeDepth))
-            throw SceneError(child.location, "includes are nested too deeply (more than 32 levels)");
+            throw SceneError(child.location,
+                             "includes are nested too deeply (more than 32 levels)");
         const std::string text = read_file(p.string(), child.location);
         XmlNode included = parse_text(text, p.string(), p.parent_path().string(), child.location);
         set_root_dir(included, child.root_dir);
@@ -189,7 +195,8 @@ void collect_defaults(XmlNode& node, std::map<std::string, std::string>& params,
             const std::string* name = c.attribute("name");
             const std::string* value = c.attribute("value");
             if (!name || !value || c.attributes.size() != 2 || !c.children.empty())
-                throw SceneError(c.location, "<default> takes exactly the attributes name and value");
+                throw SceneError(c.location,
+                                 "<default> takes exactly the attributes name and value");
             if (name->empty() || !is_identifier_start((*name)[0]) ||
                 !std::all_of(name->begin(), name->end(), is_identifier_char))
                 throw SceneError(c.location, fmt::format("invalid parameter name \"{}\"", *name));
@@ -207,7 +214,8 @@ void substitute(XmlNode& node, const std::map<std::string, std::string>& params)
         if (a.value.find('$') == std::string::npos) continue;
         std::string out;
         for (size_t i = 0; i < a.value.size(); ++i) {
-            if (a.value[i] != '$' || i + 1 >= a.value.size() || !is_identifier_start(a.value[i + 1])) {
+            if (a.value[i] != '$' || i + 1 >= a.value.size() ||
+                !is_identifier_start(a.value[i + 1])) {
                 out += a.value[i];
                 continue;
             }
@@ -216,10 +224,11 @@ void substitute(XmlNode& node, const std::map<std::string, std::string>& params)
             const std::string name = a.value.substr(i + 1, j - i - 1);
             auto it = params.find(name);
             if (it == params.end())
-                throw SceneError(node.location,
-                                 fmt::format("parameter ${} is not defined: add <default name=\"{}\" "
-                                             "value=\"...\"/> or pass -D {}=...",
-                                             name, name, name));
+                throw SceneError(
+                    node.location,
+                    fmt::format("parameter ${} is not defined: add <default name=\"{}\" "
+                                "value=\"...\"/> or pass -D {}=...",
+                                name, name, name));
             out += it->second;
             i = j - 1;
         }

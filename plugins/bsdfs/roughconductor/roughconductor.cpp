@@ -12,10 +12,11 @@
 // sample_visible = false, D(m) cos(theta_m) is sampled. The reflected direction's pdf is
 // p(m) / (4 wo.m).
 //
-// Difference from Mitsuba: the Beckmann G1 is the exact Smith term 1 / (1 + Lambda) with
-// Lambda(a) = (erfc-based closed form), where Mitsuba uses a rational fit (<0.35% error).
-// The exact term makes the visible-normal pdf integrate to exactly one, which the chi-square
-// tests rely on. Roughness values below 1e-4 are clamped to 1e-4 (as Mitsuba does).
+// Difference from Mitsuba: the Beckmann G1 is the exact Smith term 1 / (1 + Lambda(a)) with
+// Lambda(a) = (exp(-a^2) / (a sqrt(pi)) - erfc(a)) / 2 and a = 1 / (alpha tan(theta)), where
+// Mitsuba uses a rational fit (< 0.35% error). The exact term makes the visible-normal pdf
+// integrate to exactly one, which the chi-square tests rely on. Roughness values below 1e-4
+// are clamped to 1e-4 (as Mitsuba does). Roughness is a float, not a texture.
 #include <algorithm>
 #include <cctype>
 #include <cmath>

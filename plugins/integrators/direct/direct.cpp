@@ -28,7 +28,8 @@ public:
         return x * x + y * y > 0 ? x * x / (x * x + y * y) : 0.f;
     }
 
-    void sample(const Scene& scene, Sampler& sampler, const Ray& ray, ContributionList& out) const override {
+    void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
+                ContributionList& out) const override {
         Hit hit;
         Ray r = ray;
         double length0 = 0;
@@ -80,7 +81,8 @@ private:
 
 FEMTO_PLUGIN(Direct, femto::PluginKind::Integrator, "direct",
              "Direct illumination: emitter and BSDF sampling combined with MIS",
-             {{"shading_samples", "integer", "1", "default for both emitter_samples and bsdf_samples"},
+             {{"shading_samples", "integer", "1",
+               "default for both emitter_samples and bsdf_samples"},
               {"emitter_samples", "integer", "1", "emitter samples per camera ray"},
               {"bsdf_samples", "integer", "1", "BSDF samples per camera ray"},
               {"hide_emitters", "boolean", "false", "hide directly visible emitters"}})

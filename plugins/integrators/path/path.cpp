@@ -44,7 +44,8 @@ public:
                 const Color Le = em->eval(hit, -ray.d);
                 if (!Le.is_black() && !(depth == 1 && hide_emitters_)) {
                     float w = 1.f;
-                    if (!prev_delta) w = power_heuristic(prev_pdf, scene.pdf_emitter(*em, prev_p, hit));
+                    if (!prev_delta)
+                        w = power_heuristic(prev_pdf, scene.pdf_emitter(*em, prev_p, hit));
                     out.add(throughput * Le * w, path_length);
                 }
             }
@@ -63,7 +64,8 @@ public:
                     const Vec3 wo = hit.to_local(es.wi);
                     const Color f = bsdf.eval(hit, hit.wi, wo);
                     if (!f.is_black() && !scene.occluded(hit.spawn_to(es.p))) {
-                        const float w = es.delta ? 1.f : power_heuristic(es.pdf, bsdf.pdf(hit, hit.wi, wo));
+                        const float w =
+                            es.delta ? 1.f : power_heuristic(es.pdf, bsdf.pdf(hit, hit.wi, wo));
                         out.add(throughput * f * es.weight * w, path_length + double(es.distance));
                     }
                 }
@@ -100,6 +102,7 @@ private:
 
 FEMTO_PLUGIN(PathTracer, femto::PluginKind::Integrator, "path",
              "Unidirectional path tracer with next-event estimation and MIS",
-             {{"max_depth", "integer", "-1", "longest path (1 = visible emitters only, 2 = direct light; -1 = unbounded)"},
+             {{"max_depth", "integer", "-1",
+               "longest path (1 = visible emitters only, 2 = direct light; -1 = unbounded)"},
               {"rr_depth", "integer", "5", "path depth at which Russian roulette starts"},
               {"hide_emitters", "boolean", "false", "hide directly visible emitters"}})
