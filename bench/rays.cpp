@@ -82,6 +82,7 @@ struct Options {
     size_t raw_rays = size_t(1) << 20;  ///< pre-generated rays, traced in passes
     double raw_seconds = 1.0;           ///< each raw measurement runs at least this long
     uint64_t seed = 1;
+    bool raw_robust = true;  ///< RTC_SCENE_FLAG_ROBUST for the raw scene, as the renderer sets
 };
 
 void usage() {
@@ -102,7 +103,10 @@ void usage() {
         "  --seed N           render and ray-generation seed (default 1)\n"
         "  --work-dir DIR     where to write the generated scene (default: a temp folder)\n"
         "  --keep             keep the generated scene\n"
-        "  --preview DIR      also write each scene's image (EXR + PNG) to DIR");
+        "  --preview DIR      also write each scene's image (EXR + PNG) to DIR\n"
+        "  --raw-not-robust   diagnostic: build the raw scene without RTC_SCENE_FLAG_ROBUST\n"
+        "                     (femto's scene always sets it, so the ratio is then not like\n"
+        "                     for like)");
 }
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -151,6 +155,10 @@ Options parse_options(int argc, char** argv) {
         }
         if (a == "--keep") {
             o.keep_work = true;
+            continue;
+        }
+        if (a == "--raw-not-robust") {
+            o.raw_robust = false;
             continue;
         }
         if (i + 1 >= argc) throw std::invalid_argument(a + ": missing value (see --help)");
@@ -419,13 +427,13 @@ struct CompactRay {
 /// An Embree scene built from a femto scene's shapes the way femto::Scene builds its own.
 class RawScene {
 public:
-    explicit RawScene(const femto::Scene& scene) {
+    RawScene(const femto::Scene& scene, bool robust) {
         device_ = rtcNewDevice("verbose=0");
         if (!device_) throw std::runtime_error("cannot create an Embree device");
         rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
         scene_ = rtcNewScene(device_);
         rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
-        rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneFlags(scene_, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
         unsigned id = 0;
         for (const auto& sp : scene.shapes()) {
             const femto::Shape& shape = *sp;
@@ -712,7 +720,7 @@ int run(const Options& opt) {
     std::vector<SummaryRow> summary;
     for (const std::string& name : opt.scenes) {
         BenchScene bs = load_bench_scene(name, opt, work);
-        RawScene raw(*bs.scene);
+        RawScene raw(*bs.scene, opt.raw_robust);
         const auto rays = raw.bounce_rays(opt.raw_rays, opt.seed);
         const auto shadow =
             raw.has_lights() ? raw.shadow_rays(opt.raw_rays, opt.seed) : std::vector<CompactRay>{};
@@ -853,7 +861,8 @@ int run(const Options& opt) {
           << "max_depth: " << opt.max_depth << "\n"
           << "raw_rays: " << opt.raw_rays << "\n"
           << "raw_seconds: " << opt.raw_seconds << "\n"
-          << "seed: " << opt.seed << "\n";
+          << "seed: " << opt.seed << "\n"
+          << "raw_scene_flags: " << (opt.raw_robust ? "robust" : "none") << "\n";
         if (!f) throw std::runtime_error("cannot write " + (out / "rays_meta.txt").string());
     }
     fmt::print("wrote {}, {}, {}\n", (out / "rays.csv").string(),

@@ -125,6 +125,8 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     for (const auto& d : defines) opts.defines.push_back(parse_define(d));
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
     prepare_output(out_base);
+    // From here on Ctrl-C means "stop after the current pass and write what was rendered".
+    std::signal(SIGINT, on_sigint);
     auto scene = femto::load_scene(scene_path, opts);
     femto::RenderOptions ro;
     ro.spp = spp;
@@ -133,7 +135,6 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     ro.progress = !quiet && isatty(STDERR_FILENO);
     ro.scene_file = scene_path;
     ro.stop = &g_stop;
-    std::signal(SIGINT, on_sigint);
     const femto::RenderStats stats = femto::render(*scene, ro);
     const auto files =
         scene->sensor().film().write(out_base, femto::make_render_info(*scene, ro, stats));

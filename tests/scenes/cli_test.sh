@@ -76,7 +76,13 @@ bad_define)
 sigint_partial)
   "$femto" render "$scene" -o out/int -D spp=100000 -D res=64 -q 2> err.txt &
   pid=$!
-  sleep 2
+  # Wait until femto has installed its SIGINT handler (bit 2 of SigCgt), then let it render.
+  for _ in $(seq 600); do
+    cgt=$(sed -n 's/^SigCgt:\t//p' /proc/$pid/status 2>/dev/null) || break
+    [ -n "$cgt" ] && (( (0x$cgt >> 1) & 1 )) && break
+    sleep 0.1
+  done
+  sleep 1
   kill -INT $pid
   wait $pid; code=$?
   [ "$code" -eq 130 ] || { cat err.txt >&2; fail "exit code $code after SIGINT, expected 130"; }
