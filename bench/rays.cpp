@@ -19,6 +19,7 @@
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <pmmintrin.h>
+#include <sys/resource.h>
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -74,9 +75,9 @@ struct Options {
     int runs = 7;
     std::vector<int> threads = {1, 2};
     std::vector<std::string> scenes = {"cornell-box", "displaced-sphere"};
-    int res = 128;
-    uint32_t cornell_spp = 64;
-    uint32_t sphere_spp = 32;
+    int res = 256;
+    uint32_t cornell_spp = 16;
+    uint32_t sphere_spp = 8;
     int rings = 512;  ///< latitude rings of the displaced sphere; 2*rings segments around
     int max_depth = 8;
     size_t raw_rays = size_t(1) << 20;  ///< pre-generated rays, traced in passes
@@ -93,9 +94,9 @@ void usage() {
         "  --runs N           measurements per scene and thread count (default 7, >= 1)\n"
         "  --threads LIST     comma-separated thread counts (default 1,2)\n"
         "  --scenes LIST      cornell-box,displaced-sphere (default both)\n"
-        "  --res N            image width and height for the femto renders (default 128)\n"
-        "  --cornell-spp N    samples per pixel, Cornell box (default 64)\n"
-        "  --sphere-spp N     samples per pixel, displaced sphere (default 32)\n"
+        "  --res N            image width and height for the femto renders (default 256)\n"
+        "  --cornell-spp N    samples per pixel, Cornell box (default 16)\n"
+        "  --sphere-spp N     samples per pixel, displaced sphere (default 8)\n"
         "  --rings N          displaced-sphere rings; triangles = 4 N (N - 1) (default 512)\n"
         "  --max-depth N      path integrator max_depth (default 8)\n"
         "  --raw-rays N       pre-generated raw rays (default 1048576)\n"
@@ -249,6 +250,14 @@ void enable_flush_to_zero() {
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
 }
 
+/// CPU time of the whole process (every thread), user + system, in seconds.
+double cpu_seconds() {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    auto sec = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+    return sec(ru.ru_utime) + sec(ru.ru_stime);
+}
+
 double median(std::vector<double> v) {
     if (v.empty()) return NAN;
     std::sort(v.begin(), v.end());
@@ -331,8 +340,8 @@ constexpr const char* kSphereSceneXml = R"(<?xml version="1.0" encoding="utf-8"?
 <!-- femto bench: a displaced sphere of >= 1M triangles (displaced_sphere.ply, written by
      femto_bench_rays) in a Cornell-style room lit by a small area light. -->
 <scene version="3.0.0">
-    <default name="spp" value="32"/>
-    <default name="res" value="128"/>
+    <default name="spp" value="8"/>
+    <default name="res" value="256"/>
     <default name="max_depth" value="8"/>
 
     <integrator type="path">
@@ -529,7 +538,11 @@ public:
     struct Result {
         uint64_t rays = 0, hits = 0;
         double seconds = 0;
+        double cpu_seconds = 0;  ///< process CPU time (user + system) during the measurement
         double mrays_per_s() const { return seconds > 0 ? double(rays) / seconds * 1e-6 : 0; }
+        double mrays_per_cpu_s() const {
+            return cpu_seconds > 0 ? double(rays) / cpu_seconds * 1e-6 : 0;
+        }
     };
 
     /// Traces `rays` in passes until `min_seconds` have elapsed (at least one pass), on at most
@@ -540,6 +553,7 @@ public:
         enable_flush_to_zero();
         std::atomic<uint64_t> hits{0};
         Result res;
+        const double cpu0 = cpu_seconds();
         const auto t0 = Clock::now();
         do {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024),
@@ -556,6 +570,7 @@ public:
             res.rays += rays.size();
             res.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         } while (res.seconds < min_seconds);
+        res.cpu_seconds = cpu_seconds() - cpu0;
         res.hits = hits.load();
         return res;
     }
@@ -622,9 +637,13 @@ struct RunRow {
     int threads = 0, run = 0;
     RawScene::Result raw, shadow;
     femto::RenderStats femto;
+    double femto_cpu_seconds = 0;  ///< process CPU time around femto::render()
     double load = 0;
     double femto_mrays_per_s() const {
         return femto.seconds > 0 ? double(femto.rays) / femto.seconds * 1e-6 : 0;
+    }
+    double femto_mrays_per_cpu_s() const {
+        return femto_cpu_seconds > 0 ? double(femto.rays) / femto_cpu_seconds * 1e-6 : 0;
     }
 };
 
@@ -637,6 +656,9 @@ struct SummaryRow {
     double shadow_median = 0;
     double ratio = 0;         ///< femto median / raw median
     double paired_ratio = 0;  ///< median over runs of femto/raw measured back to back
+    double raw_cpu_median = 0, femto_cpu_median = 0;  ///< Mrays per CPU second
+    double cpu_ratio = 0;                             ///< femto / raw, per CPU second
+    double raw_cores = 0, femto_cores = 0;            ///< median CPU time / wall time
     double rays_per_sample = 0;
     std::string load_before, load_after;
 };
@@ -746,6 +768,7 @@ int run(const Options& opt) {
 
             const std::string load_before = read_loadavg();
             std::vector<double> raw_rates, femto_rates, shadow_rates, paired, per_sample;
+            std::vector<double> raw_cpu_rates, femto_cpu_rates, raw_cores, femto_cores;
             for (int r = 0; r < opt.runs; ++r) {
                 RunRow row;
                 row.scene = name;
@@ -760,7 +783,9 @@ int run(const Options& opt) {
                 };
                 // ABBA: raw first on even runs, femto first on odd runs.
                 if (r % 2 == 0) measure_raw();
+                const double cpu0 = cpu_seconds();
                 row.femto = render_once(*bs.scene, threads, bs.spp, opt.seed);
+                row.femto_cpu_seconds = cpu_seconds() - cpu0;
                 if (r % 2 == 1) measure_raw();
 
                 raw_rates.push_back(row.raw.mrays_per_s());
@@ -768,13 +793,19 @@ int run(const Options& opt) {
                 femto_rates.push_back(row.femto_mrays_per_s());
                 paired.push_back(row.femto_mrays_per_s() / row.raw.mrays_per_s());
                 per_sample.push_back(double(row.femto.rays) / double(row.femto.camera_samples));
+                raw_cpu_rates.push_back(row.raw.mrays_per_cpu_s());
+                femto_cpu_rates.push_back(row.femto_mrays_per_cpu_s());
+                raw_cores.push_back(row.raw.cpu_seconds / row.raw.seconds);
+                femto_cores.push_back(row.femto_cpu_seconds / row.femto.seconds);
                 fmt::print(
                     "  {} threads, run {}: raw {:6.2f} Mray/s (hit {:4.1f}%), raw shadow {:6.2f} "
-                    "Mray/s, femto {:6.2f} Mray/s ({:.2f} s, {:.2f} rays/sample), load {:.2f}\n",
+                    "Mray/s, femto {:6.2f} Mray/s ({:.2f} s, {:.2f} rays/sample); cores used raw "
+                    "{:.2f} femto {:.2f}; load {:.2f}\n",
                     threads, r, row.raw.mrays_per_s(),
                     100.0 * double(row.raw.hits) / double(std::max<uint64_t>(1, row.raw.rays)),
                     row.shadow.mrays_per_s(), row.femto_mrays_per_s(), row.femto.seconds,
-                    double(row.femto.rays) / double(row.femto.camera_samples), row.load);
+                    double(row.femto.rays) / double(row.femto.camera_samples), raw_cores.back(),
+                    femto_cores.back(), row.load);
                 std::fflush(stdout);
                 rows.push_back(row);
             }
@@ -793,6 +824,11 @@ int run(const Options& opt) {
             s.ratio = s.femto_median / s.raw_median;
             s.paired_ratio = median(paired);
             s.rays_per_sample = median(per_sample);
+            s.raw_cpu_median = median(raw_cpu_rates);
+            s.femto_cpu_median = median(femto_cpu_rates);
+            s.cpu_ratio = s.femto_cpu_median / s.raw_cpu_median;
+            s.raw_cores = median(raw_cores);
+            s.femto_cores = median(femto_cores);
             s.load_before = load_before;
             s.load_after = read_loadavg();
             summary.push_back(s);
@@ -801,15 +837,21 @@ int run(const Options& opt) {
     const std::string load_end = read_loadavg();
 
     // Table.
-    fmt::print("\n{:<17} {:>10} {:>7} {:>12} {:>12} {:>8} {:>8} {:>13}\n", "scene", "triangles",
-               "threads", "raw Mray/s", "femto Mray/s", "ratio", "paired", "raw shadow");
+    fmt::print("\n{:<17} {:>9} {:>3} {:>8} {:>8} {:>6} {:>6} {:>8} {:>8} {:>6} {:>5} {:>5}\n", "",
+               "", "", "Mray/s", "", "", "", "Mray/CPU-s", "", "", "cores", "");
+    fmt::print("{:<17} {:>9} {:>3} {:>8} {:>8} {:>6} {:>6} {:>8} {:>8} {:>6} {:>5} {:>5}\n",
+               "scene", "triangles", "thr", "raw", "femto", "ratio", "paired", "raw", "femto",
+               "ratio", "raw", "femto");
     for (const auto& s : summary)
-        fmt::print("{:<17} {:>10} {:>7} {:>12.2f} {:>12.2f} {:>8.3f} {:>8.3f} {:>13.2f}\n", s.scene,
-                   s.triangles, s.threads, s.raw_median, s.femto_median, s.ratio, s.paired_ratio,
-                   s.shadow_median);
+        fmt::print(
+            "{:<17} {:>9} {:>3} {:>8.2f} {:>8.2f} {:>6.3f} {:>6.3f} {:>8.2f} {:>8.2f} {:>6.3f} "
+            "{:>5.2f} {:>5.2f}\n",
+            s.scene, s.triangles, s.threads, s.raw_median, s.femto_median, s.ratio, s.paired_ratio,
+            s.raw_cpu_median, s.femto_cpu_median, s.cpu_ratio, s.raw_cores, s.femto_cores);
     fmt::print(
-        "(medians of {} runs; ratio = femto median / raw median, paired = median of per-run "
-        "ratios; goal >= 0.7)\n",
+        "(medians of {} runs. ratio = femto median / raw median (goal >= 0.7); paired = median "
+        "of the per-run ratios;\n Mray/CPU-s = rays per second of process CPU time; cores = CPU "
+        "time / wall time, below the thread count when the machine is busy)\n",
         opt.runs);
     fmt::print("load average: start {}, end {}\n", load_start, load_end);
 
@@ -818,15 +860,17 @@ int run(const Options& opt) {
     {
         std::ofstream f(out / "rays.csv");
         f << "scene,triangles,threads,run,raw_mrays_per_s,femto_mrays_per_s,"
-             "raw_shadow_mrays_per_s,raw_rays,raw_seconds,raw_hit_fraction,femto_rays,"
-             "femto_seconds,femto_spp,femto_rays_per_sample,load1\n";
+             "raw_shadow_mrays_per_s,raw_rays,raw_seconds,raw_cpu_seconds,raw_hit_fraction,"
+             "femto_rays,femto_seconds,femto_cpu_seconds,femto_spp,femto_rays_per_sample,load1\n";
         for (const auto& r : rows)
             f << fmt::format(
-                "{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.6f},{:.4f},{},{:.6f},{},{:.4f},{:.2f}\n",
+                "{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.6f},{:.6f},{:.4f},{},{:.6f},{:.6f},{},{:."
+                "4f},"
+                "{:.2f}\n",
                 r.scene, r.triangles, r.threads, r.run, r.raw.mrays_per_s(), r.femto_mrays_per_s(),
-                r.shadow.mrays_per_s(), r.raw.rays, r.raw.seconds,
+                r.shadow.mrays_per_s(), r.raw.rays, r.raw.seconds, r.raw.cpu_seconds,
                 double(r.raw.hits) / double(std::max<uint64_t>(1, r.raw.rays)), r.femto.rays,
-                r.femto.seconds, r.femto.spp_done,
+                r.femto.seconds, r.femto_cpu_seconds, r.femto.spp_done,
                 double(r.femto.rays) / double(r.femto.camera_samples), r.load);
         if (!f) throw std::runtime_error("cannot write " + (out / "rays.csv").string());
     }
@@ -834,13 +878,16 @@ int run(const Options& opt) {
         std::ofstream f(out / "rays_summary.csv");
         f << "scene,triangles,threads,runs,raw_median_mrays_per_s,raw_min,raw_max,"
              "femto_median_mrays_per_s,femto_min,femto_max,ratio,paired_ratio,"
-             "raw_shadow_median_mrays_per_s,femto_rays_per_sample,load_before,load_after\n";
+             "raw_shadow_median_mrays_per_s,raw_median_mrays_per_cpu_s,"
+             "femto_median_mrays_per_cpu_s,cpu_ratio,raw_cores_used,femto_cores_used,"
+             "femto_rays_per_sample,load_before,load_after\n";
         for (const auto& s : summary)
             f << fmt::format(
                 "{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},"
-                "{},{}\n",
+                "{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{},{}\n",
                 s.scene, s.triangles, s.threads, s.runs, s.raw_median, s.raw_min, s.raw_max,
                 s.femto_median, s.femto_min, s.femto_max, s.ratio, s.paired_ratio, s.shadow_median,
+                s.raw_cpu_median, s.femto_cpu_median, s.cpu_ratio, s.raw_cores, s.femto_cores,
                 s.rays_per_sample, csv_escape(s.load_before), csv_escape(s.load_after));
         if (!f) throw std::runtime_error("cannot write " + (out / "rays_summary.csv").string());
     }

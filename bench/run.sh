@@ -16,8 +16,12 @@ if [[ ! -f "$build/build.ninja" ]]; then
 fi
 ninja -C "$build"
 
-echo "load average before the benchmark: $(cat /proc/loadavg)"
-"$build/bin/femto_bench_rays" --out "$results" "$@" 2>&1 | tee "$results/run.log"
+{
+    echo "source: git $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)" \
+        "($(git -C "$root" status --porcelain 2>/dev/null | wc -l) uncommitted changes)"
+    echo "load average before the benchmark: $(cat /proc/loadavg)"
+} | tee "$results/run.log"
+"$build/bin/femto_bench_rays" --out "$results" "$@" 2>&1 | tee -a "$results/run.log"
 echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$results/run.log"
 
 # Debian's Python has matplotlib (a pyenv python3 on PATH may not).

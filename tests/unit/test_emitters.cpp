@@ -67,7 +67,10 @@ TEST(EmitterSchema, ParametersAreDocumented) {
         {"spot", {"intensity", "cutoff_angle", "beam_width", "to_world"}},
         {"collimated", {"radius", "irradiance", "power", "to_world"}},
     };
-    for (const auto& [type, names] : expected) {
+    // Every emitter also takes the pulse parameters (design section 4), listed last.
+    const std::vector<std::string> pulse = {"pulse", "pulse_width", "pulse_sigma", "time_offset"};
+    for (auto [type, names] : expected) {
+        names.insert(names.end(), pulse.begin(), pulse.end());
         const femto::PluginDescriptor& d = femto::find_plugin(PluginKind::Emitter, type);
         EXPECT_EQ(d.kind, PluginKind::Emitter);
         ASSERT_EQ(d.params.size(), names.size()) << type;

@@ -48,6 +48,15 @@ public:
     /// Density of sample() returning wo (non-delta lobes only).
     virtual float pdf(const Hit& hit, const Vec3& wi, const Vec3& wo) const = 0;
 
+    /// Scattering delay (eq. 5.13) in optical path length (scene units): time the material
+    /// holds the light before re-emitting it, e.g. a fluorescence lifetime. Sampled once per
+    /// path vertex; 0 for ordinary materials.
+    virtual double sample_delay(const Hit& /*hit*/, float /*u*/) const { return 0.0; }
+    virtual bool has_delay() const { return false; }
+    /// Colour transfer at a vertex for materials that move energy between colour channels
+    /// (fluorescence): maps the path throughput before eval() is applied. Identity otherwise.
+    virtual Color transfer(const Hit& /*hit*/, const Color& throughput) const { return throughput; }
+
     bool has_delta_only() const { return (flags() & kBsdfSmooth) == 0; }
     bool is_null() const { return flags() == kBsdfNull; }
 };

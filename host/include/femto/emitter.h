@@ -4,9 +4,28 @@
 #include "femto/color.h"
 #include "femto/math.h"
 #include "femto/object.h"
+#include "femto/properties.h"
 #include "femto/shape.h"
 
 namespace femto {
+
+/// When an emitter's light leaves it (design §4), in optical path length (scene units, time x c).
+/// `delta`: all at `offset` (default 0); `box`: uniform in [offset, offset + width] (a long box
+/// is continuous emission); `gaussian`: normal with mean `offset` and deviation `sigma`.
+struct PulseProfile {
+    enum class Shape { Delta, Box, Gaussian };
+    Shape shape = Shape::Delta;
+    double offset = 0, width = 0, sigma = 0;
+
+    /// An emission time distributed as the profile, from one uniform number.
+    double sample(float u) const;
+    /// The probability density of emission at time t (+inf at a delta's offset).
+    double pdf(double t) const;
+    /// Earliest time with non-negligible emission (6 sigma for a Gaussian).
+    double earliest() const;
+    double mean() const;
+    bool is_delta() const { return shape == Shape::Delta; }
+};
 
 /// Result of sampling an emitter for direct lighting of a reference point.
 struct EmitterSample {
@@ -17,6 +36,7 @@ struct EmitterSample {
     float pdf = 0;       ///< solid-angle pdf (1 for delta emitters); 0 = no contribution
     Color weight;        ///< incident radiance / pdf (irradiance for delta emitters)
     bool delta = false;  ///< true when no BSDF sample can hit this emitter (MIS weight 1)
+    const class Emitter* emitter = nullptr;  ///< which emitter (set by Scene::sample_emitter)
 };
 
 class Emitter : public Object {
@@ -36,8 +56,24 @@ public:
     void set_shape(const Shape* shape) { shape_ = shape; }
     const Shape* shape() const { return shape_; }
 
+    /// The emission profile in time (the `pulse`, `pulse_width`, `pulse_sigma` and
+    /// `time_offset` parameters every emitter takes).
+    const PulseProfile& pulse() const { return pulse_; }
+
 protected:
+    /// Reads the pulse parameters; list FEMTO_PULSE_PARAMS in the plugin's schema.
+    explicit Emitter(const Properties& props);
+
     const Shape* shape_ = nullptr;
+    PulseProfile pulse_;
 };
+
+/// The pulse parameters, to append to every emitter's FEMTO_PLUGIN schema list.
+#define FEMTO_PULSE_PARAMS                                                                       \
+    {"pulse", "string", "delta", "emission profile in time: delta, box or gaussian"},            \
+        {"pulse_width", "float", "", "box pulse length (optical path length, scene units)"},     \
+        {"pulse_sigma", "float", "", "gaussian pulse deviation (optical path length)"}, {        \
+        "time_offset", "float", "0", "emission start (delta/box) or mean (gaussian), same units" \
+    }
 
 }  // namespace femto

@@ -26,11 +26,20 @@ public:
     void add(const Color& radiance, double path_length) {
         if (!radiance.is_black()) items_.push_back({radiance, path_length});
     }
-    void clear() { items_.clear(); }
+    void clear() {
+        items_.clear();
+        sensor_distance_ = -1.0;
+    }
     const std::vector<Contribution>& items() const { return items_; }
+    /// Length of the camera ray's first segment (scene units), set by the integrator at the
+    /// first hit; negative when the ray escaped. Films use it for world time (eq. 4.1) and
+    /// store it as the per-pixel depth that `femto viz unwarp` needs.
+    void set_sensor_distance(double d) { sensor_distance_ = d; }
+    double sensor_distance() const { return sensor_distance_; }
 
 private:
     std::vector<Contribution> items_;
+    double sensor_distance_ = -1.0;
 };
 
 /// Metadata recorded into every output file.
@@ -67,6 +76,9 @@ public:
     virtual void merge(const FilmBlock& block) = 0;
     /// Latest path length (scene units) this film records; paths beyond it may stop.
     virtual double max_path_length() const;
+    /// Whether pixel row y receives any sample (a streak film records only a few rows);
+    /// the renderer skips the others.
+    virtual bool row_active(int /*y*/) const { return true; }
     /// The current image integrated over time: linear RGB, row-major, top row first, normalised
     /// by the reconstruction-filter weights (what name.exr holds for a steady film).
     virtual std::vector<float> steady_image() const = 0;

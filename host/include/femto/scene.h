@@ -56,6 +56,9 @@ public:
 
     /// Rays traced so far by all threads (primary, bounce and shadow rays).
     uint64_t rays_traced() const;
+    /// Earliest emission time of any emitter (PulseProfile::earliest), for cutting paths
+    /// that can no longer reach a film's time window.
+    double earliest_emission() const { return earliest_emission_; }
 
 private:
     struct Accel;
@@ -66,6 +69,7 @@ private:
     std::vector<std::shared_ptr<Emitter>> emitters_;
     std::vector<const Emitter*> emitter_list_;
     Bounds3 bounds_;
+    double earliest_emission_ = 0.0;
 };
 
 }  // namespace femto

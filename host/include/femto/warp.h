@@ -1,5 +1,5 @@
 // femto public API: sampling routines mapping [0,1)^2 to directions and points, with pdfs.
-// Each has a chi-square test against its pdf in tests/unit/test_warp.cpp.
+// Each has a chi-square test against its pdf in tests/unit/test_warp_chi2.cpp.
 #pragma once
 
 #include "femto/math.h"

@@ -68,6 +68,11 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
             emitters_.push_back(e);
         }
     for (const auto& e : emitters_) emitter_list_.push_back(e.get());
+    if (!emitter_list_.empty()) {
+        earliest_emission_ = emitter_list_[0]->pulse().earliest();
+        for (const Emitter* e : emitter_list_)
+            earliest_emission_ = std::min(earliest_emission_, e->pulse().earliest());
+    }
 
     RTCDevice dev = device();
     accel_->scene = rtcNewScene(dev);
@@ -155,6 +160,7 @@ EmitterSample Scene::sample_emitter(const Vec3& ref, float u_select, Vec2 u) con
     if (n == 0) return {};
     const size_t i = std::min(size_t(u_select * float(n)), n - 1);
     EmitterSample s = emitter_list_[i]->sample_direct(ref, u);
+    s.emitter = emitter_list_[i];
     s.pdf /= float(n);
     s.weight *= float(n);
     return s;

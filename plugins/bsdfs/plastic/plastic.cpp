@@ -18,13 +18,13 @@
 // Mitsuba 3 uses polynomial fits). With it, eta^2 (1 - Fdr_int) = 1 - Fdr_ext holds to
 // integration accuracy, so a white plastic (diffuse and specular reflectance 1) reflects
 // exactly all light: F + (1 - F) = 1, which the furnace test checks.
-#include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "femto/bsdf.h"
+#include "femto/fresnel.h"
 #include "femto/plugin.h"
 #include "femto/texture.h"
 #include "femto/warp.h"
@@ -33,93 +33,20 @@ namespace {
 
 using namespace femto;
 
-// ---- Named dielectric IORs and the dielectric Fresnel term. --------------------------------
-// The same block is in dielectric.cpp and plastic.cpp (plugins may not share source files);
-// it belongs in a host header (femto/fresnel.h) once there is one.
-
-struct IorEntry {
-    const char* name;
-    float value;
-};
-/// Mitsuba's table of dielectric indices of refraction (Hecht, Optics; ~589 nm, 0-20 C).
-constexpr IorEntry kIorTable[] = {
-    {"vacuum", 1.0f},
-    {"helium", 1.000036f},
-    {"hydrogen", 1.000132f},
-    {"air", 1.000277f},
-    {"carbon dioxide", 1.00045f},
-    {"water", 1.3330f},
-    {"acetone", 1.36f},
-    {"ethanol", 1.361f},
-    {"carbon tetrachloride", 1.461f},
-    {"glycerol", 1.4729f},
-    {"benzene", 1.501f},
-    {"silicone oil", 1.52045f},
-    {"bromine", 1.661f},
-    {"water ice", 1.31f},
-    {"fused quartz", 1.458f},
-    {"pyrex", 1.470f},
-    {"acrylic glass", 1.49f},
-    {"polypropylene", 1.49f},
-    {"bk7", 1.5046f},
-    {"sodium chloride", 1.544f},
-    {"amber", 1.55f},
-    {"pet", 1.5750f},
-    {"diamond", 2.419f},
-    // femto aliases (not in Mitsuba's table)
-    {"acrylic", 1.49f},
-    {"glass", 1.5046f},
-};
-
-std::string to_lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
-/// Reads an index of refraction given as a positive number or a name from kIorTable
+/// Reads an index of refraction given as a positive number or a name known to lookup_ior()
 /// (case-insensitive); `def` when absent.
 float read_ior(const Properties& props, const std::string& name, float def) {
     if (!props.has(name)) return def;
     if (props.type(name) == Properties::Type::String) {
-        const std::string value = to_lower(props.get_string(name));
-        for (const IorEntry& e : kIorTable)
-            if (value == e.name) return e.value;
-        std::string valid;
-        for (const IorEntry& e : kIorTable)
-            valid += std::string(valid.empty() ? "" : ", ") + e.name;
+        const std::string value = props.get_string(name);
+        if (const std::optional<float> ior = lookup_ior(value)) return *ior;
         props.fail(name, "unknown index of refraction \"" + value + "\" for \"" + name +
-                             "\"; give a number or one of: " + valid);
+                             "\"; give a number or one of: " + ior_names());
     }
     const double v = props.get_float(name);
     if (!(v > 0.0)) props.fail(name, "\"" + name + "\" must be a positive index of refraction");
     return static_cast<float>(v);
 }
-
-/// Unpolarised Fresnel reflectance of a dielectric interface with relative IOR eta = n_int /
-/// n_ext, as Mitsuba's fresnel(): `cos_i` is signed (negative = arriving from the inside).
-/// Also returns the signed cosine of the refracted direction (on the opposite side; 0 under
-/// total internal reflection) and the relative IORs eta_it = n_t / n_i and eta_ti = n_i / n_t.
-struct FresnelDielectric {
-    float r, cos_t, eta_it, eta_ti;
-};
-FresnelDielectric fresnel_dielectric(float cos_i, float eta) {
-    const bool outside = cos_i >= 0.f;
-    const float eta_it = outside ? eta : 1.f / eta, eta_ti = outside ? 1.f / eta : eta;
-    const float cos_t2 = 1.f - eta_ti * eta_ti * (1.f - cos_i * cos_i);
-    const float ci = std::abs(cos_i), ct = safe_sqrt(cos_t2);
-    float r;
-    if (eta == 1.f)
-        r = 0.f;  // index matched
-    else if (ci == 0.f || cos_t2 <= 0.f)
-        r = 1.f;  // grazing, or total internal reflection
-    else {
-        const float a_s = (ci - eta_it * ct) / (ci + eta_it * ct);
-        const float a_p = (ct - eta_it * ci) / (ct + eta_it * ci);
-        r = 0.5f * (a_s * a_s + a_p * a_p);
-    }
-    return {r, outside ? -ct : ct, eta_it, eta_ti};
-}
-// ---- end of the shared block ---------------------------------------------------------------
 
 /// Unpolarised dielectric Fresnel reflectance in double precision, for light arriving with
 /// cosine mu > 0 at an interface of relative index eta (transmitted side over incident side).

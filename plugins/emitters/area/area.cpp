@@ -13,7 +13,7 @@ namespace {
 class AreaEmitter final : public Emitter {
 public:
     explicit AreaEmitter(const Properties& props)
-        : radiance_(props.get_color("radiance", Color(1.f))) {
+        : Emitter(props), radiance_(props.get_color("radiance", Color(1.f))) {
         if (radiance_.r < 0 || radiance_.g < 0 || radiance_.b < 0)
             props.fail("radiance", "the radiance must not be negative");
     }
@@ -60,4 +60,5 @@ private:
 
 FEMTO_PLUGIN(femto::AreaEmitter, femto::PluginKind::Emitter, "area",
              "Diffuse area light: uniform radiance from the front side of its shape",
-             {{"radiance", "color", "1", "emitted radiance (W / (m^2 sr) per channel)"}})
+             {{"radiance", "color", "1", "emitted radiance (W / (m^2 sr) per channel)"},
+              FEMTO_PULSE_PARAMS})

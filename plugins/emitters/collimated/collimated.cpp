@@ -19,7 +19,7 @@ namespace {
 
 class CollimatedEmitter final : public Emitter {
 public:
-    explicit CollimatedEmitter(const Properties& props) {
+    explicit CollimatedEmitter(const Properties& props) : Emitter(props) {
         if (!props.has("radius"))
             props.fail("radius",
                        "the collimated emitter needs a beam \"radius\" (> 0, in scene units): an "
@@ -90,4 +90,5 @@ FEMTO_PLUGIN(femto::CollimatedEmitter, femto::PluginKind::Emitter, "collimated",
                "irradiance inside the beam on a surface perpendicular to it (W/m^2)"},
               {"power", "color", "", "beam power (W); irradiance = power / (pi radius^2)"},
               {"to_world", "transform", "identity",
-               "beam frame: starts at to_world(0, 0, 0), points along local +z"}})
+               "beam frame: starts at to_world(0, 0, 0), points along local +z"},
+              FEMTO_PULSE_PARAMS})

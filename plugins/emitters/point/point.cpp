@@ -14,7 +14,7 @@ namespace {
 class PointEmitter final : public Emitter {
 public:
     explicit PointEmitter(const Properties& props)
-        : intensity_(props.get_color("intensity", Color(1.f))) {
+        : Emitter(props), intensity_(props.get_color("intensity", Color(1.f))) {
         if (intensity_.r < 0 || intensity_.g < 0 || intensity_.b < 0)
             props.fail("intensity", "the intensity must not be negative");
         if (props.has("position") && props.has("to_world"))
@@ -54,4 +54,5 @@ FEMTO_PLUGIN(femto::PointEmitter, femto::PluginKind::Emitter, "point", "Isotropi
              {{"intensity", "color", "1", "radiant intensity (W/sr per channel)"},
               {"position", "point", "(0, 0, 0)", "location (alternative to to_world)"},
               {"to_world", "transform", "identity",
-               "places the light at to_world(0, 0, 0) (alternative to position)"}})
+               "places the light at to_world(0, 0, 0) (alternative to position)"},
+              FEMTO_PULSE_PARAMS})

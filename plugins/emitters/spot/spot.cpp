@@ -20,7 +20,7 @@ namespace {
 class SpotEmitter final : public Emitter {
 public:
     explicit SpotEmitter(const Properties& props)
-        : intensity_(props.get_color("intensity", Color(1.f))) {
+        : Emitter(props), intensity_(props.get_color("intensity", Color(1.f))) {
         if (intensity_.r < 0 || intensity_.g < 0 || intensity_.b < 0)
             props.fail("intensity", "the intensity must not be negative");
         const double cutoff_deg = props.get_float("cutoff_angle", 20.0);
@@ -99,4 +99,5 @@ FEMTO_PLUGIN(femto::SpotEmitter, femto::PluginKind::Emitter, "spot",
               {"beam_width", "float", "3/4 cutoff_angle",
                "angle (degrees) within which the full intensity is emitted"},
               {"to_world", "transform", "identity",
-               "light frame: at to_world(0, 0, 0), shining along local +z"}})
+               "light frame: at to_world(0, 0, 0), shining along local +z"},
+              FEMTO_PULSE_PARAMS})

@@ -28,6 +28,10 @@ public:
         return x * x + y * y > 0 ? x * x / (x * x + y * y) : 0.f;
     }
 
+    static double emission_time(const Emitter& em, Sampler& sampler) {
+        return em.pulse().is_delta() ? em.pulse().offset : em.pulse().sample(sampler.next_1d());
+    }
+
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
                 ContributionList& out) const override {
         Hit hit;
@@ -37,8 +41,11 @@ public:
             if (!scene.intersect(r, hit)) return;
             length0 += hit.t;
             if (const Emitter* em = hit.shape->emitter(); em && !hide_emitters_)
-                out.add(em->eval(hit, -r.d), length0);
-            if (!hit.shape->bsdf()->is_null()) break;
+                out.add(em->eval(hit, -r.d), length0 + emission_time(*em, sampler));
+            if (!hit.shape->bsdf()->is_null()) {
+                out.set_sensor_distance(length0);
+                break;
+            }
             r = hit.spawn(r.d);
             if (guard == 63) return;
         }
@@ -53,7 +60,8 @@ public:
                 const Color f = bsdf.eval(hit, hit.wi, wo);
                 if (f.is_black() || scene.occluded(hit.spawn_to(es.p))) continue;
                 const float w = es.delta ? 1.f : mis(ne, es.pdf, nb, bsdf.pdf(hit, hit.wi, wo));
-                out.add(f * es.weight * (w / ne), length0 + double(es.distance));
+                out.add(f * es.weight * (w / ne),
+                        length0 + double(es.distance) + emission_time(*es.emitter, sampler));
             }
         for (int64_t i = 0; i < bsdf_samples_; ++i) {
             const float u_lobe = sampler.next_1d();
@@ -68,7 +76,8 @@ public:
             if (Le.is_black()) continue;
             const bool delta = (bs.sampled_lobe & kBsdfDelta) != 0;
             const float w = delta ? 1.f : mis(nb, bs.pdf, ne, scene.pdf_emitter(*em, hit.p, lit));
-            out.add(bs.weight * Le * (w / nb), length0 + double(lit.t));
+            out.add(bs.weight * Le * (w / nb),
+                    length0 + double(lit.t) + emission_time(*em, sampler));
         }
     }
 

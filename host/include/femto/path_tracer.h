@@ -1,0 +1,27 @@
+// femto public API: the unidirectional path tracer shared by the `path` and `transient_path`
+// integrators, reusable by plugins that need a path-traced estimate.
+#pragma once
+
+#include <cstdint>
+
+#include "femto/film.h"
+#include "femto/sampler.h"
+#include "femto/scene.h"
+
+namespace femto {
+
+struct PathTracerOptions {
+    int64_t max_depth = -1;  ///< longest path in segments (1 = emitters seen directly); -1 = none
+    int64_t rr_depth = 5;    ///< depth at which Russian roulette starts; 0 = never
+    bool hide_emitters = false;  ///< drop emission seen directly by the camera
+};
+
+/// Traces one camera path with next-event estimation and MIS (power heuristic). Every
+/// contribution is reported with its time: the optical path length travelled, plus the
+/// emitter's sampled emission time and any scattering delays (eq. 5.11-5.16). Paths stop
+/// when their time passes the film's max_path_length() (ch. 5.6.1), at max_depth, or by
+/// Russian roulette when enabled. Sets the list's sensor distance at the first hit.
+void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, ContributionList& out,
+                const PathTracerOptions& options);
+
+}  // namespace femto
