@@ -121,7 +121,7 @@ int cmd_plugins(const std::string& name, bool markdown, const femto::LoadOptions
 
 int cmd_render(const std::string& scene_path, std::string out_base,
                const std::vector<std::string>& defines, uint32_t spp, int threads, uint64_t seed,
-               bool quiet, femto::LoadOptions opts) {
+               bool quiet, bool npy, femto::LoadOptions opts) {
     for (const auto& d : defines) opts.defines.push_back(parse_define(d));
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
     prepare_output(out_base);
@@ -136,8 +136,9 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     ro.scene_file = scene_path;
     ro.stop = &g_stop;
     const femto::RenderStats stats = femto::render(*scene, ro);
-    const auto files =
-        scene->sensor().film().write(out_base, femto::make_render_info(*scene, ro, stats));
+    femto::RenderInfo info = femto::make_render_info(*scene, ro, stats);
+    info.write_npy = npy;
+    const auto files = scene->sensor().film().write(out_base, info);
     std::signal(SIGINT, SIG_DFL);
     if (!quiet) {
         fmt::print(stderr, "{} {} of {} spp in {:.2f} s ({:.2f} M rays/s)\n",
@@ -163,7 +164,7 @@ int main(int argc, char** argv) {
     uint32_t spp = 0;
     int threads = 0;
     uint64_t seed = 0;
-    bool quiet = false;
+    bool quiet = false, npy = false;
     render->add_option("scene", scene_path, "Scene file (Mitsuba 0.6 / 3.x XML)")->required();
     render->add_option("-o,--output", out_base,
                        "Output path without extension (default: scene name)");
@@ -177,6 +178,8 @@ int main(int argc, char** argv) {
     render->add_flag("--lenient", opts.lenient,
                      "Warn about unknown/unused parameters instead of failing");
     render->add_flag("-q,--quiet", quiet, "No progress or summary output");
+    render->add_flag("--npy", npy,
+                     "Transient films: also write OUTBASE.npy (float32 [H, W, T, C])");
 
     auto* plugins = app.add_subcommand("plugins", "List plugins, or print one plugin's parameters");
     std::string plugin_name;
@@ -195,7 +198,7 @@ int main(int argc, char** argv) {
     }
     try {
         if (render->parsed())
-            return cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet, opts);
+            return cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet, npy, opts);
         if (plugins->parsed()) return cmd_plugins(plugin_name, markdown, opts);
     } catch (const femto::SceneError& e) {
         std::fprintf(stderr, "femto: error: %s\n", e.what());

@@ -2,6 +2,8 @@
 // into time-resolved images).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -50,10 +52,30 @@ struct RenderInfo {
     uint64_t seed = 0;
     uint32_t samples_per_pixel = 0;  ///< reached (lower than requested when interrupted)
     uint32_t samples_requested = 0;
+    bool write_npy = false;  ///< transient films: also write OUTBASE.npy (float32 [H, W, T, C])
     double render_seconds = 0;
     bool interrupted = false;
 };
 
+/// Calls f(x, y, weight) for every pixel of [x0, x1) x [y0, y1) whose centre lies within
+/// the filter radius of film position pos, with the separable filter weight.
+template <typename F>
+void for_each_filter_pixel(const ReconstructionFilter& filter, Vec2 pos, int x0, int y0, int x1,
+                           int y1, F&& f) {
+    const float r = filter.radius();
+    const int xa = std::max(x0, int(std::ceil(pos.x - 0.5f - r)));
+    const int xb = std::min(x1 - 1, int(std::floor(pos.x - 0.5f + r)));
+    const int ya = std::max(y0, int(std::ceil(pos.y - 0.5f - r)));
+    const int yb = std::min(y1 - 1, int(std::floor(pos.y - 0.5f + r)));
+    for (int y = ya; y <= yb; ++y) {
+        const float wy = filter.eval(float(y) + 0.5f - pos.y);
+        if (wy == 0) continue;
+        for (int x = xa; x <= xb; ++x) {
+            const float w = wy * filter.eval(float(x) + 0.5f - pos.x);
+            if (w != 0) f(x, y, w);
+        }
+    }
+}
 /// A rectangle of pixels owned by one worker; accumulates without locks.
 class FilmBlock {
 public:
@@ -69,11 +91,16 @@ public:
     int width() const { return width_; }
     int height() const { return height_; }
     const ReconstructionFilter& rfilter() const { return *rfilter_; }
+    /// Border (in pixels) a block needs around its tile for this film's filter.
+    int filter_border() const { return std::max(0, int(std::ceil(rfilter_->radius() - 0.5f))); }
 
     /// Workspace for pixels [x0, x0+w) x [y0, y0+h) plus the filter's border.
     virtual std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const = 0;
-    /// Adds a finished block into the film; safe to call from several threads.
+    /// Adds a finished block into the film. The renderer never merges overlapping blocks
+    /// at the same time, so films need no lock for this.
     virtual void merge(const FilmBlock& block) = 0;
+    /// Called before each render pass (pass 0, 1, ...) starts.
+    virtual void start_pass(uint32_t /*pass*/) {}
     /// Latest path length (scene units) this film records; paths beyond it may stop.
     virtual double max_path_length() const;
     /// Whether pixel row y receives any sample (a streak film records only a few rows);

@@ -23,6 +23,28 @@ void write_png_preview(const std::string& path, int width, int height, const flo
 std::vector<float> read_image_rgb(const std::string& path, int& width, int& height,
                                   bool srgb_to_linear_if_8bit = true);
 
+/// A time-resolved image (x-y-t cube): `data` is float32 laid out [height][width][bins][3],
+/// the layout of the .npy files femto writes. `depth` (optional, [height][width]) is the mean
+/// distance from the sensor to the first surface per pixel (-1 where nothing was hit).
+struct Cube {
+    int width = 0, height = 0, bins = 0;
+    std::vector<float> data;
+    std::vector<float> depth;
+    Attributes attributes;
+    const std::string* attribute(const std::string& name) const;
+};
+
+/// Writes a cube as a multi-part OpenEXR file: one RGB part per time bin (named t00000, ...),
+/// plus a part "depth" (channel Z) when `depth` is given. Every part carries `attributes`.
+void write_exr_cube(const std::string& path, int width, int height, int bins, const float* data,
+                    const float* depth, const Attributes& attributes);
+/// Reads what write_exr_cube wrote; throws SceneError for other files.
+Cube read_exr_cube(const std::string& path);
+/// Writes a float32 NumPy .npy file of the given shape (C order).
+void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data);
+/// Reads a float32 .npy file; returns the data and sets `shape`.
+std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape);
+
 /// Path of the OpenColorIO config in use ($FEMTO_OCIO_CONFIG, else the one shipped).
 std::string ocio_config_path();
 

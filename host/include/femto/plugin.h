@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "femto/object.h"
@@ -39,6 +40,11 @@ struct PluginDescriptor {
     /// Builds the object; throws SceneError on bad parameters.
     Object* (*create)(const Properties& props);
 };
+
+/// Builds plugin `type` of `kind` with default parameters, for a parent object whose child
+/// was not given in the scene (e.g. a film's default <tfilter>). Throws SceneError.
+ObjectPtr create_default_object(PluginKind kind, const std::string& type,
+                                const SourceLocation& loc);
 
 }  // namespace femto
 

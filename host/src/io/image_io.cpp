@@ -163,3 +163,210 @@ std::vector<float> read_image_rgb(const std::string& path, int& width, int& heig
 }
 
 }  // namespace femto::io
+
+// ---- time-resolved images ---------------------------------------------------------------
+
+#include <OpenEXR/ImfInputPart.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfMultiPartOutputFile.h>
+#include <OpenEXR/ImfOutputPart.h>
+#include <OpenEXR/ImfPartType.h>
+
+#include <cstring>
+#include <fstream>
+
+namespace femto::io {
+
+const std::string* Cube::attribute(const std::string& name) const {
+    for (const auto& [k, v] : attributes)
+        if (k == name) return &v;
+    return nullptr;
+}
+
+namespace {
+std::string part_name(int bin) { return fmt::format("t{:05}", bin); }
+}  // namespace
+
+void write_exr_cube(const std::string& path, int width, int height, int bins, const float* data,
+                    const float* depth, const Attributes& attributes) {
+    const std::string tmp = temp_path_for(path);
+    try {
+        std::vector<Imf::Header> headers;
+        const int parts = bins + (depth ? 1 : 0);
+        headers.reserve(size_t(parts));
+        for (int p = 0; p < parts; ++p) {
+            Imf::Header h(width, height);
+            h.compression() = Imf::ZIP_COMPRESSION;
+            h.setName(p < bins ? part_name(p) : "depth");
+            h.setType(Imf::SCANLINEIMAGE);
+            if (p < bins)
+                for (const char* c : {"R", "G", "B"})
+                    h.channels().insert(c, Imf::Channel(Imf::FLOAT));
+            else
+                h.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+            for (const auto& [k, v] : attributes) h.insert(k, Imf::StringAttribute(v));
+            headers.push_back(std::move(h));
+        }
+        Imf::MultiPartOutputFile file(tmp.c_str(), headers.data(), parts);
+        const size_t xs = size_t(bins) * 3 * sizeof(float), ys = xs * size_t(width);
+        for (int p = 0; p < parts; ++p) {
+            Imf::OutputPart part(file, p);
+            Imf::FrameBuffer fb;
+            if (p < bins) {
+                char* base = reinterpret_cast<char*>(const_cast<float*>(data + size_t(p) * 3));
+                fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+                fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+                fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+            } else {
+                char* base = reinterpret_cast<char*>(const_cast<float*>(depth));
+                fb.insert("Z", Imf::Slice(Imf::FLOAT, base, sizeof(float),
+                                          sizeof(float) * size_t(width)));
+            }
+            part.setFrameBuffer(fb);
+            part.writePixels(height);
+        }
+    } catch (const std::exception& e) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw SceneError(fmt::format("cannot write \"{}\": {}", path, e.what()));
+    }
+    commit(tmp, path);
+}
+
+Cube read_exr_cube(const std::string& path) {
+    Cube cube;
+    try {
+        Imf::MultiPartInputFile file(path.c_str());
+        const int parts = file.parts();
+        const Imath::Box2i dw = file.header(0).dataWindow();
+        cube.width = dw.max.x - dw.min.x + 1;
+        cube.height = dw.max.y - dw.min.y + 1;
+        for (auto it = file.header(0).begin(); it != file.header(0).end(); ++it)
+            if (const auto* a = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+                cube.attributes.emplace_back(it.name(), a->value());
+        for (int p = 0; p < parts; ++p) {
+            const std::string name = file.header(p).hasName() ? file.header(p).name() : "";
+            if (name.size() == 6 && name[0] == 't') ++cube.bins;
+        }
+        if (cube.bins == 0)
+            throw std::runtime_error(
+                "it is not a femto transient cube (no parts named t00000, ...)");
+        const size_t w = size_t(cube.width), h = size_t(cube.height), T = size_t(cube.bins);
+        cube.data.assign(w * h * T * 3, 0.f);
+        const size_t xs = T * 3 * sizeof(float), ys = xs * w;
+        for (int p = 0; p < parts; ++p) {
+            const Imf::Header& hd = file.header(p);
+            const Imath::Box2i pw = hd.dataWindow();
+            if (pw.max.x - pw.min.x + 1 != cube.width || pw.max.y - pw.min.y + 1 != cube.height)
+                throw std::runtime_error("its parts have different sizes");
+            const std::string name = hd.hasName() ? hd.name() : "";
+            Imf::InputPart part(file, p);
+            Imf::FrameBuffer fb;
+            const ptrdiff_t origin =
+                -(ptrdiff_t(pw.min.y) * ptrdiff_t(ys) + ptrdiff_t(pw.min.x) * ptrdiff_t(xs));
+            if (name == "depth") {
+                cube.depth.assign(w * h, -1.f);
+                char* base =
+                    reinterpret_cast<char*>(cube.depth.data()) -
+                    (ptrdiff_t(pw.min.y) * ptrdiff_t(w) + pw.min.x) * ptrdiff_t(sizeof(float));
+                fb.insert("Z", Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * w));
+            } else if (name.size() == 6 && name[0] == 't') {
+                const int bin = std::stoi(name.substr(1));
+                if (bin < 0 || bin >= cube.bins)
+                    throw std::runtime_error("a part name is out of range: " + name);
+                char* base = reinterpret_cast<char*>(cube.data.data() + size_t(bin) * 3) + origin;
+                fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+                fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+                fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+            } else {
+                continue;
+            }
+            part.setFrameBuffer(fb);
+            part.readPixels(pw.min.y, pw.max.y);
+        }
+    } catch (const SceneError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw SceneError(fmt::format("cannot read transient EXR \"{}\": {}", path, e.what()));
+    }
+    return cube;
+}
+
+// The .npy format (version 1.0) is a 10-byte preamble, a Python-dict header padded to a
+// multiple of 64 bytes, and the raw little-endian data; small enough that no library is needed.
+void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data) {
+    std::string dims;
+    size_t count = 1;
+    for (size_t d : shape) {
+        dims += std::to_string(d) + ", ";
+        count *= d;
+    }
+    if (shape.size() > 1)
+        dims.erase(dims.size() - 2);  // "(3,)" keeps its comma for 1-D
+    else if (!dims.empty())
+        dims.erase(dims.size() - 1);
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + dims + "), }";
+    const size_t total = 10 + header.size() + 1;
+    header.append((64 - total % 64) % 64, ' ');
+    header += '\n';
+    const std::string tmp = temp_path_for(path);
+    {
+        std::ofstream out(tmp, std::ios::binary);
+        const unsigned char magic[8] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0};
+        out.write(reinterpret_cast<const char*>(magic), 8);
+        const uint16_t len = uint16_t(header.size());
+        const char le[2] = {char(len & 0xff), char(len >> 8)};
+        out.write(le, 2);
+        out << header;
+        out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(float)));
+        if (!out) {
+            std::error_code ec;
+            fs::remove(tmp, ec);
+            throw SceneError(fmt::format("cannot write \"{}\"", path));
+        }
+    }
+    commit(tmp, path);
+}
+
+std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape) {
+    std::ifstream in(path, std::ios::binary);
+    char pre[10];
+    if (!in.read(pre, 10) || std::memcmp(pre, "\x93NUMPY", 6) != 0)
+        throw SceneError(fmt::format("\"{}\" is not a .npy file", path));
+    if (pre[6] != 1)
+        throw SceneError(fmt::format("\"{}\": only .npy version 1.0 is supported", path));
+    const size_t len = size_t(uint8_t(pre[8])) | (size_t(uint8_t(pre[9])) << 8);
+    std::string header(len, '\0');
+    if (!in.read(header.data(), std::streamsize(len)))
+        throw SceneError(fmt::format("\"{}\" is truncated", path));
+    if (header.find("'descr': '<f4'") == std::string::npos ||
+        header.find("'fortran_order': False") == std::string::npos)
+        throw SceneError(fmt::format("\"{}\": expected little-endian float32 in C order", path));
+    const size_t open = header.find('(', header.find("'shape'")), close = header.find(')', open);
+    if (open == std::string::npos || close == std::string::npos)
+        throw SceneError(fmt::format("\"{}\": no shape in the header", path));
+    shape.clear();
+    size_t count = 1;
+    std::string dims = header.substr(open + 1, close - open - 1);
+    for (size_t pos = 0; pos < dims.size();) {
+        const size_t comma = dims.find(',', pos);
+        const std::string item =
+            dims.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+        if (item.find_first_of("0123456789") != std::string::npos) {
+            const size_t d = std::stoull(item);
+            if (d == 0 || d > (size_t(1) << 32))
+                throw SceneError(fmt::format("\"{}\": bad shape", path));
+            shape.push_back(d);
+            count *= d;
+            if (count > (size_t(1) << 34)) throw SceneError(fmt::format("\"{}\": too large", path));
+        }
+        if (comma == std::string::npos) break;
+        pos = comma + 1;
+    }
+    std::vector<float> data(count);
+    if (!in.read(reinterpret_cast<char*>(data.data()), std::streamsize(count * sizeof(float))))
+        throw SceneError(fmt::format("\"{}\" is truncated", path));
+    return data;
+}
+
+}  // namespace femto::io

@@ -138,8 +138,10 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     const auto start = Clock::now();
     RenderStats stats;
     stats.spp_requested = spp;
-    for (uint32_t s0 = 0; s0 < spp; s0 += pass_spp) {
+    uint32_t pass = 0;
+    for (uint32_t s0 = 0; s0 < spp; s0 += pass_spp, ++pass) {
         const uint32_t s1 = std::min(spp, s0 + pass_spp);
+        film.start_pass(pass);
         for (const auto& tiles : by_colour) {
             tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
                 enable_flush_to_zero();
@@ -147,7 +149,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                 Sampler& sampler = *samplers.local();
                 ContributionList& list = lists.local();
                 auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
-                for (int y = tile.y0; y < tile.y0 + tile.h; ++y)
+                for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
+                    if (!film.row_active(y)) continue;
                     for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
                         const uint64_t pixel = uint64_t(y) * uint64_t(W) + uint64_t(x);
                         for (uint32_t s = s0; s < s1; ++s) {
@@ -160,6 +163,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                             block->put(pos, list);
                         }
                     }
+                }
                 film.merge(*block);
                 progress.advance(uint64_t(tile.w) * uint64_t(tile.h) * (s1 - s0));
             });

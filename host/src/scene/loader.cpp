@@ -502,4 +502,9 @@ std::vector<std::string> plugin_search_path(const LoadOptions& options) {
 
 const char* version() { return FEMTO_VERSION; }
 
+ObjectPtr create_default_object(PluginKind kind, const std::string& type,
+                                const SourceLocation& loc) {
+    return detail::create_default(kind, type, loc);
+}
+
 }  // namespace femto

@@ -1,0 +1,51 @@
+// femto public API: time conventions (design section 4, docs/units.md).
+//
+// Time is carried in double precision as optical path length in scene units (time x c; a
+// distance d inside a medium of index eta counts as eta * d). Films bin it on a TimeGrid.
+#pragma once
+
+#include <string>
+
+#include "femto/properties.h"
+
+namespace femto {
+
+/// Speed of light in vacuum, in metres per second (exact).
+inline constexpr double kSpeedOfLight = 299792458.0;
+
+/// Uniform time bins [start + i * bin_width, start + (i + 1) * bin_width), i < bins.
+struct TimeGrid {
+    double start = 0.0;
+    double bin_width = 1.0;
+    int bins = 1;
+    std::string length_unit;  ///< "m", "cm", "mm", "um", "nm", "km" or "" (unknown)
+
+    double end() const { return start + bin_width * bins; }
+    /// Bin holding time t, or -1 outside the window.
+    int bin_of(double t) const {
+        if (!(t >= start) || !(t < end())) return -1;
+        const int b = int((t - start) / bin_width);
+        return b < bins ? b : bins - 1;
+    }
+    /// Metres per scene unit for length_unit, or 0 when it is unknown.
+    double metres_per_unit() const;
+    /// Path length (scene units) <-> picoseconds, given length_unit (throws if unknown).
+    double to_picoseconds(double path_length) const;
+    double from_picoseconds(double ps) const;
+};
+
+/// Reads a film's time window: `start`, `bin_width`, `bins` in scene units, or `start_ps` and
+/// `bin_width_ps` in picoseconds together with `length_unit`. Throws located SceneErrors.
+TimeGrid read_time_grid(const Properties& props);
+
+/// The time-window parameters, to append to a transient film's FEMTO_PLUGIN schema list.
+#define FEMTO_TIME_GRID_PARAMS                                                                 \
+    {"start", "float", "0", "start of the time window (optical path length, scene units)"},    \
+        {"bin_width", "float", "", "width of a time bin (scene units); or give bin_width_ps"}, \
+        {"bins", "integer", "", "number of time bins"},                                        \
+        {"start_ps", "float", "", "start of the window in picoseconds (needs length_unit)"},   \
+        {"bin_width_ps", "float", "", "bin width in picoseconds (needs length_unit)"}, {       \
+        "length_unit", "string", "", "what one scene unit is: m, cm, mm, um, nm or km"         \
+    }
+
+}  // namespace femto
