@@ -17,7 +17,8 @@ struct PathTracerOptions {
 };
 
 /// Traces one camera path with next-event estimation and MIS (power heuristic). Every
-/// contribution is reported with its time: the optical path length travelled, plus the
+/// contribution is reported with its time: the optical path length travelled (each segment
+/// times the refractive index it crosses, tracked through dielectric transmissions), plus the
 /// emitter's sampled emission time and any scattering delays (eq. 5.11-5.16). Paths stop
 /// when their time passes the film's max_path_length() (ch. 5.6.1), at max_depth, or by
 /// Russian roulette when enabled. Sets the list's sensor distance at the first hit.

@@ -23,14 +23,16 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
     Ray ray = camera_ray;
     Color throughput(1.f);
     double path_length = 0.0;  // optical length travelled so far, plus scattering delays
+    double index = 1.0;        // refractive index where the ray travels (light is slower by it)
     float prev_pdf = 1.f;
     bool prev_delta = true;
     Vec3 prev_p = ray.o;
     for (int64_t depth = 1;;) {
         Hit hit;
         if (!scene.intersect(ray, hit)) break;
-        if (depth == 1 && out.sensor_distance() < 0) out.set_sensor_distance(path_length + hit.t);
-        path_length += hit.t;
+        if (depth == 1 && out.sensor_distance() < 0)
+            out.set_sensor_distance(path_length + hit.t * index);
+        path_length += double(hit.t) * index;
         if (path_length > max_length) break;
 
         if (const Emitter* em = hit.shape->emitter()) {
@@ -77,6 +79,10 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
         const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
         if (!bs.valid() || bs.weight.is_black()) break;
         throughput *= bs.weight;
+        // Crossing into a dielectric: BsdfSample::eta is the index ratio across the surface.
+        if (bs.sampled_lobe &
+            (kBsdfDeltaTransmission | kBsdfGlossyTransmission | kBsdfDiffuseTransmission))
+            index *= double(bs.eta);
         prev_delta = (bs.sampled_lobe & kBsdfDelta) != 0;
         prev_pdf = bs.pdf;
         prev_p = hit.p;
