@@ -39,7 +39,9 @@ render_demo)
   "$femto" render "$scene" -o out/demo -D spp=4 -D res=64 -q || fail "render failed"
   [ -s out/demo.exr ] && [ -s out/demo.png ] || fail "outputs missing"
   [ "$(exr_attr out/demo.exr femto:samples)" = 4 ] || fail "samples attribute"
-  [ "$(exr_attr out/demo.exr femto:integrator)" = path ] || fail "integrator attribute"
+  [ "$(exr_attr out/demo.exr femto:integrator)" = transient_path ] || fail "integrator attribute"
+  [ "$(exr_attr out/demo.exr femto:bins)" = 256 ] || fail "bins attribute"
+  [ -s out/demo_steady.exr ] || fail "steady image missing"
   no_temp_files out || fail "temporary files left";;
 bad_xml)
   printf '<scene version="3.0.0">\n  <shape type="rectangle">\n</scene>\n' > bad.xml
