@@ -1,4 +1,4 @@
-// The `femto` command line: render, plugins, --version.
+// The `femto` command line: render, plugins, viz, --version.
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -13,6 +13,7 @@
 #include "femto/integrator.h"
 #include "femto/log.h"
 #include "femto/sensor.h"
+#include "viz.h"
 
 namespace fs = std::filesystem;
 
@@ -187,6 +188,7 @@ int main(int argc, char** argv) {
     plugins->add_option("name", plugin_name, "Plugin type name");
     plugins->add_option("--plugin-dir", opts.plugin_dirs, "Extra plugin folder (repeatable)");
     plugins->add_flag("--markdown", markdown, "Print the reference in Markdown (docs/plugins.md)");
+    CLI::App* viz = femto::cli::add_viz_command(app);
 
     try {
         app.parse(argc, argv);
@@ -200,6 +202,7 @@ int main(int argc, char** argv) {
         if (render->parsed())
             return cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet, npy, opts);
         if (plugins->parsed()) return cmd_plugins(plugin_name, markdown, opts);
+        if (viz->parsed()) return femto::cli::run_viz_command();
     } catch (const femto::SceneError& e) {
         std::fprintf(stderr, "femto: error: %s\n", e.what());
         return kExitBadInput;

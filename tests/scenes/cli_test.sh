@@ -116,6 +116,65 @@ progress_tty)
   ! grep -q 'Rendering' quiet.txt || fail "--quiet still shows progress"
   "$femto" render "$scene" -o out/r -D spp=4 -D res=32 2> piped.txt
   ! grep -q 'Rendering \[' piped.txt || fail "progress shown when stderr is not a terminal";;
+viz_outputs)
+  # `femto viz` on a small transient render: every subcommand writes its files.
+  "$femto" render "$scene" -o out/cb -D spp=2 -D res=32 -D bins=24 -q --npy || fail "render failed"
+  "$femto" viz frames out/cb.exr -o out/frames --gif --tone log -q || fail "frames"
+  [ "$(ls out/frames/frame_*.png | wc -l)" -eq 24 ] && [ -s out/frames/frames.gif ] || fail "frames missing"
+  iinfo -v out/frames/frames.gif | grep -q '24 subimages' || fail "GIF is not animated"
+  "$femto" viz frames out/cb.npy -o out/nframes --mp4 -q 2> mp4.txt || fail "frames from .npy"
+  if command -v ffmpeg > /dev/null; then [ -s out/nframes/frames.mp4 ] || fail "no MP4"
+  else grep -q 'skipping the MP4' mp4.txt || fail "no MP4 skip message"; fi
+  "$femto" viz peak-time out/cb.exr -o out/peak.png --exr out/peak.exr -q || fail "peak-time"
+  [ -s out/peak.png ] && [ -s out/peak.exr ] || fail "peak-time outputs missing"
+  "$femto" viz peak-time out/cb.npy --start 3.5 --bin-width 0.05 -o out/peakn.png --exr out/peakn.exr --isochrones 4 -q ||
+    fail "peak-time from .npy"
+  "$femto" viz rainbow out/cb.exr -o out/rainbow.png -q && [ -s out/rainbow.png ] || fail "rainbow"
+  "$femto" viz streak out/cb.exr --row 16 -o out/streak.png --exr out/streak.exr -q || fail "streak"
+  [ "$(iinfo out/streak.exr | sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\),.*/\1x\2/p')" = 32x24 ] || fail "streak size"
+  [ "$(exr_attr out/streak.exr femto:row)" = 16 ] || fail "streak row attribute"
+  "$femto" viz unwarp out/cb.exr -o out/world.exr --to world -q || fail "unwarp to world"
+  [ "$(exr_attr out/world.exr femto:time)" = world ] || fail "femto:time not updated"
+  "$femto" viz unwarp out/world.exr -o out/camera.exr --to camera -q || fail "unwarp to camera"
+  [ "$(exr_attr out/camera.exr femto:time)" = camera ] || fail "femto:time not camera"
+  no_temp_files out && no_temp_files out/frames || fail "temporary files left";;
+viz_bad_input)
+  "$femto" render "$scene" -o out/cb -D spp=1 -D res=16 -D bins=8 -q --npy || fail "render failed"
+  expect_exit 2 '"nothere\.exr" does not exist' -- "$femto" viz peak-time nothere.exr -o out/p.png
+  expect_exit 2 'not a femto transient cube' -- "$femto" viz frames out/cb_steady.exr -o out/f
+  expect_exit 2 'row 16 is out of range.*0 to 15' -- "$femto" viz streak out/cb.exr --row 16 -o out/s.png
+  expect_exit 2 'no depth part' -- "$femto" viz unwarp out/cb.npy -o out/u.exr --to world
+  expect_exit 2 'already in camera time' -- "$femto" viz unwarp out/cb.exr -o out/u.exr --to camera
+  expect_exit 2 'need the cube.s time axis' -- "$femto" viz peak-time out/cb.npy -o out/p.png --exr out/p.exr
+  expect_exit 2 'tone' -- "$femto" viz frames out/cb.exr -o out/f --tone gamma
+  expect_exit 2 'must end in \.exr' -- "$femto" viz unwarp out/cb.exr -o out/u.png --to world
+  expect_exit 2 'subcommand' -- "$femto" viz
+  [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;
+streak_film)
+  cat > streak.xml <<'XML'
+<scene version="3.0.0">
+  <integrator type="transient_path"/>
+  <sensor type="orthographic">
+    <transform name="to_world"><scale x="2" y="2"/><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+    <film type="streak">
+      <integer name="width" value="32"/><integer name="height" value="24"/>
+      <string name="rows" value="5, 12"/>
+      <float name="start" value="6.5"/><float name="bin_width" value="0.1"/><integer name="bins" value="30"/>
+    </film>
+  </sensor>
+  <shape type="rectangle"><transform name="to_world"><scale value="3"/></transform></shape>
+  <emitter type="point"><point name="position" x="0" y="0" z="2"/><rgb name="intensity" value="5"/></emitter>
+</scene>
+XML
+  "$femto" render streak.xml -o out/st -q || fail "render failed"
+  for r in 0005 0012; do
+    [ -s out/st_row$r.exr ] && [ -s out/st_row$r.png ] || fail "row $r outputs missing"; done
+  [ "$(exr_attr out/st_row0012.exr femto:row)" = 12 ] || fail "femto:row"
+  [ "$(exr_attr out/st_row0012.exr femto:bins)" = 30 ] || fail "femto:bins"
+  [ "$(iinfo out/st_row0005.exr | sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\),.*/\1x\2/p')" = 32x30 ] || fail "streak size"
+  sed 's/value="5, 12"/value="5, 24"/' streak.xml > bad.xml
+  expect_exit 2 'bad\.xml:[0-9]+:[0-9]+: .*row 24 is outside the image' -- "$femto" render bad.xml -o out/b -q;;
 *) fail "unknown case";;
 esac
 echo "PASS [$case_name]"

@@ -54,8 +54,10 @@ public:
     virtual double sample_delay(const Hit& /*hit*/, float /*u*/) const { return 0.0; }
     virtual bool has_delay() const { return false; }
     /// Colour transfer at a vertex for materials that move energy between colour channels
-    /// (fluorescence): maps the path throughput before eval() is applied. Identity otherwise.
-    virtual Color transfer(const Hit& /*hit*/, const Color& throughput) const { return throughput; }
+    /// (fluorescence): in the light direction, light leaving the vertex is M * (light arriving),
+    /// applied on top of eval()/sample() weights. Only consulted when has_transfer() is true.
+    virtual bool has_transfer() const { return false; }
+    virtual ColorMatrix transfer(const Hit& /*hit*/) const { return {}; }
 
     bool has_delta_only() const { return (flags() & kBsdfSmooth) == 0; }
     bool is_null() const { return flags() == kBsdfNull; }

@@ -22,6 +22,13 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
     const double max_length = scene.sensor().film().max_path_length() - scene.earliest_emission();
     Ray ray = camera_ray;
     Color throughput(1.f);
+    // Camera-side weight = mix * diag(throughput); mix stays the identity (and unused) until
+    // a colour-transferring material (fluorescence) is met.
+    ColorMatrix mix;
+    bool mixing = false;
+    auto weighted = [&](const Color& c) {
+        return mixing ? mix * (throughput * c) : throughput * c;
+    };
     double path_length = 0.0;  // optical length travelled so far, plus scattering delays
     double index = 1.0;        // refractive index where the ray travels (light is slower by it)
     float prev_pdf = 1.f;
@@ -43,7 +50,7 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
                 const double t_emit = em->pulse().is_delta()
                                           ? em->pulse().offset
                                           : em->pulse().sample(sampler.next_1d());
-                out.add(throughput * Le * w, path_length + t_emit);
+                out.add(weighted(Le * w), path_length + t_emit);
             }
         }
         const Bsdf& bsdf = *hit.shape->bsdf();
@@ -54,7 +61,11 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
         if (opt.max_depth >= 0 && depth >= opt.max_depth) break;
 
         if (bsdf.has_delay()) path_length += bsdf.sample_delay(hit, sampler.next_1d());
-        throughput = bsdf.transfer(hit, throughput);
+        if (bsdf.has_transfer()) {
+            mix = (mixing ? mix : ColorMatrix()).scale_columns(throughput) * bsdf.transfer(hit);
+            mixing = true;
+            throughput = Color(1.f);
+        }
 
         // Next-event estimation: its contribution arrives at its own time.
         if (bsdf.flags() & kBsdfSmooth) {
@@ -69,7 +80,7 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
                     const PulseProfile& pulse = es.emitter->pulse();
                     const double t_emit =
                         pulse.is_delta() ? pulse.offset : pulse.sample(sampler.next_1d());
-                    out.add(throughput * f * es.weight * w,
+                    out.add(weighted(f * es.weight * w),
                             path_length + double(es.distance) + t_emit);
                 }
             }
@@ -89,7 +100,9 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
         ray = hit.spawn(hit.to_world(bs.wo));
 
         if (opt.rr_depth > 0 && depth >= opt.rr_depth) {
-            const float q = std::min(throughput.max_component(), 0.95f);
+            const float q = std::min(
+                mixing ? mix.scale_columns(throughput).max_row_sum() : throughput.max_component(),
+                0.95f);
             if (!(sampler.next_1d() < q)) break;
             throughput *= 1.f / q;
         }

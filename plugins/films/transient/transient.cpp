@@ -18,6 +18,7 @@
 #include "femto/plugin.h"
 #include "femto/tfilter.h"
 #include "femto/time.h"
+#include "femto/viz.h"
 
 namespace {
 
@@ -148,29 +149,8 @@ public:
         for (size_t p = 0; p < pixels; ++p)
             if (weights_[p].depth_weight > 0)
                 depth[p] = float(weights_[p].depth_sum / weights_[p].depth_weight);
-        io::Attributes attrs = {
-            {"femto:version", info.femto_version},
-            {"femto:integrator", info.integrator},
-            {"femto:scene", info.scene_file},
-            {"femto:seed", std::to_string(info.seed)},
-            {"femto:samples", std::to_string(info.samples_per_pixel)},
-            {"femto:samples_requested", std::to_string(info.samples_requested)},
-            {"femto:render_seconds", fmt::format("{:.3f}", info.render_seconds)},
-            {"femto:interrupted", info.interrupted ? "true" : "false"},
-            {"femto:start", fmt::format("{:.17g}", grid_.start)},
-            {"femto:bin_width", fmt::format("{:.17g}", grid_.bin_width)},
-            {"femto:bins", std::to_string(grid_.bins)},
-            {"femto:units", "optical path length in scene units (time x c)"},
-            {"femto:length_unit", grid_.length_unit},
-            {"femto:time", world_time_ ? "world" : "camera"},
-            {"femto:tfilter", tfilter_->type_name()},
-        };
-        if (grid_.metres_per_unit() > 0) {
-            attrs.push_back(
-                {"femto:start_ps", fmt::format("{:.17g}", grid_.to_picoseconds(grid_.start))});
-            attrs.push_back({"femto:bin_width_ps",
-                             fmt::format("{:.17g}", grid_.to_picoseconds(grid_.bin_width))});
-        }
+        const io::Attributes attrs =
+            io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
         const std::vector<float> cube = normalised_cube();
         std::vector<std::string> files;
         files.push_back(out_base + ".exr");

@@ -1,0 +1,128 @@
+// femto public API (libfemto_io): time-resolved outputs and the pictures `femto viz` makes from
+// them (thesis ch. 4.3, 4.5, 4.6): the femto:* attributes every time-resolved file carries,
+// frame tone mapping with one exposure for a whole cube, peak-time (isochrone) images,
+// rainbow fusion, streak (x-t) slices and camera <-> world time unwarping (eq. 4.1).
+//
+// Cubes are femto::io::Cube: float32 [height][width][bins][3], optional depth [height][width]
+// (distance from the sensor to the first surface, -1 where nothing was hit).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "femto/color.h"
+#include "femto/film.h"
+#include "femto/image_io.h"
+#include "femto/time.h"
+
+namespace femto::io {
+
+/// The femto:* header attributes of a time-resolved output (render info, the time grid in
+/// scene units and, when length_unit is known, picoseconds; camera or world time; the
+/// temporal filter's type). Films append their own (e.g. femto:row) after these.
+Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info, bool world_time,
+                                    const std::string& tfilter);
+
+}  // namespace femto::io
+
+namespace femto::viz {
+
+/// Time axis of a cube: bin i covers [start + i * bin_width, start + (i + 1) * bin_width).
+struct TimeAxis {
+    double start = 0.0;
+    double bin_width = 1.0;
+    bool known = false;  ///< false: only bin indices are known (e.g. a .npy without --start)
+    std::string time;    ///< "camera", "world" or "" (unknown)
+    double bin_centre(int bin) const { return start + (bin + 0.5) * bin_width; }
+};
+
+/// Reads a cube written by a transient film: an OpenEXR cube (io::read_exr_cube) or a .npy
+/// of shape [H, W, T, C] (C = 1, 3 or 4; converted to RGB). `start` / `bin_width` override
+/// or supply the time axis (they are required for a .npy when time matters). Throws
+/// SceneError with a message naming the file for anything else.
+io::Cube load_cube(const std::string& path);
+/// The time axis from the cube's femto:* attributes, overridden by `start` / `bin_width`.
+TimeAxis time_axis(const io::Cube& cube, std::optional<double> start = std::nullopt,
+                   std::optional<double> bin_width = std::nullopt);
+
+// ---- tone mapping --------------------------------------------------------------------------
+
+enum class Tone { Linear, Log };
+/// Parses "linear" / "log"; throws SceneError otherwise.
+Tone parse_tone(const std::string& name);
+
+/// The value (of the per-pixel, per-bin maximum RGB component) at `percentile` (0..1) over
+/// the non-zero entries of the whole cube: the reference white of every frame, so that
+/// frames are comparable. Returns 1 when the cube is black.
+float reference_level(const io::Cube& cube, double percentile = 0.995);
+/// Same, for one RGB image (row-major, 3 floats per pixel).
+float reference_level(const std::vector<float>& rgb, double percentile = 0.995);
+
+/// Maps linear RGB to display values in [0, 1]: x = value * 2^exposure / reference;
+/// Linear: the sRGB transfer curve of clamp(x); Log: log(1 + k x) / log(1 + k) with
+/// k = kLogRange (a logarithmic transformation, ch. 4.5, showing ~3 decades below the
+/// reference). The result is what an 8-bit file stores (times 255).
+inline constexpr float kLogRange = 1000.f;
+std::vector<float> tone_map(const float* rgb, size_t pixels, float reference, float exposure,
+                            Tone tone);
+
+/// Frame `bin` of the cube: an RGB image [height][width][3].
+std::vector<float> frame(const io::Cube& cube, int bin);
+
+// ---- pictures ------------------------------------------------------------------------------
+
+/// A rainbow colour for u in [0, 1]: red (u = 0, early) through yellow, green, cyan to blue
+/// (u = 1, late); a fully saturated hue whose largest component is 1.
+Color time_colour(double u);
+
+/// Per pixel, the bin of maximum radiance (of luminance), or -1 where the pixel is black.
+std::vector<int> peak_bins(const io::Cube& cube);
+/// Per pixel, the time of maximum radiance (bin centre, scene units); NaN where black.
+std::vector<float> peak_times(const io::Cube& cube, const TimeAxis& axis);
+/// The peak-time image (ch. 4.5): each pixel coloured by its peak time (time_colour over the
+/// bins that hold peaks), with the brightness of its peak (the radiance within two bins of
+/// the peak, log tone). With `isochrone_spacing` > 0, as in the thesis only every
+/// `isochrone_spacing`-th bin contributes, so that coloured isochrones are separated by black.
+/// Returns display values in [0, 1], [height][width][3].
+std::vector<float> peak_time_image(const io::Cube& cube, int isochrone_spacing = 0);
+
+/// Rainbow fusion (ch. 4.5): the full fusion N_ij = sum_k M_ijk (w_k = 1) of the frames'
+/// luminance, with each frame k tinted by the colour of its time, time_colour(k / (T - 1)).
+/// Linear RGB [H][W][3].
+std::vector<float> rainbow_fusion(const io::Cube& cube);
+
+/// The x-t slice at row y (ch. 4.3): an image `width` wide and `bins` tall, time increasing
+/// downward, [bins][width][3]. Throws SceneError when y is out of range.
+std::vector<float> streak_slice(const io::Cube& cube, int y);
+
+/// Time unwarping (eq. 4.1): shifts each pixel's time series by its depth z (t_world =
+/// t_camera - z; eta = 1 as in the thesis' table-top scenes) to convert a camera-time cube to
+/// world time (`to_world`) or back. Bins are resampled by linear interpolation of the shifted
+/// piecewise-constant series, which conserves each pixel's energy; whole-bin shifts are exact.
+/// The output keeps the input's bin width and grid alignment; with `keep_window` it keeps the
+/// input's window too (energy shifted outside is dropped and reported in `dropped`), else the
+/// window becomes the bins that hold energy after the shift (nothing is dropped). Attributes
+/// femto:time, femto:start, femto:bins (and femto:start_ps) are updated; the depth is kept. Throws
+/// SceneError when the cube has no depth, is already in that time, or has no time axis.
+struct UnwarpResult {
+    io::Cube cube;
+    double dropped = 0.0;  ///< fraction of the total energy shifted outside (keep_window)
+};
+UnwarpResult unwarp(const io::Cube& cube, const TimeAxis& axis, bool to_world,
+                    bool keep_window = false);
+
+// ---- files ---------------------------------------------------------------------------------
+
+/// Writes display values in [0, 1] (RGB, row-major) as an 8-bit PNG (atomically).
+void write_png8(const std::string& path, int width, int height, const std::vector<float>& display);
+/// Writes display frames (each width*height*3 values in [0, 1]) as a looping animated GIF at
+/// `fps` frames per second, through OpenImageIO's multi-subimage GIF writer (atomically).
+void write_gif(const std::string& path, int width, int height,
+               const std::vector<std::vector<float>>& frames, int fps = 12);
+/// Writes a single-channel float image (e.g. peak times) as OpenEXR (channel Y), atomically.
+void write_exr_gray(const std::string& path, int width, int height, const float* values,
+                    const io::Attributes& attributes);
+
+}  // namespace femto::viz

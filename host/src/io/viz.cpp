@@ -1,0 +1,546 @@
+// Time-resolved outputs and the pictures of `femto viz` (femto/viz.h; thesis ch. 4.3-4.6).
+#include "femto/viz.h"
+
+#include <OpenColorIO/OpenColorIO.h>
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <mutex>
+
+#include "femto/error.h"
+
+namespace fs = std::filesystem;
+namespace OCIO = OCIO_NAMESPACE;
+
+namespace femto::io {
+
+Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info, bool world_time,
+                                    const std::string& tfilter) {
+    Attributes attrs = {
+        {"femto:version", info.femto_version},
+        {"femto:integrator", info.integrator},
+        {"femto:scene", info.scene_file},
+        {"femto:seed", std::to_string(info.seed)},
+        {"femto:samples", std::to_string(info.samples_per_pixel)},
+        {"femto:samples_requested", std::to_string(info.samples_requested)},
+        {"femto:render_seconds", fmt::format("{:.3f}", info.render_seconds)},
+        {"femto:interrupted", info.interrupted ? "true" : "false"},
+        {"femto:start", fmt::format("{:.17g}", grid.start)},
+        {"femto:bin_width", fmt::format("{:.17g}", grid.bin_width)},
+        {"femto:bins", std::to_string(grid.bins)},
+        {"femto:units", "optical path length in scene units (time x c)"},
+        {"femto:length_unit", grid.length_unit},
+        {"femto:time", world_time ? "world" : "camera"},
+        {"femto:tfilter", tfilter},
+    };
+    if (grid.metres_per_unit() > 0) {
+        attrs.push_back(
+            {"femto:start_ps", fmt::format("{:.17g}", grid.to_picoseconds(grid.start))});
+        attrs.push_back(
+            {"femto:bin_width_ps", fmt::format("{:.17g}", grid.to_picoseconds(grid.bin_width))});
+    }
+    return attrs;
+}
+
+}  // namespace femto::io
+
+namespace femto::viz {
+
+namespace {
+
+std::string temp_path_for(const std::string& path) {
+    static std::atomic<unsigned> counter{0};
+    const fs::path p(path);
+    return (p.parent_path() / fmt::format(".{}.tmp{}-{}{}", p.stem().string(), getpid(), counter++,
+                                          p.extension().string()))
+        .string();
+}
+
+void commit(const std::string& tmp, const std::string& path) {
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw SceneError(fmt::format("cannot write \"{}\": {}", path, ec.message()));
+    }
+}
+
+[[noreturn]] void fail_write(const std::string& tmp, const std::string& path,
+                             const std::string& err) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw SceneError(fmt::format("cannot write \"{}\": {}", path, err));
+}
+
+OCIO::ConstCPUProcessorRcPtr display_processor() {
+    static std::once_flag once;
+    static OCIO::ConstCPUProcessorRcPtr processor;
+    static std::string error;
+    std::call_once(once, [] {
+        try {
+            auto config = OCIO::Config::CreateFromFile(io::ocio_config_path().c_str());
+            processor = config->getProcessor("linear", "sRGB")->getDefaultCPUProcessor();
+        } catch (const std::exception& e) {
+            error = e.what();
+        }
+    });
+    if (!processor)
+        throw std::runtime_error(
+            fmt::format("OpenColorIO config {}: {}", io::ocio_config_path(), error));
+    return processor;
+}
+
+const float* px(const io::Cube& c, int x, int y, int t) {
+    return &c.data[((size_t(y) * size_t(c.width) + size_t(x)) * size_t(c.bins) + size_t(t)) * 3];
+}
+
+float lum(const float* v) { return Color{v[0], v[1], v[2]}.luminance(); }
+
+bool parse_double(const std::string& s, double& out) {
+    try {
+        size_t used = 0;
+        out = std::stod(s, &used);
+        return used == s.size() && std::isfinite(out);
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
+void set_attribute(io::Attributes& attrs, const std::string& name, const std::string& value) {
+    for (auto& [k, v] : attrs)
+        if (k == name) {
+            v = value;
+            return;
+        }
+    attrs.emplace_back(name, value);
+}
+
+// The value at `percentile` of the non-zero samples (a deterministic subsample of at most ~4M).
+float percentile_of(std::vector<float> values, double percentile) {
+    if (values.empty()) return 1.f;
+    const size_t k = std::min(values.size() - 1, size_t(double(values.size() - 1) * percentile));
+    std::nth_element(values.begin(), values.begin() + ptrdiff_t(k), values.end());
+    return values[k] > 0 ? values[k] : 1.f;
+}
+
+}  // namespace
+
+io::Cube load_cube(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw SceneError(fmt::format("\"{}\" does not exist", path));
+    if (fs::is_directory(path, ec))
+        throw SceneError(fmt::format("\"{}\" is a folder, not a cube file", path));
+    char magic[6] = {};
+    {
+        std::ifstream in(path, std::ios::binary);
+        in.read(magic, 6);
+    }
+    if (std::string(magic, 6) != "\x93NUMPY") return io::read_exr_cube(path);
+    std::vector<size_t> shape;
+    std::vector<float> data = io::read_npy(path, shape);
+    if (shape.size() != 4 || !(shape[3] == 1 || shape[3] == 3 || shape[3] == 4))
+        throw SceneError(fmt::format(
+            "\"{}\": expected a cube of shape [height, width, bins, channels] with 1, 3 or 4 "
+            "channels",
+            path));
+    if (shape[0] > (1u << 20) || shape[1] > (1u << 20) || shape[2] > (1u << 20))
+        throw SceneError(fmt::format("\"{}\": the cube is too large", path));
+    io::Cube cube;
+    cube.height = int(shape[0]);
+    cube.width = int(shape[1]);
+    cube.bins = int(shape[2]);
+    const size_t C = shape[3], n = shape[0] * shape[1] * shape[2];
+    if (C == 3) {
+        cube.data = std::move(data);
+    } else {
+        cube.data.resize(n * 3);
+        for (size_t i = 0; i < n; ++i)
+            for (size_t c = 0; c < 3; ++c) cube.data[3 * i + c] = data[i * C + (C == 1 ? 0 : c)];
+    }
+    return cube;
+}
+
+TimeAxis time_axis(const io::Cube& cube, std::optional<double> start,
+                   std::optional<double> bin_width) {
+    TimeAxis axis;
+    double s = 0, w = 0;
+    const std::string* as = cube.attribute("femto:start");
+    const std::string* aw = cube.attribute("femto:bin_width");
+    const bool have = as && aw && parse_double(*as, s) && parse_double(*aw, w) && w > 0;
+    if (have) {
+        axis.start = s;
+        axis.bin_width = w;
+    }
+    if (start) axis.start = *start;
+    if (bin_width) {
+        if (!(*bin_width > 0) || !std::isfinite(*bin_width))
+            throw SceneError(fmt::format("--bin-width must be > 0, got {}", *bin_width));
+        axis.bin_width = *bin_width;
+    }
+    axis.known = have || (start && bin_width);
+    if (const std::string* t = cube.attribute("femto:time")) axis.time = *t;
+    return axis;
+}
+
+Tone parse_tone(const std::string& name) {
+    if (name == "linear") return Tone::Linear;
+    if (name == "log") return Tone::Log;
+    throw SceneError(fmt::format("unknown tone curve \"{}\" (valid: linear, log)", name));
+}
+
+float reference_level(const io::Cube& cube, double percentile) {
+    const size_t n = cube.data.size() / 3;
+    const size_t stride = std::max<size_t>(1, n / (size_t(1) << 22));
+    std::vector<float> values;
+    for (size_t i = 0; i < n; i += stride) {
+        const float* v = &cube.data[3 * i];
+        const float m = std::max({v[0], v[1], v[2]});
+        if (m > 0 && std::isfinite(m)) values.push_back(m);
+    }
+    return percentile_of(std::move(values), percentile);
+}
+
+float reference_level(const std::vector<float>& rgb, double percentile) {
+    std::vector<float> values;
+    for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
+        const float m = std::max({rgb[i], rgb[i + 1], rgb[i + 2]});
+        if (m > 0 && std::isfinite(m)) values.push_back(m);
+    }
+    return percentile_of(std::move(values), percentile);
+}
+
+std::vector<float> tone_map(const float* rgb, size_t pixels, float reference, float exposure,
+                            Tone tone) {
+    const float scale = std::exp2(exposure) / (reference > 0 ? reference : 1.f);
+    std::vector<float> out(rgb, rgb + 3 * pixels);
+    for (float& v : out) v = std::isfinite(v) ? std::max(0.f, v * scale) : 0.f;
+    if (tone == Tone::Log) {
+        const float norm = 1.f / std::log1p(kLogRange);
+        for (float& v : out) v = std::min(1.f, std::log1p(kLogRange * v) * norm);
+    } else {
+        for (float& v : out) v = std::min(1.f, v);
+        OCIO::PackedImageDesc desc(out.data(), long(pixels), 1, 3);
+        display_processor()->apply(desc);
+        for (float& v : out) v = std::clamp(v, 0.f, 1.f);
+    }
+    return out;
+}
+
+std::vector<float> frame(const io::Cube& cube, int bin) {
+    if (bin < 0 || bin >= cube.bins)
+        throw SceneError(fmt::format("bin {} is out of range [0, {})", bin, cube.bins));
+    std::vector<float> out(size_t(cube.width) * size_t(cube.height) * 3);
+    for (int y = 0; y < cube.height; ++y)
+        for (int x = 0; x < cube.width; ++x) {
+            const float* v = px(cube, x, y, bin);
+            float* o = &out[(size_t(y) * size_t(cube.width) + size_t(x)) * 3];
+            o[0] = v[0];
+            o[1] = v[1];
+            o[2] = v[2];
+        }
+    return out;
+}
+
+Color time_colour(double u) {
+    // HSV hue from 0 (red) to 240 degrees (blue), full saturation and value.
+    const double h = std::clamp(u, 0.0, 1.0) * 4.0;  // in sextants of 60 degrees
+    const int i = std::min(3, int(h));
+    const float f = float(h - i);
+    switch (i) {
+        case 0:
+            return {1.f, f, 0.f};  // red -> yellow
+        case 1:
+            return {1.f - f, 1.f, 0.f};  // yellow -> green
+        case 2:
+            return {0.f, 1.f, f};  // green -> cyan
+        default:
+            return {0.f, 1.f - f, 1.f};  // cyan -> blue
+    }
+}
+
+std::vector<int> peak_bins(const io::Cube& cube) {
+    std::vector<int> peaks(size_t(cube.width) * size_t(cube.height), -1);
+    for (int y = 0; y < cube.height; ++y)
+        for (int x = 0; x < cube.width; ++x) {
+            float best = 0;
+            int arg = -1;
+            for (int t = 0; t < cube.bins; ++t) {
+                const float l = lum(px(cube, x, y, t));
+                if (l > best) {
+                    best = l;
+                    arg = t;
+                }
+            }
+            peaks[size_t(y) * size_t(cube.width) + size_t(x)] = arg;
+        }
+    return peaks;
+}
+
+std::vector<float> peak_times(const io::Cube& cube, const TimeAxis& axis) {
+    const std::vector<int> peaks = peak_bins(cube);
+    std::vector<float> times(peaks.size());
+    for (size_t i = 0; i < peaks.size(); ++i)
+        times[i] = peaks[i] < 0 ? std::numeric_limits<float>::quiet_NaN()
+                                : float(axis.bin_centre(peaks[i]));
+    return times;
+}
+
+std::vector<float> peak_time_image(const io::Cube& cube, int isochrone_spacing) {
+    const std::vector<int> peaks = peak_bins(cube);
+    int kmin = std::numeric_limits<int>::max(), kmax = -1;
+    for (int k : peaks)
+        if (k >= 0) {
+            kmin = std::min(kmin, k);
+            kmax = std::max(kmax, k);
+        }
+    // The sparse volume of the thesis: only the radiance within two bins of each pixel's peak
+    // (and, with isochrones, only every isochrone_spacing-th bin of it).
+    std::vector<float> energy(peaks.size(), 0.f);
+    for (int y = 0; y < cube.height; ++y)
+        for (int x = 0; x < cube.width; ++x) {
+            const size_t p = size_t(y) * size_t(cube.width) + size_t(x);
+            const int k = peaks[p];
+            if (k < 0) continue;
+            double e = 0;
+            for (int t = std::max(0, k - 2); t <= std::min(cube.bins - 1, k + 2); ++t)
+                if (isochrone_spacing <= 0 || t % isochrone_spacing == 0)
+                    e += lum(px(cube, x, y, t));
+            energy[p] = float(e);
+        }
+    std::vector<float> nonzero;
+    for (float e : energy)
+        if (e > 0) nonzero.push_back(e);
+    const float ref = percentile_of(nonzero, 0.995);
+    const float norm = 1.f / std::log1p(kLogRange);
+    std::vector<float> out(peaks.size() * 3, 0.f);
+    for (size_t p = 0; p < peaks.size(); ++p) {
+        if (peaks[p] < 0 || energy[p] <= 0) continue;
+        const double u = kmax > kmin ? double(peaks[p] - kmin) / double(kmax - kmin) : 0.0;
+        const Color c = time_colour(u);
+        const float b = std::min(1.f, std::log1p(kLogRange * energy[p] / ref) * norm);
+        out[3 * p + 0] = c.r * b;
+        out[3 * p + 1] = c.g * b;
+        out[3 * p + 2] = c.b * b;
+    }
+    return out;
+}
+
+std::vector<float> rainbow_fusion(const io::Cube& cube) {
+    std::vector<Color> tint(size_t(cube.bins));
+    for (int t = 0; t < cube.bins; ++t)
+        tint[size_t(t)] = time_colour(cube.bins > 1 ? double(t) / double(cube.bins - 1) : 0.0);
+    std::vector<float> out(size_t(cube.width) * size_t(cube.height) * 3, 0.f);
+    for (int y = 0; y < cube.height; ++y)
+        for (int x = 0; x < cube.width; ++x) {
+            double s[3] = {0, 0, 0};
+            for (int t = 0; t < cube.bins; ++t) {
+                const float l = lum(px(cube, x, y, t));
+                if (l == 0) continue;
+                const Color& c = tint[size_t(t)];
+                s[0] += double(l) * c.r;
+                s[1] += double(l) * c.g;
+                s[2] += double(l) * c.b;
+            }
+            float* o = &out[(size_t(y) * size_t(cube.width) + size_t(x)) * 3];
+            for (int c = 0; c < 3; ++c) o[c] = float(s[c]);
+        }
+    return out;
+}
+
+std::vector<float> streak_slice(const io::Cube& cube, int y) {
+    if (y < 0 || y >= cube.height)
+        throw SceneError(
+            fmt::format("row {} is out of range: the cube has rows 0 to {}", y, cube.height - 1));
+    std::vector<float> out(size_t(cube.width) * size_t(cube.bins) * 3);
+    for (int t = 0; t < cube.bins; ++t)
+        for (int x = 0; x < cube.width; ++x) {
+            const float* v = px(cube, x, y, t);
+            float* o = &out[(size_t(t) * size_t(cube.width) + size_t(x)) * 3];
+            o[0] = v[0];
+            o[1] = v[1];
+            o[2] = v[2];
+        }
+    return out;
+}
+
+UnwarpResult unwarp(const io::Cube& cube, const TimeAxis& axis, bool to_world, bool keep_window) {
+    const char* target = to_world ? "world" : "camera";
+    if (cube.depth.empty())
+        throw SceneError(
+            "the cube has no depth part (per-pixel sensor distance), which unwarping needs: "
+            "use the OpenEXR cube a transient film wrote, not a .npy");
+    if (!axis.known) throw SceneError("the cube has no time axis (femto:start, femto:bin_width)");
+    if (axis.time == target)
+        throw SceneError(fmt::format("the cube is already in {} time (femto:time)", target));
+    if (axis.time != "camera" && axis.time != "world")
+        throw SceneError(
+            "the cube does not say whether it holds camera or world time (femto:time)");
+    const size_t pixels = size_t(cube.width) * size_t(cube.height), T = size_t(cube.bins);
+    const double bw = axis.bin_width;
+    // Shift of each pixel in bins: new time = old time + shift * bw.
+    std::vector<double> shift(pixels, 0.0);
+    double smin = 0, smax = 0;
+    bool any = false;
+    for (size_t p = 0; p < pixels; ++p) {
+        const float d = cube.depth[p];
+        if (!(d > 0) || !std::isfinite(d)) continue;
+        shift[p] = (to_world ? -double(d) : double(d)) / bw;
+        smin = any ? std::min(smin, shift[p]) : shift[p];
+        smax = any ? std::max(smax, shift[p]) : shift[p];
+        any = true;
+    }
+    constexpr double kSnap = 1e-6;  // whole-bin shifts up to rounding stay exact
+    auto snapped_floor = [&](double v) {
+        const double r = std::round(v);
+        return std::abs(v - r) < kSnap ? r : std::floor(v);
+    };
+    auto snapped_ceil = [&](double v) {
+        const double r = std::round(v);
+        return std::abs(v - r) < kSnap ? r : std::ceil(v);
+    };
+    int64_t k_lo = 0, k_hi = 0;
+    if (!keep_window && any) {
+        k_lo = std::min<int64_t>(0, int64_t(snapped_floor(smin)));
+        k_hi = std::max<int64_t>(0, int64_t(snapped_ceil(smax)));
+    }
+    const int64_t new_bins = int64_t(T) + k_hi - k_lo;
+    if (new_bins > (int64_t(1) << 20) ||
+        double(pixels) * double(new_bins) * 3 * sizeof(float) > double(int64_t(1) << 36))
+        throw SceneError(fmt::format("the unwarped cube would need {} bins: too large", new_bins));
+    UnwarpResult result;
+    io::Cube& out = result.cube;
+    out.width = cube.width;
+    out.height = cube.height;
+    out.bins = int(new_bins);
+    out.depth = cube.depth;
+    // Part names and types are the writer's business (read_exr_cube returns part 0's).
+    for (const auto& [k, v] : cube.attributes)
+        if (k != "name" && k != "type") out.attributes.emplace_back(k, v);
+    out.data.assign(pixels * size_t(new_bins) * 3, 0.f);
+    double total = 0, kept = 0;
+    for (size_t p = 0; p < pixels; ++p) {
+        const float* in = &cube.data[p * T * 3];
+        float* o = &out.data[p * size_t(new_bins) * 3];
+        // New bin j covers old-bin coordinates [j + k_lo - shift, j + k_lo - shift + 1).
+        double off = double(k_lo) - shift[p];
+        double base = std::floor(off);
+        if (std::abs(off - std::round(off)) < kSnap) base = off = std::round(off);
+        const float f = float(off - base);
+        const int64_t i0 = int64_t(base);
+        for (int64_t j = 0; j < new_bins; ++j) {
+            const int64_t a = j + i0, b = a + 1;
+            for (int c = 0; c < 3; ++c) {
+                float v = 0;
+                if (a >= 0 && a < int64_t(T)) v += (1.f - f) * in[size_t(a) * 3 + size_t(c)];
+                if (f > 0 && b >= 0 && b < int64_t(T)) v += f * in[size_t(b) * 3 + size_t(c)];
+                o[size_t(j) * 3 + size_t(c)] = v;
+            }
+        }
+        for (size_t i = 0; i < T * 3; ++i) total += in[i];
+        for (size_t i = 0; i < size_t(new_bins) * 3; ++i) kept += o[i];
+    }
+    result.dropped = total > 0 ? std::max(0.0, 1.0 - kept / total) : 0.0;
+    if (!keep_window) {
+        // Trim the grown window to the bins that hold energy (keeping the grid alignment).
+        int64_t first = new_bins, last = -1;
+        for (size_t p = 0; p < pixels; ++p)
+            for (int64_t j = 0; j < new_bins; ++j) {
+                const float* v = &out.data[(p * size_t(new_bins) + size_t(j)) * 3];
+                if (v[0] != 0 || v[1] != 0 || v[2] != 0) {
+                    first = std::min(first, j);
+                    last = std::max(last, j);
+                }
+            }
+        if (last >= first && (first > 0 || last < new_bins - 1)) {
+            const int64_t bins = last - first + 1;
+            std::vector<float> cropped(pixels * size_t(bins) * 3);
+            for (size_t p = 0; p < pixels; ++p)
+                std::copy_n(&out.data[(p * size_t(new_bins) + size_t(first)) * 3], size_t(bins) * 3,
+                            &cropped[p * size_t(bins) * 3]);
+            out.data = std::move(cropped);
+            out.bins = int(bins);
+            k_lo += first;
+        }
+    }
+    const double new_start = axis.start + double(k_lo) * bw;
+    set_attribute(out.attributes, "femto:time", target);
+    set_attribute(out.attributes, "femto:start", fmt::format("{:.17g}", new_start));
+    set_attribute(out.attributes, "femto:bin_width", fmt::format("{:.17g}", bw));
+    set_attribute(out.attributes, "femto:bins", std::to_string(out.bins));
+    double start_ps = 0, bw_ps = 0;
+    const std::string* sps = cube.attribute("femto:start_ps");
+    const std::string* wps = cube.attribute("femto:bin_width_ps");
+    if (sps && wps && parse_double(*sps, start_ps) && parse_double(*wps, bw_ps))
+        set_attribute(out.attributes, "femto:start_ps",
+                      fmt::format("{:.17g}", start_ps + double(k_lo) * bw_ps));
+    set_attribute(out.attributes, "femto:unwarped",
+                  to_world ? "camera -> world (eq. 4.1)" : "world -> camera (eq. 4.1)");
+    return result;
+}
+
+void write_png8(const std::string& path, int width, int height, const std::vector<float>& display) {
+    std::vector<unsigned char> bytes(display.size());
+    for (size_t i = 0; i < bytes.size(); ++i)
+        bytes[i] = static_cast<unsigned char>(std::lround(
+            std::clamp(std::isfinite(display[i]) ? display[i] : 0.f, 0.f, 1.f) * 255.f));
+    const std::string tmp = temp_path_for(path);
+    auto out = OIIO::ImageOutput::create(tmp);
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) ||
+        !out->close())
+        fail_write(tmp, path, out ? out->geterror() : OIIO::geterror());
+    commit(tmp, path);
+}
+
+void write_gif(const std::string& path, int width, int height,
+               const std::vector<std::vector<float>>& frames, int fps) {
+    if (frames.empty()) throw SceneError(fmt::format("cannot write \"{}\": no frames", path));
+    const std::string tmp = temp_path_for(path);
+    auto out = OIIO::ImageOutput::create(tmp);
+    if (!out) fail_write(tmp, path, OIIO::geterror());
+    if (!out->supports("multiimage"))
+        fail_write(tmp, path, "this OpenImageIO cannot write multi-image GIFs");
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    const int rate[2] = {std::max(1, fps), 1};
+    spec.attribute("FramesPerSecond", OIIO::TypeRational, rate);
+    spec.attribute("oiio:Movie", 1);
+    spec.attribute("oiio:LoopCount", 0);
+    const std::vector<OIIO::ImageSpec> specs(frames.size(), spec);
+    const bool append = out->supports("appendsubimage");
+    bool ok = append ? out->open(tmp, spec) : out->open(tmp, int(specs.size()), specs.data());
+    std::vector<unsigned char> bytes;
+    for (size_t f = 0; ok && f < frames.size(); ++f) {
+        if (f > 0) ok = out->open(tmp, spec, OIIO::ImageOutput::AppendSubimage);
+        bytes.resize(frames[f].size());
+        for (size_t i = 0; i < bytes.size(); ++i)
+            bytes[i] = static_cast<unsigned char>(std::lround(
+                std::clamp(std::isfinite(frames[f][i]) ? frames[f][i] : 0.f, 0.f, 1.f) * 255.f));
+        ok = ok && out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+    }
+    ok = ok && out->close();
+    if (!ok) fail_write(tmp, path, out->geterror());
+    commit(tmp, path);
+}
+
+void write_exr_gray(const std::string& path, int width, int height, const float* values,
+                    const io::Attributes& attributes) {
+    const std::string tmp = temp_path_for(path);
+    auto out = OIIO::ImageOutput::create(tmp);
+    OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = {"Y"};
+    spec.attribute("compression", "zip");
+    for (const auto& [k, v] : attributes) spec.attribute(k, v);
+    if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values) ||
+        !out->close())
+        fail_write(tmp, path, out ? out->geterror() : OIIO::geterror());
+    commit(tmp, path);
+}
+
+}  // namespace femto::viz

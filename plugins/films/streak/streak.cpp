@@ -1,0 +1,277 @@
+// Streak camera film (thesis ch. 4.3): x-t images of a few chosen rows. Each recorded row is
+// reconstructed exactly as the `transient` film reconstructs that row of its x-y-t cube
+// (<rfilter> in space, <tfilter> in time, histogram by default), so a streak image equals
+// the corresponding slice of a transient cube rendered with the same scene and seed.
+// Writes OUTBASE_rowRRRR.exr (width x bins: x to the right, time increasing downward) and
+// OUTBASE_rowRRRR.png (its preview) for every recorded row.
+//
+// Memory: per recorded row, width * bins * 3 floats plus per-pixel filter weight sums
+// (double). The renderer skips rows whose samples cannot reach a recorded row (row_active).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "femto/film.h"
+#include "femto/image_io.h"
+#include "femto/log.h"
+#include "femto/plugin.h"
+#include "femto/tfilter.h"
+#include "femto/time.h"
+#include "femto/viz.h"
+
+namespace {
+
+using namespace femto;
+
+class StreakFilm;
+
+// One block: the recorded rows that fall inside a tile plus its filter border.
+class StreakBlock final : public FilmBlock {
+public:
+    StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, int border);
+    void put(Vec2 pos, const ContributionList& sample) override;
+
+    const StreakFilm& film_;
+    int x0_, y0_, w_, h_, bins_;
+    std::vector<int> rows_;        // recorded rows inside [y0_, y0_ + h_)
+    std::vector<int> slot_of_y_;   // per block row: index into rows_, or -1
+    std::vector<float> data_;      // [rows_][w_][bins][3]
+    std::vector<double> weights_;  // [rows_][w_]
+    std::vector<BinWeight> scratch_;
+    uint64_t invalid_ = 0;
+};
+
+std::vector<int> parse_rows(const Properties& props, int height) {
+    std::vector<int> rows;
+    const bool has_rows = props.has("rows"), has_row = props.has("row");
+    if (has_rows && has_row) props.fail("row", "give row or rows, not both");
+    if (!has_rows && !has_row)
+        props.fail("rows",
+                   "the streak film needs the rows to record: row (integer) or rows "
+                   "(comma-separated, e.g. \"64, 100\")");
+    auto check = [&](const char* name, int64_t r) {
+        if (r < 0 || r >= height)
+            props.fail(name,
+                       fmt::format("row {} is outside the image (rows 0 to {})", r, height - 1));
+        if (std::find(rows.begin(), rows.end(), int(r)) != rows.end())
+            props.fail(name, fmt::format("row {} is given twice", r));
+        rows.push_back(int(r));
+    };
+    if (has_row) {
+        check("row", props.get_int("row"));
+        return rows;
+    }
+    const std::string text = props.get_string("rows");
+    size_t pos = 0;
+    while (true) {
+        const size_t comma = text.find(',', pos);
+        std::string item =
+            text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+        const size_t a = item.find_first_not_of(" \t\n"), b = item.find_last_not_of(" \t\n");
+        item = a == std::string::npos ? "" : item.substr(a, b - a + 1);
+        if (item.empty() || item.find_first_not_of("0123456789") != std::string::npos ||
+            item.size() > 9)
+            props.fail("rows", fmt::format("rows must be comma-separated row indices (e.g. "
+                                           "\"64, 100\"), got \"{}\"",
+                                           text));
+        check("rows", std::stoll(item));
+        if (comma == std::string::npos) break;
+        pos = comma + 1;
+    }
+    return rows;
+}
+
+class StreakFilm final : public Film {
+public:
+    explicit StreakFilm(const Properties& props) : Film(props), grid_(read_time_grid(props)) {
+        world_time_ = props.get_bool("world_time", false);
+        exposure_ = float(props.get_float("exposure", 0.0));
+        rows_ = parse_rows(props, height_);
+        std::sort(rows_.begin(), rows_.end());
+        auto filters = props.objects(PluginKind::TemporalFilter);
+        if (filters.size() > 1) props.fail("tfilter", "a film takes at most one <tfilter>");
+        tfilter_ = std::static_pointer_cast<TemporalFilter>(
+            filters.empty()
+                ? create_default_object(PluginKind::TemporalFilter, "histogram", props.location())
+                : filters[0]);
+        const double bytes = double(rows_.size()) * width_ * grid_.bins * 3 * sizeof(float);
+        if (bytes > double(size_t(1) << 36))
+            props.fail("bins", fmt::format("the streak images would need {:.1f} GiB (limit 64 GiB)",
+                                           bytes / double(1 << 30)));
+        slot_of_row_.assign(size_t(height_), -1);
+        for (size_t i = 0; i < rows_.size(); ++i) slot_of_row_[size_t(rows_[i])] = int(i);
+        // A sample in pixel row y lies in [y, y + 1); it reaches pixel row r when
+        // |r + 0.5 - pos.y| <= radius (for_each_filter_pixel's footprint).
+        const double radius = rfilter().radius();
+        active_.assign(size_t(height_), 0);
+        for (int y = 0; y < height_; ++y)
+            for (int r : rows_)
+                if (double(y) <= r + 0.5 + radius && double(y) + 1.0 > r + 0.5 - radius)
+                    active_[size_t(y)] = 1;
+        data_.assign(rows_.size() * size_t(width_) * size_t(grid_.bins) * 3, 0.f);
+        weights_.assign(rows_.size() * size_t(width_), 0.0);
+    }
+
+    std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
+        return std::make_unique<StreakBlock>(*this, x0, y0, w, h, filter_border());
+    }
+
+    void merge(const FilmBlock& b) override {
+        const auto& block = static_cast<const StreakBlock&>(b);
+        invalid_ += block.invalid_;
+        const size_t T3 = size_t(grid_.bins) * 3;
+        for (size_t s = 0; s < block.rows_.size(); ++s) {
+            const size_t slot = size_t(slot_of_row_[size_t(block.rows_[s])]);
+            for (int bx = 0; bx < block.w_; ++bx) {
+                const int x = block.x0_ + bx;
+                if (x < 0 || x >= width_) continue;
+                const size_t src = s * size_t(block.w_) + size_t(bx);
+                const size_t dst = slot * size_t(width_) + size_t(x);
+                if (block.weights_[src] == 0) continue;
+                weights_[dst] += block.weights_[src];
+                const float* in = &block.data_[src * T3];
+                float* out = &data_[dst * T3];
+                for (size_t i = 0; i < T3; ++i) out[i] += in[i];
+            }
+        }
+    }
+
+    void start_pass(uint32_t pass) override { tfilter_->start_pass(pass); }
+    double max_path_length() const override {
+        // As the transient film: in world time the sensor segment is subtracted later.
+        return world_time_ ? std::numeric_limits<double>::infinity()
+                           : grid_.end() + tfilter_->max_radius();
+    }
+    bool row_active(int y) const override {
+        return y >= 0 && y < height_ && active_[size_t(y)] != 0;
+    }
+
+    std::vector<float> steady_image() const override {
+        std::vector<float> rgb(size_t(width_) * size_t(height_) * 3, 0.f);
+        const size_t T = size_t(grid_.bins);
+        for (size_t s = 0; s < rows_.size(); ++s)
+            for (int x = 0; x < width_; ++x) {
+                const size_t p = s * size_t(width_) + size_t(x);
+                if (weights_[p] == 0) continue;
+                double sum[3] = {0, 0, 0};
+                for (size_t t = 0; t < T; ++t)
+                    for (int c = 0; c < 3; ++c) sum[c] += data_[(p * T + t) * 3 + size_t(c)];
+                float* o = &rgb[(size_t(rows_[s]) * size_t(width_) + size_t(x)) * 3];
+                for (int c = 0; c < 3; ++c) o[c] = float(sum[c] / weights_[p]);
+            }
+        return rgb;
+    }
+
+    /// Recorded row `slot` as an x-t image [bins][width][3], normalised by the filter weights.
+    std::vector<float> streak_image(size_t slot) const {
+        const size_t T = size_t(grid_.bins), W = size_t(width_);
+        std::vector<float> img(W * T * 3, 0.f);
+        for (size_t x = 0; x < W; ++x) {
+            const size_t p = slot * W + x;
+            const double w = weights_[p];
+            if (w == 0) continue;
+            for (size_t t = 0; t < T; ++t)
+                for (size_t c = 0; c < 3; ++c)
+                    img[(t * W + x) * 3 + c] = float(data_[(p * T + t) * 3 + c] / w);
+        }
+        return img;
+    }
+
+    std::vector<std::string> write(const std::string& out_base,
+                                   const RenderInfo& info) const override {
+        if (invalid_ > 0)
+            log_warning(fmt::format("{} contributions with NaN or infinite radiance were discarded",
+                                    invalid_));
+        std::vector<std::string> files;
+        for (size_t s = 0; s < rows_.size(); ++s) {
+            io::Attributes attrs =
+                io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
+            attrs.push_back({"femto:row", std::to_string(rows_[s])});
+            attrs.push_back({"femto:layout", "streak image: x to the right, time downward"});
+            const std::vector<float> img = streak_image(s);
+            const std::string base = fmt::format("{}_row{:04}", out_base, rows_[s]);
+            files.push_back(base + ".exr");
+            io::write_exr_rgb(files.back(), width_, grid_.bins, img.data(), attrs);
+            files.push_back(base + ".png");
+            io::write_png_preview(files.back(), width_, grid_.bins, img.data(), exposure_);
+        }
+        return files;
+    }
+
+    TimeGrid grid_;
+    bool world_time_ = false;
+    float exposure_ = 0;
+    std::shared_ptr<TemporalFilter> tfilter_;
+    std::vector<int> rows_;         // sorted
+    std::vector<int> slot_of_row_;  // per image row: index into rows_, or -1
+    std::vector<char> active_;      // per image row: samples there reach a recorded row
+    std::vector<float> data_;       // [rows_][width][bins][3]
+    std::vector<double> weights_;   // [rows_][width]
+    uint64_t invalid_ = 0;
+};
+
+StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, int border)
+    : film_(film),
+      x0_(x0 - border),
+      y0_(y0 - border),
+      w_(w + 2 * border),
+      h_(h + 2 * border),
+      bins_(film.grid_.bins),
+      slot_of_y_(size_t(h_), -1) {
+    for (int r : film.rows_)
+        if (r >= y0_ && r < y0_ + h_) {
+            slot_of_y_[size_t(r - y0_)] = int(rows_.size());
+            rows_.push_back(r);
+        }
+    data_.assign(rows_.size() * size_t(w_) * size_t(bins_) * 3, 0.f);
+    weights_.assign(rows_.size() * size_t(w_), 0.0);
+}
+
+void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
+    if (rows_.empty()) return;
+    const double sensor = sample.sensor_distance();
+    for (const auto& c : sample.items())
+        if (!c.radiance.is_finite()) {
+            ++invalid_;
+            return;
+        }
+    for_each_filter_pixel(
+        film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
+            const int slot = slot_of_y_[size_t(y - y0_)];
+            if (slot < 0) return;
+            const size_t local = size_t(slot) * size_t(w_) + size_t(x - x0_);
+            weights_[local] += w;
+            const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
+            float* px = &data_[local * size_t(bins_) * 3];
+            for (const auto& c : sample.items()) {
+                const double t =
+                    film_.world_time_ ? c.path_length - std::max(0.0, sensor) : c.path_length;
+                scratch_.clear();
+                film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
+                for (const BinWeight& bw : scratch_) {
+                    const float s = w * bw.weight;
+                    float* v = px + size_t(bw.bin) * 3;
+                    v[0] += s * c.radiance.r;
+                    v[1] += s * c.radiance.g;
+                    v[2] += s * c.radiance.b;
+                }
+            }
+        });
+}
+
+}  // namespace
+
+FEMTO_PLUGIN(StreakFilm, femto::PluginKind::Film, "streak",
+             "Streak camera (ch. 4.3): x-t images of chosen rows, one EXR + PNG per row",
+             {{"width", "integer", "768", "image width in pixels"},
+              {"height", "integer", "576", "image height in pixels"},
+              {"rows", "string", "", "rows to record, comma-separated (e.g. \"64, 100\")"},
+              {"row", "integer", "", "the row to record (instead of rows)"},
+              FEMTO_TIME_GRID_PARAMS,
+              {"world_time", "boolean", "false",
+               "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
+              {"exposure", "float", "0", "exposure of the PNG previews, in stops"},
+              {"rfilter", "rfilter", "gaussian", "spatial reconstruction filter (nested)"},
+              {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}})

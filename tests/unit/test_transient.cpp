@@ -1,0 +1,676 @@
+// Time-resolved rendering against physics: arrival times and amplitudes over a plane (camera
+// and world time), energy conservation of the x-y-t film against the steady `path` render,
+// the (eta - 1) d delay of a glass slab, and the `fluorescent` material (its sampling, colour
+// transfer and lifetime; its delayed, colour-shifted re-emission in a render).
+//
+// Tolerances:
+//  - Arrival times are exact: every contribution's time is a sum of segment lengths in double
+//    precision from float hit distances (relative rounding ~1e-7 on lengths < 10, i.e. < 1e-5
+//    absolute). Scenes place the expected times at least 1e-3 inside a bin (bins are 5e-3 to
+//    2e-2 wide), and a footprint's time range is widened by 1e-4 before it is mapped to bins.
+//  - Monte Carlo means are compared within 4 standard errors (two-sided), the standard error
+//    derived for each estimator where it is used (jitter of the pixel position, a binomial
+//    choice, or the ratio estimator of a mean time over independent pixels).
+//  - `path` and `transient_path` trace the same estimator (host trace_path) and draw the same
+//    random numbers per (pixel, sample) when roulette is off and the time window contains every
+//    path: then the two steady images agree up to float summation order (see EnergyMatchesPath).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "femto/bsdf.h"
+#include "femto/film.h"
+#include "femto/host.h"
+#include "femto/properties.h"
+#include "femto/random.h"
+#include "femto/sensor.h"
+#include "femto/time.h"
+#include "scene_util.h"
+
+using namespace femto;
+
+namespace {
+
+const std::string kScenes = std::string(FEMTO_SOURCE_DIR) + "/scenes/";
+
+// ---------------------------------------------------------------------------------------------
+// Cubes: render, write with --npy, read the .npy back
+
+struct Cube {
+    int H = 0, W = 0, T = 0, C = 0;
+    std::vector<float> data;
+    float at(int y, int x, int t, int c) const {
+        return data[((size_t(y) * size_t(W) + size_t(x)) * size_t(T) + size_t(t)) * size_t(C) +
+                    size_t(c)];
+    }
+    /// Sum over the colour channels of bin t.
+    double energy(int y, int x, int t) const {
+        double e = 0;
+        for (int c = 0; c < C; ++c) e += at(y, x, t, c);
+        return e;
+    }
+};
+
+// .npy version 1/2: magic, version, header length (2 or 4 bytes little-endian), a Python dict
+// {'descr': '<f4', 'fortran_order': False, 'shape': (...), }, then the raw data.
+Cube read_npy(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_GE(bytes.size(), 10u);
+    EXPECT_EQ(bytes.substr(0, 6), std::string("\x93NUMPY"));
+    const int major = static_cast<unsigned char>(bytes[6]);
+    size_t header_len = 0, offset = 0;
+    if (major == 1) {
+        header_len = size_t(static_cast<unsigned char>(bytes[8])) |
+                     size_t(static_cast<unsigned char>(bytes[9])) << 8;
+        offset = 10;
+    } else {
+        for (int i = 0; i < 4; ++i)
+            header_len |= size_t(static_cast<unsigned char>(bytes[8 + size_t(i)])) << (8 * i);
+        offset = 12;
+    }
+    const std::string header = bytes.substr(offset, header_len);
+    EXPECT_NE(header.find("'descr': '<f4'"), std::string::npos) << header;
+    EXPECT_NE(header.find("'fortran_order': False"), std::string::npos) << header;
+    const size_t open = header.find("'shape': (");
+    EXPECT_NE(open, std::string::npos) << header;
+    std::vector<int> shape;
+    std::stringstream ss(header.substr(open + 10, header.find(')', open) - open - 10));
+    std::string item;
+    while (std::getline(ss, item, ','))
+        if (item.find_first_not_of(' ') != std::string::npos) shape.push_back(std::stoi(item));
+    EXPECT_EQ(shape.size(), 4u) << header;
+    Cube cube;
+    if (shape.size() != 4) return cube;
+    cube.H = shape[0];
+    cube.W = shape[1];
+    cube.T = shape[2];
+    cube.C = shape[3];
+    const size_t n = size_t(cube.H) * size_t(cube.W) * size_t(cube.T) * size_t(cube.C);
+    EXPECT_EQ(bytes.size(), offset + header_len + n * sizeof(float));
+    cube.data.resize(n);
+    std::memcpy(cube.data.data(), bytes.data() + offset + header_len, n * sizeof(float));
+    return cube;
+}
+
+Cube render_cube(Scene& scene, uint64_t seed, const std::string& name) {
+    RenderOptions opt;
+    opt.seed = seed;
+    const RenderStats stats = render(scene, opt);
+    RenderInfo info = make_render_info(scene, opt, stats);
+    info.write_npy = true;
+    const auto dir = femto::test::temp_dir("transient-" + name);
+    scene.sensor().film().write((dir / name).string(), info);
+    Cube cube = read_npy((dir / (name + ".npy")).string());
+    std::filesystem::remove_all(dir);
+    return cube;
+}
+
+std::vector<float> render_steady(Scene& scene, uint64_t seed) {
+    RenderOptions opt;
+    opt.seed = seed;
+    render(scene, opt);
+    return scene.sensor().film().steady_image();
+}
+
+LoadOptions defines(std::vector<std::pair<std::string, std::string>> d) {
+    LoadOptions o;
+    o.defines = std::move(d);
+    return o;
+}
+
+std::string read_text(const std::string& path) {
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// Replaces the first element that starts with `open` up to and including `close`.
+std::string replace_element(const std::string& xml, const std::string& open,
+                            const std::string& close, const std::string& with) {
+    const size_t a = xml.find(open);
+    EXPECT_NE(a, std::string::npos) << open;
+    if (a == std::string::npos) return xml;
+    const size_t b = xml.find(close, a);
+    EXPECT_NE(b, std::string::npos) << close;
+    return xml.substr(0, a) + with + xml.substr(b + close.size());
+}
+
+/// Time bin of the window [start, start + bins * width) holding t, or -1.
+int bin_of(double start, double width, int bins, double t) {
+    TimeGrid g;
+    g.start = start;
+    g.bin_width = width;
+    g.bins = bins;
+    return g.bin_of(t);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The fluorescent material on its own
+
+std::shared_ptr<Bsdf> make_fluorescent(Color absorption, Color emission, double efficiency,
+                                       double lifetime) {
+    Properties p("fluorescent", {});
+    p.set_color("absorption", absorption);
+    p.set_color("emission", emission);
+    p.set_float("efficiency", efficiency);
+    p.set_float("lifetime", lifetime);
+    return std::static_pointer_cast<Bsdf>(create_object(PluginKind::Bsdf, "fluorescent", p));
+}
+
+double dot(const Color& a, const Color& b) {
+    return double(a.r) * b.r + double(a.g) * b.g + double(a.b) * b.b;
+}
+
+}  // namespace
+
+TEST(FluorescentMaterial, SampleWeightIsEvalOverPdf) {
+    const auto bsdf = make_fluorescent({0, 0, 1}, {0, 1, 0}, 1, 1);
+    ASSERT_TRUE(bsdf);
+    EXPECT_TRUE(bsdf->has_delay());
+    EXPECT_EQ(bsdf->flags(), uint32_t(kBsdfDiffuseReflection));
+    const Hit hit;
+    Pcg32 rng(11, 3);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3 wi = normalize(
+            Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, 0.05f + rng.next_float()));
+        const BsdfSample s =
+            bsdf->sample(hit, wi, rng.next_float(), {rng.next_float(), rng.next_float()});
+        if (!s.valid()) continue;
+        ASSERT_GT(s.wo.z, 0.f);
+        const Color f = bsdf->eval(hit, wi, s.wo);
+        const float pdf = bsdf->pdf(hit, wi, s.wo);
+        // A Lambertian lobe: f cos = cos / pi, pdf = cos / pi (float rounding ~1e-7).
+        EXPECT_NEAR(f.g, s.wo.z / M_PI, 1e-6);
+        EXPECT_NEAR(pdf, s.wo.z / M_PI, 1e-6);
+        EXPECT_NEAR(s.pdf, pdf, 1e-6 * pdf);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.weight[c], f[c] / pdf, 1e-5);
+    }
+    // Back side: nothing.
+    EXPECT_FALSE(bsdf->sample(hit, Vec3(0, 0, -1), 0.5f, {0.3f, 0.3f}).valid());
+    EXPECT_TRUE(bsdf->eval(hit, Vec3(0, 0, -1), Vec3(0, 0, 1)).is_black());
+}
+
+TEST(FluorescentMaterial, TransferIsAnEnergyConservingRankOneMatrix) {
+    // Light direction: L_out = M L_in with M = efficiency * e a^T, e = emission / sum(emission).
+    Pcg32 rng(5, 9);
+    const Hit hit;
+    for (int trial = 0; trial < 200; ++trial) {
+        const Color a(rng.next_float(), rng.next_float(), rng.next_float());
+        const Color em(rng.next_float() + 0.01f, rng.next_float(), rng.next_float());
+        const double eff = rng.next_float();
+        const auto bsdf = make_fluorescent(a, em, eff, 0.5);
+        const double sum_e = double(em.r) + em.g + em.b;
+        const Color L(rng.next_float(), rng.next_float(), rng.next_float());
+        const double absorbed = dot(a, L);
+        double ML[3];
+        for (int c = 0; c < 3; ++c) ML[c] = eff * em[c] / sum_e * absorbed;
+        ASSERT_TRUE(bsdf->has_transfer());
+        const Color out_c = bsdf->transfer(hit) * L;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(out_c[c], ML[c], 1e-6 * (1 + std::abs(ML[c])));
+        // Energy (summed over channels): re-emitted = eff * absorbed <= in.
+        const double out = double(out_c.r) + out_c.g + out_c.b;
+        EXPECT_NEAR(out, eff * absorbed, 1e-6);
+        EXPECT_LE(out, dot(Color(1.f), L) * (1 + 1e-6));
+    }
+    // Efficiency 1 and full absorption: all the energy comes back.
+    const auto full = make_fluorescent({1, 1, 1}, {0.2f, 0.5f, 0.9f}, 1, 1);
+    const Color L(0.3f, 1.7f, 0.25f);
+    const Color back = full->transfer(hit) * L;
+    EXPECT_NEAR(double(back.r) + back.g + back.b, 0.3 + 1.7 + 0.25, 1e-6);
+}
+
+TEST(FluorescentMaterial, DelayIsExponentialWithMeanLifetime) {
+    const double tau = 2.5;
+    const auto bsdf = make_fluorescent({0, 0, 1}, {0, 1, 0}, 1, tau);
+    const Hit hit;
+    Pcg32 rng(42, 1);
+    const int n = 200000;
+    double sum = 0, sum2 = 0;
+    int beyond_tau = 0;
+    for (int i = 0; i < n; ++i) {
+        const double d = bsdf->sample_delay(hit, rng.next_float());
+        ASSERT_GE(d, 0.0);
+        ASSERT_TRUE(std::isfinite(d));
+        sum += d;
+        sum2 += d * d;
+        beyond_tau += d > tau;
+    }
+    const double mean = sum / n;
+    const double sd = std::sqrt((sum2 - n * mean * mean) / (n - 1));
+    EXPECT_NEAR(mean, tau, 4 * sd / std::sqrt(double(n)));
+    EXPECT_NEAR(sd, tau, 0.02 * tau);  // sd of an exponential = its mean (SE of sd ~ tau/sqrt(n))
+    // P(d > tau) = 1/e; binomial standard error.
+    const double p = std::exp(-1.0);
+    EXPECT_NEAR(double(beyond_tau) / n, p, 4 * std::sqrt(p * (1 - p) / n));
+}
+
+TEST(FluorescentMaterial, RejectsBadParameters) {
+    Properties p("fluorescent", {});
+    p.set_float("efficiency", 1.5);
+    EXPECT_THROW(create_object(PluginKind::Bsdf, "fluorescent", p), SceneError);
+    Properties q("fluorescent", {});
+    q.set_color("emission", Color(0.f));
+    EXPECT_THROW(create_object(PluginKind::Bsdf, "fluorescent", q), SceneError);
+    Properties r("fluorescent", {});
+    r.set_float("lifetime", -1);
+    EXPECT_THROW(create_object(PluginKind::Bsdf, "fluorescent", r), SceneError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Time of flight over a plane (scenes/tof-plane)
+
+namespace {
+
+struct Footprint {
+    double r_min, r_max;  // distance range from the point under the light
+};
+
+// The pixel's footprint on the plane z = 0 (orthographic camera looking down -z).
+Footprint footprint(const Sensor& sensor, int px, int py) {
+    const Ray a = sensor.sample_ray({float(px), float(py)}, {});
+    const Ray b = sensor.sample_ray({float(px + 1), float(py + 1)}, {});
+    const double x0 = std::min(a.o.x, b.o.x), x1 = std::max(a.o.x, b.o.x);
+    const double y0 = std::min(a.o.y, b.o.y), y1 = std::max(a.o.y, b.o.y);
+    const double dx = std::max({0.0, x0, -x1}), dy = std::max({0.0, y0, -y1});
+    const double fx = std::max(std::abs(x0), std::abs(x1)),
+                 fy = std::max(std::abs(y0), std::abs(y1));
+    return {std::hypot(dx, dy), std::hypot(fx, fy)};
+}
+
+constexpr double kTofH = 1.5, kTofI = 5, kTofRho = 0.6, kTofCamera = 5;
+
+// Checks that every pixel's energy lies in the bins its footprint's arrival times span, and
+// that the time-integrated amplitude matches rho/pi * I * cos / d^2 averaged over the pixel.
+void check_tof_plane(bool world_time) {
+    const int res = 16, spp = 64;
+    const double start = world_time ? 1.4 : 6.4, width = 0.005;
+    const int bins = 370;  // arrivals: 1.5 .. 3.2 in world time, 5 more in camera time
+    auto scene = load_scene(kScenes + "tof-plane/scene.xml",
+                            defines({{"res", std::to_string(res)},
+                                     {"spp", std::to_string(spp)},
+                                     {"start", std::to_string(start)},
+                                     {"bin_width", std::to_string(width)},
+                                     {"bins", std::to_string(bins)},
+                                     {"world_time", world_time ? "true" : "false"}}));
+    const Cube cube = render_cube(*scene, 17, world_time ? "tof-world" : "tof-camera");
+    ASSERT_EQ(cube.H, res);
+    ASSERT_EQ(cube.W, res);
+    ASSERT_EQ(cube.T, bins);
+    const Sensor& sensor = scene->sensor();
+    const double sensor_segment = world_time ? 0.0 : kTofCamera;
+    auto radiance_at = [&](Vec2 pos) {
+        const Ray r = sensor.sample_ray(pos, {});
+        const double d2 = double(r.o.x) * r.o.x + double(r.o.y) * r.o.y + kTofH * kTofH;
+        return kTofRho / M_PI * kTofI * (kTofH / std::sqrt(d2)) / d2;
+    };
+    double max_span = 0;
+    for (int py = 0; py < res; ++py)
+        for (int px = 0; px < res; ++px) {
+            const Footprint f = footprint(sensor, px, py);
+            const double t_min = sensor_segment + std::hypot(f.r_min, kTofH);
+            const double t_max = sensor_segment + std::hypot(f.r_max, kTofH);
+            const int b0 = bin_of(start, width, bins, t_min - 1e-4);
+            const int b1 = bin_of(start, width, bins, t_max + 1e-4);
+            ASSERT_GE(b0, 0);
+            ASSERT_GE(b1, b0);
+            max_span = std::max(max_span, t_max - t_min);
+            double inside = 0;
+            for (int t = 0; t < bins; ++t) {
+                const double e = cube.energy(py, px, t);
+                if (t < b0 || t > b1) {
+                    EXPECT_EQ(e, 0.0)
+                        << "pixel " << px << "," << py << " bin " << t << " outside [" << b0 << ", "
+                        << b1 << "] (t in [" << t_min << ", " << t_max << "])";
+                } else {
+                    inside += cube.at(py, px, t, 1);
+                }
+            }
+            // Amplitude: the pixel averages L over uniformly jittered positions; compare with
+            // the pixel average, allowing 4 standard errors of that jitter (as test_render).
+            const int grid = 32;
+            double sum = 0, sum2 = 0;
+            for (int j = 0; j < grid; ++j)
+                for (int i = 0; i < grid; ++i) {
+                    const double v = radiance_at({px + (i + 0.5f) / grid, py + (j + 0.5f) / grid});
+                    sum += v;
+                    sum2 += v * v;
+                }
+            const double mean = sum / (grid * grid);
+            const double sd = std::sqrt(std::max(0.0, sum2 / (grid * grid) - mean * mean));
+            EXPECT_NEAR(inside, mean, 4 * sd / std::sqrt(double(spp)) + 1e-5 * mean)
+                << "pixel " << px << "," << py;
+        }
+    // How sharp the check is: a footprint's time range (0.25-unit pixels) spans at most
+    // 0.25 * sqrt(2) * r / d < 0.33 units at the corners and a few bins near the centre.
+    EXPECT_LE(max_span, 0.33);
+}
+
+}  // namespace
+
+TEST(Transient, TofPlaneArrivalAndAmplitudeInCameraTime) { check_tof_plane(false); }
+
+TEST(Transient, TofPlaneArrivalInWorldTime) { check_tof_plane(true); }
+
+// ---------------------------------------------------------------------------------------------
+// Energy: the transient cube summed over time is the steady `path` render
+
+namespace {
+
+struct EnergyCase {
+    std::string scene;
+    int max_depth;  // the scene's max_depth (set by the defines where the scene has one)
+    std::vector<std::pair<std::string, std::string>> defines;
+};
+
+// The scene with `path` (roulette beyond max_depth, i.e. never) and an hdrfilm with the same
+// size and reconstruction filter instead of transient_path and the transient film.
+std::string as_steady_path(const std::string& xml, int max_depth) {
+    const std::string depth = std::to_string(max_depth);
+    const int rr = max_depth + 1;
+    std::string out = replace_element(
+        xml, "<integrator", "</integrator>",
+        "<integrator type=\"path\"><integer name=\"max_depth\" value=\"" + depth +
+            "\"/><integer name=\"rr_depth\" value=\"" + std::to_string(rr) + "\"/></integrator>");
+    const size_t film = out.find("<film type=\"transient\">");
+    const size_t rf = out.find("<rfilter type=\"", film);
+    const std::string rfilter = out.substr(rf, out.find("/>", rf) + 2 - rf);
+    return replace_element(out, "<film type=\"transient\">", "</film>",
+                           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"$res\"/>"
+                           "<integer name=\"height\" value=\"$res\"/>" +
+                               rfilter + "</film>");
+}
+
+}  // namespace
+
+TEST(Transient, EnergyMatchesPath) {
+    // Both integrators run host trace_path with the same options (roulette off: `path` gets
+    // rr_depth = max_depth + 1, which is never reached; a transient path only stops early when
+    // its time passes the window's end, which the windows below exclude: each is longer than
+    // max_depth times the longest segment in its scene (bounded by the scene's extent, times
+    // the glass index 1.52 in `spheres`) plus the longest camera segment; for `fluorescent`
+    // the window also holds up to max_depth - 1 lifetime delays to a tail probability below
+    // 1e-12). The samplers draw numbers per (seed, pixel, sample), so both integrators see the
+    // same random numbers and produce the same contributions; only the films differ. The
+    // steady images must then agree up to float rounding of the two accumulations (hdrfilm
+    // sums in double; the cube sums per bin in float over <= 64 samples, relative error
+    // < 64 * 6e-8 ~ 4e-6): 1e-4 relative, plus 1e-6 absolute for dark pixels.
+    const std::vector<EnergyCase> cases = {
+        {"tof-plane", 2, {{"res", "16"}, {"spp", "16"}}},
+        {"cornell-box",
+         5,
+         {{"res", "16"}, {"spp", "16"}, {"max_depth", "5"}, {"bins", "400"}}},  // 3.5..23.5
+        {"spheres",
+         4,
+         {{"res", "16"},
+          {"spp", "16"},
+          {"max_depth", "4"},
+          {"start", "0"},
+          {"bin_width", "0.05"},
+          {"bins", "1200"}}},  // 0..60 > 7.6 + 3 * 9 * 1.52 (camera segment, scene diagonal)
+        {"fluorescent",
+         4,
+         {{"res", "16"},
+          {"spp", "16"},
+          {"max_depth", "4"},
+          {"start", "0"},
+          {"bin_width", "0.1"},
+          {"bins", "1000"}}},  // 0..100: 3 delays of mean 1.5 exceed ~75 w.p. < 1e-18
+    };
+    for (const EnergyCase& c : cases) {
+        SCOPED_TRACE(c.scene);
+        const std::string path = kScenes + c.scene + "/scene.xml";
+        const std::string xml = read_text(path);
+        ASSERT_FALSE(xml.empty()) << path;
+        auto transient = load_scene_string(xml, defines(c.defines), kScenes + c.scene);
+        auto steady = load_scene_string(as_steady_path(xml, c.max_depth), defines(c.defines),
+                                        kScenes + c.scene);
+        const auto a = render_steady(*transient, 23);
+        const auto b = render_steady(*steady, 23);
+        ASSERT_EQ(a.size(), b.size());
+        double total = 0;
+        int bad = 0;
+        for (size_t i = 0; i < a.size(); ++i) {
+            total += b[i];
+            const double tol = 1e-4 * std::max(std::abs(a[i]), std::abs(b[i])) + 1e-6;
+            if (std::abs(double(a[i]) - b[i]) > tol && ++bad <= 10)
+                ADD_FAILURE() << "value " << i << " (pixel " << i / 3 << ", channel " << i % 3
+                              << "): transient " << a[i] << " vs path " << b[i];
+        }
+        EXPECT_EQ(bad, 0);
+        EXPECT_GT(total, 0.0);  // the comparison is not vacuous
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Refraction delay: a glass slab of thickness d and index eta delays light by (eta - 1) d
+
+TEST(Transient, GlassSlabDelaysByEtaMinusOneTimesThickness) {
+    // An orthographic camera at z = 5 looks straight down at an emitting rectangle at z = 0
+    // (radiance 1, black so it reflects nothing). A slab of glass (eta = 1.5) fills
+    // 1 <= z <= 1 + d. Without it, light arrives at camera time 5. Through it the straight
+    // (normal-incidence) path is 5 - d + eta d = 5 + (eta - 1) d; light reflected 2k times
+    // inside the slab arrives 2 k eta d later. With Fresnel reflectance R = ((eta-1)/(eta+1))^2
+    // at normal incidence, the first arrival carries (1 - R)^2 of the radiance.
+    const double d = 0.5, eta = 1.5, start = 4.905, width = 0.02;
+    const int bins = 200, res = 16, spp = 64;
+    auto xml = [&](bool slab) {
+        std::string s =
+            "<scene version=\"3.0.0\"><integrator type=\"transient_path\"/>"
+            "<sensor type=\"orthographic\"><transform name=\"to_world\">"
+            "<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/></transform>"
+            "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" +
+            std::to_string(spp) +
+            "\"/></sampler><film type=\"transient\"><integer name=\"width\" value=\"" +
+            std::to_string(res) + "\"/><integer name=\"height\" value=\"" + std::to_string(res) +
+            "\"/><float name=\"start\" value=\"" + std::to_string(start) +
+            "\"/><float name=\"bin_width\" value=\"" + std::to_string(width) +
+            "\"/><integer name=\"bins\" value=\"" + std::to_string(bins) +
+            "\"/><rfilter type=\"box\"/></film></sensor>"
+            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/>"
+            "</transform><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0\"/></bsdf>"
+            "<emitter type=\"area\"><float name=\"radiance\" value=\"1\"/></emitter></shape>";
+        if (slab)
+            s += "<shape type=\"cube\"><transform name=\"to_world\"><scale x=\"3\" y=\"3\" z=\"" +
+                 std::to_string(d / 2) + "\"/><translate z=\"" + std::to_string(1 + d / 2) +
+                 "\"/></transform><bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"" +
+                 std::to_string(eta) + "\"/><float name=\"ext_ior\" value=\"1\"/></bsdf></shape>";
+        return s + "</scene>";
+    };
+    auto reference = load_scene_string(xml(false));
+    const Cube ref = render_cube(*reference, 5, "slab-ref");
+    auto with_slab = load_scene_string(xml(true));
+    const Cube glass = render_cube(*with_slab, 5, "slab");
+    ASSERT_EQ(glass.T, bins);
+
+    const int b_ref = bin_of(start, width, bins, 5.0);
+    const int b_first = bin_of(start, width, bins, 5.0 + (eta - 1) * d);
+    std::vector<int> b_echo;  // arrivals after 2k internal reflections, k >= 1, in the window
+    for (int k = 1;; ++k) {
+        const int b = bin_of(start, width, bins, 5.0 + (eta - 1) * d + 2 * k * eta * d);
+        if (b < 0) break;
+        b_echo.push_back(b);
+    }
+    ASSERT_EQ(b_ref, 4);
+    ASSERT_EQ(b_first, 17);
+    double first = 0;
+    for (int y = 0; y < res; ++y)
+        for (int x = 0; x < res; ++x) {
+            for (int t = 0; t < bins; ++t) {
+                if (t != b_ref) {
+                    EXPECT_EQ(ref.energy(y, x, t), 0.0) << x << "," << y << " " << t;
+                }
+                const bool expected =
+                    t == b_first || std::find(b_echo.begin(), b_echo.end(), t) != b_echo.end();
+                if (!expected) {
+                    EXPECT_EQ(glass.energy(y, x, t), 0.0)
+                        << "pixel " << x << "," << y << ": light through the slab in bin " << t
+                        << " (time " << start + (t + 0.5) * width << "); expected bin " << b_first
+                        << " (time 5 + (eta - 1) d = " << 5.0 + (eta - 1) * d << ")";
+                }
+            }
+            EXPECT_NEAR(ref.at(y, x, b_ref, 0), 1.0, 1e-5);
+            first += glass.at(y, x, b_first, 0);
+        }
+    // Each camera sample either crosses both faces (probability (1 - R)^2, weight 1) or not:
+    // a binomial mean over res^2 * spp samples.
+    const double R = std::pow((eta - 1) / (eta + 1), 2), p = (1 - R) * (1 - R);
+    const double n = double(res) * res * spp;
+    EXPECT_NEAR(first / (res * res), p, 4 * std::sqrt(p * (1 - p) / n) + 1e-6);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fluorescence in a render: delayed by the lifetime, re-emitted in the emission colour
+
+namespace {
+
+// A camera and a white point light (intensity I) at the centre of a sphere of radius R seen
+// from inside. Every camera ray meets the sphere head-on at distance R and the light is R
+// away along the normal, so the direct light arrives at camera time exactly 2R for every
+// pixel, with radiance albedo * I / (pi R^2) (max_depth 2: direct light only).
+constexpr double kSphereR = 1, kSphereI = 2, kTau = 0.5, kStart = 1.91, kWidth = 0.02;
+constexpr int kBins = 400, kRes = 32;  // window 1.91 .. 9.91: 2R + 15.8 lifetimes
+
+std::string sphere_scene(const std::string& bsdf) {
+    return "<scene version=\"3.0.0\"><integrator type=\"transient_path\"><integer "
+           "name=\"max_depth\" value=\"2\"/></integrator>"
+           "<sensor type=\"perspective\"><float name=\"fov\" value=\"60\"/>"
+           "<transform name=\"to_world\"><lookat origin=\"0,0,0\" target=\"0,0,1\" "
+           "up=\"0,1,0\"/></transform>"
+           "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"16\"/></sampler>"
+           "<film type=\"transient\"><integer name=\"width\" value=\"" +
+           std::to_string(kRes) + "\"/><integer name=\"height\" value=\"" + std::to_string(kRes) +
+           "\"/><float name=\"start\" value=\"" + std::to_string(kStart) +
+           "\"/><float name=\"bin_width\" value=\"" + std::to_string(kWidth) +
+           "\"/><integer name=\"bins\" value=\"" + std::to_string(kBins) +
+           "\"/><rfilter type=\"box\"/></film></sensor>"
+           "<shape type=\"sphere\"><float name=\"radius\" value=\"" +
+           std::to_string(kSphereR) + "\"/><boolean name=\"flip_normals\" value=\"true\"/>" + bsdf +
+           "</shape><emitter type=\"point\"><float name=\"intensity\" value=\"" +
+           std::to_string(kSphereI) + "\"/></emitter></scene>";
+}
+
+const std::string kFluorescentBsdf =
+    "<bsdf type=\"fluorescent\"><rgb name=\"absorption\" value=\"0,0,1\"/><rgb "
+    "name=\"emission\" value=\"0,1,0\"/><float name=\"efficiency\" value=\"1\"/><float "
+    "name=\"lifetime\" value=\"" +
+    std::to_string(kTau) + "\"/></bsdf>";
+
+struct MeanTime {
+    double mean = 0, standard_error = 0;
+};
+
+// Energy-weighted mean of the bin centres over the whole image, counting channel `channel`
+// (-1: all channels). It is a ratio of sums over pixels, m = sum A_p / sum B_p, of independent
+// per-pixel estimates (A_p = sum_t c_t E_pt, B_p = sum_t E_pt); its standard error by the delta
+// method is sqrt(n / (n - 1) * sum_p (A_p - m B_p)^2) / sum_p B_p.
+MeanTime mean_time(const Cube& cube, int channel) {
+    std::vector<double> A, B;
+    for (int y = 0; y < cube.H; ++y)
+        for (int x = 0; x < cube.W; ++x) {
+            double a = 0, b = 0;
+            for (int t = 0; t < cube.T; ++t) {
+                const double e = channel < 0 ? cube.energy(y, x, t) : cube.at(y, x, t, channel);
+                a += (kStart + (t + 0.5) * kWidth) * e;
+                b += e;
+            }
+            A.push_back(a);
+            B.push_back(b);
+        }
+    double sa = 0, sb = 0;
+    for (size_t i = 0; i < A.size(); ++i) {
+        sa += A[i];
+        sb += B[i];
+    }
+    MeanTime m;
+    if (!(sb > 0)) return m;
+    m.mean = sa / sb;
+    double r2 = 0;
+    for (size_t i = 0; i < A.size(); ++i) r2 += (A[i] - m.mean * B[i]) * (A[i] - m.mean * B[i]);
+    const double n = double(A.size());
+    m.standard_error = std::sqrt(n / (n - 1) * r2) / sb;
+    return m;
+}
+
+// Expected mean bin centre of t0 + D, D ~ Exp(tau), on the window (the captured part only).
+double expected_binned_mean(double t0, double tau) {
+    double num = 0, den = 0;
+    for (int t = 0; t < kBins; ++t) {
+        const double lo = kStart + t * kWidth, hi = lo + kWidth;
+        auto F = [&](double x) { return x <= t0 ? 0.0 : 1.0 - std::exp(-(x - t0) / tau); };
+        const double p = F(hi) - F(lo);
+        num += p * (lo + 0.5 * kWidth);
+        den += p;
+    }
+    return num / den;
+}
+
+}  // namespace
+
+TEST(Transient, FluorescenceArrivesOneLifetimeLater) {
+    const double t0 = 2 * kSphereR;
+    const int b0 = bin_of(kStart, kWidth, kBins, t0);
+    ASSERT_EQ(b0, 4);  // t0 = 2 sits in the middle of bin 4 (1.99 .. 2.01)
+    auto reference =
+        load_scene_string(sphere_scene("<bsdf type=\"diffuse\"><float name=\"reflectance\" "
+                                       "value=\"1\"/></bsdf>"));
+    const Cube ref = render_cube(*reference, 31, "fluo-ref");
+    auto fluorescent = load_scene_string(sphere_scene(kFluorescentBsdf));
+    const Cube fl = render_cube(*fluorescent, 31, "fluo");
+
+    // The reference: everything at t0, radiance I / (pi R^2) in every channel (exact: all
+    // samples have the same value).
+    const double L = kSphereI / (M_PI * kSphereR * kSphereR);
+    for (int y = 0; y < kRes; ++y)
+        for (int x = 0; x < kRes; ++x)
+            for (int t = 0; t < kBins; ++t)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(ref.at(y, x, t, c), t == b0 ? L : 0.0, 1e-5 * L);
+    const MeanTime r = mean_time(ref, -1);
+    EXPECT_NEAR(r.mean, kStart + (b0 + 0.5) * kWidth, 1e-9);
+
+    // The fluorescent sphere: the same energy (blue absorbed, efficiency 1; the importance of
+    // all three channels summed), spread after t0 as an exponential of mean tau. The expected
+    // mean of the bin centres is computed for this window (t0 + tau up to the binning and
+    // the truncation at the window's end).
+    const MeanTime m = mean_time(fl, -1);
+    const double expected = expected_binned_mean(t0, kTau);
+    EXPECT_NEAR(expected, t0 + kTau, kWidth);  // what the window does to the mean
+    EXPECT_GT(m.standard_error, 0.0);
+    EXPECT_NEAR(m.mean - r.mean, expected - (kStart + (b0 + 0.5) * kWidth), 4 * m.standard_error)
+        << "mean arrival " << m.mean << " vs reference " << r.mean << ", lifetime " << kTau;
+    double total = 0;
+    for (int y = 0; y < kRes; ++y)
+        for (int x = 0; x < kRes; ++x)
+            for (int t = 0; t < kBins; ++t) total += fl.energy(y, x, t);
+    // Energy: all of I / (pi R^2) (blue) comes back, except the tail beyond the window
+    // (exp(-7.91 / tau) ~ 1e-7), exactly per sample.
+    EXPECT_NEAR(total / (kRes * kRes), L, 1e-4 * L);
+}
+
+TEST(Transient, FluorescenceIsReemittedInTheEmissionColour) {
+    // Physics (Fig. 5.16): the sphere absorbs the blue third of the white light and re-emits
+    // it as green: the camera must see (0, I / (pi R^2), 0), all of it in the green channel.
+    auto fluorescent = load_scene_string(sphere_scene(kFluorescentBsdf));
+    RenderOptions opt;
+    opt.seed = 3;
+    render(*fluorescent, opt);
+    const auto img = fluorescent->sensor().film().steady_image();
+    const double L = kSphereI / (M_PI * kSphereR * kSphereR);
+    int wrong = 0;
+    for (size_t p = 0; p < img.size() / 3; ++p) {
+        const bool ok = std::abs(img[3 * p + 0]) <= 1e-6 * L &&
+                        std::abs(img[3 * p + 1] - L) <= 1e-4 * L &&
+                        std::abs(img[3 * p + 2]) <= 1e-6 * L;
+        if (!ok && ++wrong <= 3)
+            ADD_FAILURE() << "pixel " << p << ": (" << img[3 * p] << ", " << img[3 * p + 1] << ", "
+                          << img[3 * p + 2] << "), expected (0, " << L << ", 0)";
+    }
+    EXPECT_EQ(wrong, 0);
+}

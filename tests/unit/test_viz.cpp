@@ -1,0 +1,496 @@
+// `femto viz` computations (femto/viz.h) and the streak film (thesis ch. 4.3-4.6). Built into
+// femto_io_tests (linked with libfemto_io), not into femto_unit_tests.
+//
+// Tolerances:
+//  - Synthetic cubes hold exact binary fractions; peak bins, slices and whole-bin unwarps are
+//    exact. A fractional unwarp shift interpolates linearly in float: energy is conserved to
+//    float rounding of the sums (relative 1e-5).
+//  - The streak film and the transient film receive the same camera samples (the samplers are
+//    deterministic per pixel and sample index) and add them in the same order (the renderer
+//    merges tiles in a fixed 2x2 colouring), so their rows agree to float rounding: 1e-6
+//    relative, plus 1e-12 absolute for empty bins.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "femto/film.h"
+#include "femto/host.h"
+#include "femto/image_io.h"
+#include "femto/sensor.h"
+#include "femto/viz.h"
+#include "scene_util.h"
+
+using namespace femto;
+
+namespace {
+
+std::string fmt_double(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+io::Cube make_cube(int W, int H, int T, double start, double bw, const char* time = "camera") {
+    io::Cube c;
+    c.width = W;
+    c.height = H;
+    c.bins = T;
+    c.data.assign(size_t(W) * size_t(H) * size_t(T) * 3, 0.f);
+    c.attributes = {{"femto:start", fmt_double(start)},
+                    {"femto:bin_width", fmt_double(bw)},
+                    {"femto:bins", std::to_string(T)},
+                    {"femto:time", time}};
+    return c;
+}
+
+float& at(io::Cube& c, int x, int y, int t, int ch) {
+    return c.data[((size_t(y) * size_t(c.width) + size_t(x)) * size_t(c.bins) + size_t(t)) * 3 +
+                  size_t(ch)];
+}
+
+double pixel_energy(const io::Cube& c, int x, int y) {
+    double e = 0;
+    for (int t = 0; t < c.bins; ++t)
+        for (int ch = 0; ch < 3; ++ch)
+            e += c.data[((size_t(y) * size_t(c.width) + size_t(x)) * size_t(c.bins) + size_t(t)) *
+                            3 +
+                        size_t(ch)];
+    return e;
+}
+
+}  // namespace
+
+// ---- peak time ------------------------------------------------------------------------------
+
+TEST(Viz, PeakTimeOfSyntheticCube) {
+    const int W = 5, H = 3, T = 12;
+    io::Cube c = make_cube(W, H, T, 2.0, 0.5);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (x == 4 && y == 2) continue;  // a black pixel
+            const int peak = (2 * x + 3 * y) % T;
+            for (int t = 0; t < T; ++t)
+                for (int ch = 0; ch < 3; ++ch) at(c, x, y, t, ch) = 0.125f;
+            at(c, x, y, peak, 1) = 4.f;            // green peak: the luminance maximum
+            at(c, x, y, (peak + 5) % T, 0) = 2.f;  // a red bump with less luminance
+        }
+    const viz::TimeAxis axis = viz::time_axis(c);
+    ASSERT_TRUE(axis.known);
+    EXPECT_EQ(axis.time, "camera");
+    const std::vector<int> bins = viz::peak_bins(c);
+    const std::vector<float> times = viz::peak_times(c, axis);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t p = size_t(y) * W + size_t(x);
+            if (x == 4 && y == 2) {
+                EXPECT_EQ(bins[p], -1);
+                EXPECT_TRUE(std::isnan(times[p]));
+                continue;
+            }
+            const int peak = (2 * x + 3 * y) % T;
+            EXPECT_EQ(bins[p], peak) << x << "," << y;
+            EXPECT_FLOAT_EQ(times[p], float(2.0 + (peak + 0.5) * 0.5));
+        }
+    // The picture: black where the pixel is black, coloured elsewhere; the earliest peak is
+    // red, the latest blue.
+    const std::vector<float> img = viz::peak_time_image(c);
+    const size_t black = (size_t(2) * W + 4) * 3;
+    EXPECT_EQ(img[black] + img[black + 1] + img[black + 2], 0.f);
+    const size_t first = 0;                       // (0, 0): peak bin 0, the earliest
+    const size_t last = (size_t(1) * W + 3) * 3;  // (3, 1): peak bin 9
+    EXPECT_GT(img[first], 0.f);
+    EXPECT_EQ(img[first + 2], 0.f);
+    EXPECT_GT(img[last + 2], img[last]);
+    // Time override for a cube without attributes (a .npy): --start / --bin-width.
+    io::Cube bare = c;
+    bare.attributes.clear();
+    EXPECT_FALSE(viz::time_axis(bare).known);
+    const viz::TimeAxis given = viz::time_axis(bare, 1.0, 0.25);
+    EXPECT_TRUE(given.known);
+    EXPECT_DOUBLE_EQ(given.bin_centre(2), 1.625);
+}
+
+// ---- unwarp (eq. 4.1) ---------------------------------------------------------------------
+
+// A camera-time cube whose pixel (x, y) is lit from bin `first` on, with depth z(x, y).
+io::Cube warped_cube(double bw, int first, const std::vector<float>& depth, int W, int H, int T) {
+    io::Cube c = make_cube(W, H, T, 3.0, bw);
+    c.depth = depth;
+    uint32_t state = 12345;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            for (int t = first; t < T; ++t)
+                for (int ch = 0; ch < 3; ++ch) {
+                    state = state * 1664525u + 1013904223u;
+                    at(c, x, y, t, ch) = float(state >> 8) / float(1 << 24);
+                }
+    return c;
+}
+
+double start_of(const io::Cube& c) { return std::stod(*c.attribute("femto:start")); }
+
+TEST(Viz, UnwarpWholeBinsRoundTripIsExact) {
+    const int W = 4, H = 2, T = 16;
+    const double bw = 0.25;
+    std::vector<float> depth(W * H);
+    for (int p = 0; p < W * H; ++p) depth[size_t(p)] = 0.5f * float(p % W + 1);  // 2..8 bins
+    depth[5] = -1.f;  // nothing hit: not shifted
+    const io::Cube cam = warped_cube(bw, 6, depth, W, H, T);
+    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_axis(cam), true);
+    EXPECT_EQ(*world.cube.attribute("femto:time"), "world");
+    EXPECT_EQ(world.dropped, 0.0);
+    EXPECT_EQ(world.cube.depth, cam.depth);
+    const double ws = start_of(world.cube);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t p = size_t(y) * W + size_t(x);
+            const double z = depth[p] > 0 ? depth[p] : 0.0;
+            EXPECT_EQ(pixel_energy(world.cube, x, y), pixel_energy(cam, x, y));
+            // t_world = t_camera - z: world bin j holds camera bin i with the same time - z.
+            for (int j = 0; j < world.cube.bins; ++j) {
+                const double t = ws + j * bw;
+                const long i = std::lround((t + z - 3.0) / bw);
+                for (int ch = 0; ch < 3; ++ch) {
+                    const float expect =
+                        i >= 0 && i < T ? cam.data[((p * T) + size_t(i)) * 3 + size_t(ch)] : 0.f;
+                    ASSERT_EQ(
+                        world.cube.data[(p * size_t(world.cube.bins) + size_t(j)) * 3 + size_t(ch)],
+                        expect)
+                        << x << "," << y << " bin " << j;
+                }
+            }
+        }
+    // Back to camera time: the same series at the same times.
+    EXPECT_THROW(viz::unwarp(world.cube, viz::time_axis(world.cube), true), SceneError);
+    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_axis(world.cube), false);
+    EXPECT_EQ(*back.cube.attribute("femto:time"), "camera");
+    const double bs = start_of(back.cube);
+    for (size_t p = 0; p < size_t(W * H); ++p)
+        for (int j = 0; j < back.cube.bins; ++j) {
+            const long i = std::lround((bs + j * bw - 3.0) / bw);
+            for (int ch = 0; ch < 3; ++ch) {
+                const float expect =
+                    i >= 0 && i < T ? cam.data[(p * T + size_t(i)) * 3 + size_t(ch)] : 0.f;
+                ASSERT_EQ(back.cube.data[(p * size_t(back.cube.bins) + size_t(j)) * 3 + size_t(ch)],
+                          expect);
+            }
+        }
+    // Every original non-zero bin is inside the round-tripped window.
+    EXPECT_LE(bs, 3.0 + 6 * bw + 1e-12);
+    EXPECT_GE(bs + back.cube.bins * bw, 3.0 + T * bw - 1e-12);
+}
+
+TEST(Viz, UnwarpKeepWindowRoundTrip) {
+    // Energy in the middle of the window, shifts of up to 3 bins: nothing leaves the window.
+    const int W = 3, H = 1, T = 20;
+    const double bw = 0.5;
+    const std::vector<float> depth = {0.5f, 1.0f, 1.5f};
+    io::Cube cam = warped_cube(bw, 0, depth, W, H, T);
+    for (size_t p = 0; p < 3; ++p)
+        for (int t = 0; t < T; ++t)
+            if (t < 6 || t > 13)
+                for (int ch = 0; ch < 3; ++ch) cam.data[(p * T + size_t(t)) * 3 + size_t(ch)] = 0;
+    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_axis(cam), true, true);
+    EXPECT_EQ(world.cube.bins, T);
+    EXPECT_EQ(start_of(world.cube), 3.0);
+    EXPECT_EQ(world.dropped, 0.0);
+    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_axis(world.cube), false, true);
+    EXPECT_EQ(back.cube.data, cam.data);
+    // Depth 1.5 shifts 3 bins: energy at the start of the window falls out and is reported.
+    io::Cube early = warped_cube(bw, 0, depth, W, H, T);
+    const viz::UnwarpResult cut = viz::unwarp(early, viz::time_axis(early), true, true);
+    EXPECT_GT(cut.dropped, 0.0);
+    EXPECT_LT(cut.dropped, 0.2);
+}
+
+TEST(Viz, UnwarpFractionalShiftConservesEnergyAndMovesMeanTime) {
+    const int W = 3, H = 2, T = 24;
+    const double bw = 0.1;
+    const std::vector<float> depth = {0.33f, 0.47f, 1.05f, 0.01f, 2.2f, 0.5f};
+    const io::Cube cam = warped_cube(bw, 3, depth, W, H, T);
+    auto mean_time = [](const io::Cube& c, size_t p, double start, double bw) {
+        double e = 0, et = 0;
+        for (int t = 0; t < c.bins; ++t) {
+            double v = 0;
+            for (int ch = 0; ch < 3; ++ch)
+                v += c.data[(p * size_t(c.bins) + size_t(t)) * 3 + size_t(ch)];
+            e += v;
+            et += v * (start + (t + 0.5) * bw);
+        }
+        return et / e;
+    };
+    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_axis(cam), true);
+    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_axis(world.cube), false);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t p = size_t(y) * W + size_t(x);
+            const double e = pixel_energy(cam, x, y);
+            EXPECT_NEAR(pixel_energy(world.cube, x, y), e, 1e-5 * e);
+            EXPECT_NEAR(pixel_energy(back.cube, x, y), e, 1e-5 * e);
+            // Box resampling of a shifted piecewise-constant series moves its mean exactly.
+            EXPECT_NEAR(mean_time(world.cube, p, start_of(world.cube), bw),
+                        mean_time(cam, p, 3.0, bw) - depth[p], 1e-5);
+            EXPECT_NEAR(mean_time(back.cube, p, start_of(back.cube), bw),
+                        mean_time(cam, p, 3.0, bw), 1e-5);
+        }
+}
+
+TEST(Viz, UnwarpNeedsDepthAndTimeFrame) {
+    io::Cube c = make_cube(2, 2, 4, 0.0, 1.0);
+    at(c, 0, 0, 1, 0) = 1.f;
+    EXPECT_THROW(viz::unwarp(c, viz::time_axis(c), true), SceneError);  // no depth
+    c.depth.assign(4, 1.f);
+    EXPECT_NO_THROW(viz::unwarp(c, viz::time_axis(c), true));
+    EXPECT_THROW(viz::unwarp(c, viz::time_axis(c), false), SceneError);  // already camera
+    io::Cube unknown = c;
+    unknown.attributes = {{"femto:start", "0"}, {"femto:bin_width", "1"}};
+    EXPECT_THROW(viz::unwarp(unknown, viz::time_axis(unknown), true), SceneError);
+    unknown.attributes.clear();
+    EXPECT_THROW(viz::unwarp(unknown, viz::time_axis(unknown), true), SceneError);  // no axis
+}
+
+// ---- streak slice, frames, rainbow ----------------------------------------------------------
+
+TEST(Viz, StreakSliceEqualsCubeRow) {
+    const int W = 6, H = 4, T = 5;
+    io::Cube c = make_cube(W, H, T, 0.0, 1.0);
+    for (size_t i = 0; i < c.data.size(); ++i) c.data[i] = float(i) * 0.25f;
+    const std::vector<float> s = viz::streak_slice(c, 2);
+    ASSERT_EQ(s.size(), size_t(W * T * 3));
+    for (int t = 0; t < T; ++t)
+        for (int x = 0; x < W; ++x)
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_EQ(s[(size_t(t) * W + size_t(x)) * 3 + size_t(ch)], at(c, x, 2, t, ch));
+    EXPECT_THROW(viz::streak_slice(c, 4), SceneError);
+    EXPECT_THROW(viz::streak_slice(c, -1), SceneError);
+}
+
+TEST(Viz, FramesShareOneExposure) {
+    // Frame 0 is bright, frame 3 dim: with the cube's single reference level the dim frame
+    // stays dim (a per-frame exposure would brighten it to the same display value).
+    const int W = 8, H = 8, T = 4;
+    io::Cube c = make_cube(W, H, T, 0.0, 1.0);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            for (int ch = 0; ch < 3; ++ch) {
+                at(c, x, y, 0, ch) = 1.f;
+                at(c, x, y, 3, ch) = 0.01f;
+            }
+    const float ref = viz::reference_level(c);
+    EXPECT_FLOAT_EQ(ref, 1.f);
+    const size_t n = size_t(W) * H;
+    for (viz::Tone tone : {viz::Tone::Linear, viz::Tone::Log}) {
+        const auto f0 = viz::tone_map(viz::frame(c, 0).data(), n, ref, 0.f, tone);
+        const auto f3 = viz::tone_map(viz::frame(c, 3).data(), n, ref, 0.f, tone);
+        EXPECT_NEAR(f0[0], 1.f, 1e-3);
+        EXPECT_LT(f3[0], 0.5f * f0[0]);
+        EXPECT_GT(f3[0], 0.f);
+        // The same radiance gives the same display value in every frame.
+        io::Cube d = c;
+        at(d, 1, 1, 3, 0) = 1.f;
+        const auto g3 = viz::tone_map(viz::frame(d, 3).data(), n, ref, 0.f, tone);
+        EXPECT_EQ(g3[(size_t(1) * W + 1) * 3], f0[0]);
+    }
+    // The log curve shows dim values brighter than the linear one.
+    const auto lin = viz::tone_map(viz::frame(c, 3).data(), n, ref, 0.f, viz::Tone::Linear);
+    const auto lg = viz::tone_map(viz::frame(c, 3).data(), n, ref, 0.f, viz::Tone::Log);
+    EXPECT_GT(lg[0], lin[0]);
+    EXPECT_THROW(viz::parse_tone("gamma"), SceneError);
+}
+
+TEST(Viz, RainbowFusionTintsByTime) {
+    const int W = 3, H = 1, T = 5;
+    io::Cube c = make_cube(W, H, T, 0.0, 1.0);
+    for (int ch = 0; ch < 3; ++ch) {
+        at(c, 0, 0, 0, ch) = 1.f;  // early: red
+        at(c, 1, 0, 4, ch) = 1.f;  // late: blue
+        at(c, 2, 0, 0, ch) = 1.f;  // both
+        at(c, 2, 0, 4, ch) = 1.f;
+    }
+    const std::vector<float> r = viz::rainbow_fusion(c);
+    EXPECT_FLOAT_EQ(r[0], 1.f);
+    EXPECT_FLOAT_EQ(r[1], 0.f);
+    EXPECT_FLOAT_EQ(r[2], 0.f);
+    EXPECT_FLOAT_EQ(r[3], 0.f);
+    EXPECT_FLOAT_EQ(r[4], 0.f);
+    EXPECT_FLOAT_EQ(r[5], 1.f);
+    EXPECT_FLOAT_EQ(r[6], 1.f);
+    EXPECT_FLOAT_EQ(r[8], 1.f);
+    const Color mid = viz::time_colour(0.5);
+    EXPECT_FLOAT_EQ(mid.g, 1.f);
+}
+
+// ---- files ----------------------------------------------------------------------------------
+
+TEST(Viz, LoadsExrAndNpyCubesAndRejectsOtherFiles) {
+    const auto dir = test::temp_dir("viz-load");
+    io::Cube c = make_cube(3, 2, 4, 1.5, 0.25);
+    for (size_t i = 0; i < c.data.size(); ++i) c.data[i] = float(i);
+    c.depth = {1, 2, 3, 4, 5, -1};
+    const std::string exr = (dir / "c.exr").string(), npy = (dir / "c.npy").string();
+    io::write_exr_cube(exr, 3, 2, 4, c.data.data(), c.depth.data(), c.attributes);
+    io::write_npy(npy, {2, 3, 4, 3}, c.data.data());
+    const io::Cube a = viz::load_cube(exr), b = viz::load_cube(npy);
+    EXPECT_EQ(a.data, c.data);
+    EXPECT_EQ(a.depth, c.depth);
+    EXPECT_EQ(b.data, c.data);
+    EXPECT_TRUE(b.depth.empty());
+    EXPECT_DOUBLE_EQ(viz::time_axis(a).start, 1.5);
+    EXPECT_FALSE(viz::time_axis(b).known);
+    // A steady image is not a cube; a missing file is named.
+    const std::string steady = (dir / "s.exr").string();
+    io::write_exr_rgb(steady, 3, 2, c.data.data(), {});
+    EXPECT_THROW(viz::load_cube(steady), SceneError);
+    try {
+        viz::load_cube((dir / "gone.exr").string());
+        ADD_FAILURE();
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos);
+    }
+    // Writers: PNG, GIF (several frames), grey EXR.
+    const std::vector<float> display(3 * 2 * 3, 0.5f);
+    viz::write_png8((dir / "p.png").string(), 3, 2, display);
+    viz::write_gif((dir / "a.gif").string(), 3, 2, {display, display, display});
+    const std::vector<float> grey = {1, 2, 3, 4, 5, 6};
+    viz::write_exr_gray((dir / "g.exr").string(), 3, 2, grey.data(), {{"femto:x", "y"}});
+    for (const char* f : {"p.png", "a.gif", "g.exr"})
+        EXPECT_GT(std::filesystem::file_size(dir / f), 0u) << f;
+    int w = 0, h = 0;
+    const std::vector<float> back = io::read_image_rgb((dir / "g.exr").string(), w, h, false);
+    EXPECT_EQ(w, 3);
+    EXPECT_EQ(back[3 * 5], 6.f);
+    std::filesystem::remove_all(dir);
+}
+
+// ---- the streak film ------------------------------------------------------------------------
+
+// An orthographic camera at z = 5 over a diffuse plane lit by a point light at height 2; the
+// film is `film` (transient or streak) with `filter`.
+std::string streak_scene(const std::string& film_type, const std::string& extra,
+                         const std::string& filter) {
+    return "<scene version=\"3.0.0\"><integrator type=\"transient_path\"><integer "
+           "name=\"max_depth\" value=\"3\"/></integrator>"
+           "<sensor type=\"orthographic\"><transform name=\"to_world\"><scale x=\"3\" y=\"3\"/>"
+           "<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/></transform>"
+           "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"4\"/></sampler>"
+           "<film type=\"" +
+           film_type +
+           "\"><integer name=\"width\" value=\"40\"/><integer name=\"height\" value=\"36\"/>"
+           "<float name=\"start\" value=\"6.5\"/><float name=\"bin_width\" value=\"0.1\"/>"
+           "<integer name=\"bins\" value=\"40\"/>" +
+           extra + "<rfilter type=\"" + filter +
+           "\"/></film></sensor>"
+           "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2.5\"/>"
+           "</transform><bsdf type=\"diffuse\"/></shape>"
+           "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"0.5\"/>"
+           "<rotate x=\"1\" angle=\"90\"/><translate x=\"1\" z=\"0.5\"/></transform>"
+           "<bsdf type=\"diffuse\"/></shape>"
+           "<emitter type=\"point\"><point name=\"position\" x=\"0.3\" y=\"-0.2\" z=\"2\"/>"
+           "<rgb name=\"intensity\" value=\"4, 3, 2\"/></emitter></scene>";
+}
+
+std::string fmt_row(int r) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "_row%04d", r);
+    return buf;
+}
+
+void expect_close(float a, float b, const std::string& what) {
+    ASSERT_NEAR(a, b, 1e-6 * std::max(std::abs(a), std::abs(b)) + 1e-12) << what;
+}
+
+void check_streak_matches_transient(const std::string& filter) {
+    const std::vector<int> rows = {3, 32};  // 32 starts the second row of 32-pixel tiles
+    auto transient = load_scene_string(streak_scene("transient", "", filter));
+    auto streak = load_scene_string(
+        streak_scene("streak", "<string name=\"rows\" value=\"32, 3\"/>", filter));
+    RenderOptions ro;
+    ro.seed = 7;
+    ro.threads = 2;
+    const RenderStats st = render(*transient, ro);
+    const RenderStats ss = render(*streak, ro);
+    const Film& tf = transient->sensor().film();
+    const Film& sf = streak->sensor().film();
+    ASSERT_EQ(tf.width(), 40);
+    // Steady images: the recorded rows agree, the others are black.
+    const std::vector<float> ti = tf.steady_image(), si = sf.steady_image();
+    double energy = 0;
+    for (int y = 0; y < 36; ++y)
+        for (int x = 0; x < 40; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const size_t i = (size_t(y) * 40 + size_t(x)) * 3 + size_t(c);
+                if (y == 3 || y == 32) {
+                    expect_close(si[i], ti[i], filter + " steady row " + std::to_string(y));
+                    energy += si[i];
+                } else {
+                    ASSERT_EQ(si[i], 0.f) << y;
+                }
+            }
+    EXPECT_GT(energy, 0.0);
+    // Per bin: the EXR outputs read back.
+    const auto dir = test::temp_dir("streak-" + filter);
+    const std::string tbase = (dir / "t").string(), sbase = (dir / "s").string();
+    tf.write(tbase, make_render_info(*transient, ro, st));
+    const auto files = sf.write(sbase, make_render_info(*streak, ro, ss));
+    ASSERT_EQ(files.size(), 4u);
+    const io::Cube cube = io::read_exr_cube(tbase + ".exr");
+    for (int r : rows) {
+        const std::string exr = sbase + fmt_row(r) + ".exr";
+        ASSERT_TRUE(std::filesystem::exists(sbase + fmt_row(r) + ".png"));
+        int w = 0, h = 0;
+        const std::vector<float> img = io::read_image_rgb(exr, w, h, false);
+        ASSERT_EQ(w, 40);
+        ASSERT_EQ(h, 40);  // bins
+        const std::vector<float> slice = viz::streak_slice(cube, r);
+        double sum = 0;
+        for (size_t i = 0; i < img.size(); ++i) {
+            expect_close(img[i], slice[i], filter + " row " + std::to_string(r));
+            sum += img[i];
+        }
+        EXPECT_GT(sum, 0.0);
+    }
+    EXPECT_EQ(*cube.attribute("femto:bins"), "40");
+    std::filesystem::remove_all(dir);
+}
+
+TEST(StreakFilm, EqualsTransientRowsBoxFilter) { check_streak_matches_transient("box"); }
+TEST(StreakFilm, EqualsTransientRowsGaussianFilter) { check_streak_matches_transient("gaussian"); }
+
+TEST(StreakFilm, SkipsRowsOutsideTheFootprint) {
+    auto scene =
+        load_scene_string(streak_scene("streak", "<integer name=\"row\" value=\"10\"/>", "box"));
+    const Film& f = scene->sensor().film();
+    for (int y = 0; y < 36; ++y)
+        EXPECT_EQ(f.row_active(y), y == 10 || y == 11) << y;  // box: pos.y in [10, 11]
+    auto wide = load_scene_string(
+        streak_scene("streak", "<integer name=\"row\" value=\"10\"/>", "gaussian"));
+    EXPECT_TRUE(wide->sensor().film().row_active(8));
+    EXPECT_TRUE(wide->sensor().film().row_active(12));
+    EXPECT_FALSE(wide->sensor().film().row_active(5));
+    EXPECT_FALSE(wide->sensor().film().row_active(15));
+    EXPECT_EQ(f.max_path_length(), 6.5 + 4.0);
+}
+
+TEST(StreakFilm, RejectsBadRows) {
+    auto error = [](const std::string& extra) {
+        return test::load_error(streak_scene("streak", extra, "box"));
+    };
+    EXPECT_NE(error("").find("needs the rows"), std::string::npos);
+    EXPECT_NE(error("<string name=\"rows\" value=\"3, 36\"/>").find("outside the image"),
+              std::string::npos);
+    EXPECT_NE(error("<integer name=\"row\" value=\"-1\"/>").find("outside the image"),
+              std::string::npos);
+    EXPECT_NE(error("<string name=\"rows\" value=\"3, 4, 3\"/>").find("given twice"),
+              std::string::npos);
+    EXPECT_NE(error("<string name=\"rows\" value=\"\"/>").find("comma-separated"),
+              std::string::npos);
+    EXPECT_NE(error("<string name=\"rows\" value=\"3,,4\"/>").find("comma-separated"),
+              std::string::npos);
+    EXPECT_NE(error("<string name=\"rows\" value=\"3\"/><integer name=\"row\" value=\"3\"/>")
+                  .find("not both"),
+              std::string::npos);
+}
