@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds femto and renders the demo scene into out/.
+# Installs what is missing, builds femto, renders the demo scene (the transient Cornell box)
+# into out/ and makes pictures of it: time-integrated preview, frames + animated GIF, and the
+# peak-time image.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/deps.sh
@@ -7,4 +9,12 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DFEMTO_TESTS=OFF > /dev
 cmake --build build -j "$(nproc)"
 mkdir -p out
 build/bin/femto render scenes/cornell-box/scene.xml -o out/cornell-box "$@"
-echo "Pictures: $(pwd)/out/cornell-box.png (preview) and $(pwd)/out/cornell-box.exr (linear HDR)"
+build/bin/femto viz frames out/cornell-box.exr -o out/cornell-box-frames --gif
+build/bin/femto viz peak-time out/cornell-box.exr -o out/cornell-box-peak-time.png
+cat <<MSG
+Pictures in $(pwd)/out:
+  cornell-box.png              time-integrated preview (cornell-box_steady.exr: linear HDR)
+  cornell-box.exr              the x-y-t cube, one EXR part per time bin
+  cornell-box-frames/          one PNG per time bin and an animated GIF
+  cornell-box-peak-time.png    when each pixel is brightest (thesis ch. 4.5)
+MSG

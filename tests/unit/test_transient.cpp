@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <numeric>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -673,4 +674,72 @@ TEST(Transient, FluorescenceIsReemittedInTheEmissionColour) {
                           << img[3 * p + 2] << "), expected (0, " << L << ", 0)";
     }
     EXPECT_EQ(wrong, 0);
+}
+
+TEST(Transient, VarianceAovMatchesTheSpreadAcrossSeeds) {
+    // A box-pulse point light over a plane: each sample's contribution lands in a random bin,
+    // so pixel-bin estimates are noisy. The variance AOV of one render must agree with the
+    // variance of the same pixel-bin across independent renders (different seeds).
+    const std::string xml =
+        "<scene version=\"3.0.0\"><integrator type=\"transient_path\"><integer name=\"max_depth\" "
+        "value=\"2\"/></integrator>"
+        "<sensor type=\"orthographic\"><transform name=\"to_world\"><scale x=\"2\" y=\"2\"/>"
+        "<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/></transform>"
+        "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"4\"/></sampler>"
+        "<film type=\"transient\"><integer name=\"width\" value=\"16\"/><integer name=\"height\" "
+        "value=\"16\"/><float name=\"start\" value=\"6\"/><float name=\"bin_width\" value=\"0.1\"/>"
+        "<integer name=\"bins\" value=\"32\"/><string name=\"aovs\" value=\"variance, count\"/>"
+        "<rfilter type=\"box\"/></film></sensor>"
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale "
+        "value=\"10\"/></transform></shape>"
+        "<emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"0\" z=\"1.5\"/>"
+        "<float name=\"intensity\" value=\"5\"/><string name=\"pulse\" value=\"box\"/>"
+        "<float name=\"pulse_width\" value=\"1.5\"/></emitter></scene>";
+    constexpr int K = 12;
+    std::vector<Cube> cubes, variances;
+    for (int k = 0; k < K; ++k) {
+        auto scene = load_scene_string(xml);
+        RenderOptions opt;
+        opt.seed = 100 + k;
+        const RenderStats stats = render(*scene, opt);
+        RenderInfo info = make_render_info(*scene, opt, stats);
+        info.write_npy = true;
+        const auto dir = femto::test::temp_dir("variance-aov");
+        const auto files = scene->sensor().film().write((dir / "v").string(), info);
+        EXPECT_TRUE(std::filesystem::exists(dir / "v_count.npy"));
+        cubes.push_back(read_npy((dir / "v.npy").string()));
+        variances.push_back(read_npy((dir / "v_variance.npy").string()));
+        std::filesystem::remove_all(dir);
+    }
+    const size_t n = cubes[0].data.size();
+    // Empirical variance of each pixel-bin over the K renders, summed over pixel-bins; and
+    // the AOV summed over pixel-bins, for each render.
+    double empirical = 0, empirical_var = 0;
+    for (size_t i = 0; i < n; ++i) {
+        double m = 0, m2 = 0;
+        for (const Cube& c : cubes) {
+            m += c.data[i];
+            m2 += double(c.data[i]) * c.data[i];
+        }
+        m /= K;
+        const double s2 = (m2 - K * m * m) / (K - 1);
+        empirical += s2;
+        empirical_var += 2 * s2 * s2 / (K - 1);  // variance of a sample variance (normal cells)
+    }
+    std::vector<double> aov_sums;
+    for (const Cube& v : variances)
+        aov_sums.push_back(std::accumulate(v.data.begin(), v.data.end(), 0.0));
+    const double aov = std::accumulate(aov_sums.begin(), aov_sums.end(), 0.0) / K;
+    double spread = 0;
+    for (double a : aov_sums) spread += (a - aov) * (a - aov);
+    const double se_aov = std::sqrt(spread / (K - 1) / K);
+    // Pixel-bins are independent estimates: the summed sample variances have the summed
+    // variances 2 s^4 / (K - 1) of a chi-square with K - 1 degrees of freedom.
+    const double se_emp = std::sqrt(empirical_var);
+    ASSERT_GT(empirical, 0);
+    EXPECT_NEAR(aov, empirical, 4 * std::sqrt(se_aov * se_aov + se_emp * se_emp))
+        << "AOV " << aov << " (se " << se_aov << ") vs across seeds " << empirical << " (se "
+        << se_emp << ")";
+    std::printf("variance AOV %.6g (se %.3g), across %d seeds %.6g (se %.3g)\n", aov, se_aov, K,
+                empirical, se_emp);
 }

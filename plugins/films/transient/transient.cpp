@@ -8,6 +8,7 @@
 // accumulated per sample, then per pass in a block, then into the cube, so a single small
 // contribution is never added directly to a large running total.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -26,6 +27,7 @@ using namespace femto;
 
 struct PixelWeights {
     double weight = 0;        // sum of filter weights of all samples
+    double weight2 = 0;       // sum of their squares (effective sample count, aovs="variance")
     double depth_sum = 0;     // sum of w * sensor distance over samples that hit something
     double depth_weight = 0;  // sum of w over those samples
 };
@@ -41,8 +43,10 @@ public:
     int x0_, y0_, w_, h_, bins_;
     std::vector<float> cube_;   // [h][w][bins][3]
     std::vector<float> count_;  // [h][w][bins] contributions per bin (aovs="count")
+    std::vector<float> sq_;     // [h][w][bins][3] sum of w * (per-sample bin value)^2
     std::vector<PixelWeights> weights_;
     std::vector<BinWeight> scratch_;
+    std::vector<std::pair<int, Color>> sample_bins_;  // one sample's value per bin
     uint64_t invalid_ = 0;
 };
 
@@ -52,10 +56,20 @@ public:
         world_time_ = props.get_bool("world_time", false);
         exposure_ = float(props.get_float("exposure", 0.0));
         const std::string aovs = props.get_string("aovs", "");
-        if (aovs == "count")
-            count_enabled_ = true;
-        else if (!aovs.empty())
-            props.fail("aovs", fmt::format("aovs must be \"count\" or empty, not \"{}\"", aovs));
+        for (size_t pos = 0; pos < aovs.size();) {
+            size_t end = aovs.find(',', pos);
+            if (end == std::string::npos) end = aovs.size();
+            std::string item = aovs.substr(pos, end - pos);
+            item.erase(0, item.find_first_not_of(' '));
+            item.erase(item.find_last_not_of(' ') + 1);
+            if (item == "count")
+                count_enabled_ = true;
+            else if (item == "variance")
+                variance_enabled_ = true;
+            else
+                props.fail("aovs", fmt::format("unknown AOV \"{}\"; valid: count, variance", item));
+            pos = end + 1;
+        }
         auto filters = props.objects(PluginKind::TemporalFilter);
         if (filters.size() > 1) props.fail("tfilter", "a film takes at most one <tfilter>");
         tfilter_ = std::static_pointer_cast<TemporalFilter>(
@@ -67,8 +81,17 @@ public:
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the cube would need {:.1f} GiB (limit 64 GiB)",
                                            bytes / double(1 << 30)));
+        const double total =
+            bytes * (1 + (variance_enabled_ ? 1 : 0) + (count_enabled_ ? 1.0 / 3 : 0));
+        const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+        if (ram > 0 && total > 0.75 * ram)
+            props.fail("bins",
+                       fmt::format("the cube and its AOVs would need {:.1f} GiB, more than 3/4 of "
+                                   "this machine's {:.1f} GiB of memory",
+                                   total / double(1 << 30), ram / double(1 << 30)));
         cube_.assign(pixels * size_t(grid_.bins) * 3, 0.f);
         if (count_enabled_) count_.assign(pixels * size_t(grid_.bins), 0.f);
+        if (variance_enabled_) sq_.assign(cube_.size(), 0.f);
         weights_.resize(pixels);
     }
 
@@ -92,11 +115,17 @@ public:
                 if (s.weight == 0) continue;
                 PixelWeights& d = weights_[dst];
                 d.weight += s.weight;
+                d.weight2 += s.weight2;
                 d.depth_sum += s.depth_sum;
                 d.depth_weight += s.depth_weight;
                 const float* in = &block.cube_[src * T3];
                 float* out = &cube_[dst * T3];
                 for (size_t i = 0; i < T3; ++i) out[i] += in[i];
+                if (variance_enabled_) {
+                    const float* qin = &block.sq_[src * T3];
+                    float* qout = &sq_[dst * T3];
+                    for (size_t i = 0; i < T3; ++i) qout[i] += qin[i];
+                }
                 if (count_enabled_) {
                     const float* cin = &block.count_[src * size_t(grid_.bins)];
                     float* cout = &count_[dst * size_t(grid_.bins)];
@@ -166,6 +195,26 @@ public:
             io::write_npy(files.back(), {size_t(height_), size_t(width_), size_t(grid_.bins), 3},
                           cube.data());
         }
+        if (variance_enabled_) {
+            // Variance of each pixel-bin estimate (a weighted mean of per-sample values):
+            // (E_w[v^2] - E_w[v]^2) / (n_eff - 1), n_eff = (sum w)^2 / sum w^2.
+            const size_t T3 = size_t(grid_.bins) * 3;
+            std::vector<float> var(cube_.size(), 0.f);
+            for (size_t p = 0; p < pixels; ++p) {
+                const PixelWeights& pw = weights_[p];
+                if (!(pw.weight > 0) || !(pw.weight2 > 0)) continue;
+                const double n_eff = pw.weight * pw.weight / pw.weight2;
+                if (!(n_eff > 1)) continue;
+                for (size_t i = 0; i < T3; ++i) {
+                    const double m = cube_[p * T3 + i] / pw.weight,
+                                 m2 = sq_[p * T3 + i] / pw.weight;
+                    var[p * T3 + i] = float(std::max(0.0, m2 - m * m) / (n_eff - 1));
+                }
+            }
+            files.push_back(out_base + "_variance.npy");
+            io::write_npy(files.back(), {size_t(height_), size_t(width_), size_t(grid_.bins), 3},
+                          var.data());
+        }
         if (count_enabled_) {
             files.push_back(out_base + "_count.npy");
             io::write_npy(files.back(), {size_t(height_), size_t(width_), size_t(grid_.bins)},
@@ -175,10 +224,10 @@ public:
     }
 
     TimeGrid grid_;
-    bool world_time_ = false, count_enabled_ = false;
+    bool world_time_ = false, count_enabled_ = false, variance_enabled_ = false;
     float exposure_ = 0;
     std::shared_ptr<TemporalFilter> tfilter_;
-    std::vector<float> cube_, count_;
+    std::vector<float> cube_, count_, sq_;
     std::vector<PixelWeights> weights_;
     uint64_t invalid_ = 0;
 };
@@ -192,6 +241,7 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h, in
       bins_(film.grid_.bins),
       cube_(size_t(w_) * size_t(h_) * size_t(bins_) * 3, 0.f),
       count_(film.count_enabled_ ? size_t(w_) * size_t(h_) * size_t(bins_) : 0, 0.f),
+      sq_(film.variance_enabled_ ? cube_.size() : 0, 0.f),
       weights_(size_t(w_) * size_t(h_)) {}
 
 void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
@@ -206,12 +256,42 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
             const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
             PixelWeights& pw = weights_[local];
             pw.weight += w;
+            pw.weight2 += double(w) * w;
             if (sensor >= 0) {
                 pw.depth_sum += w * sensor;
                 pw.depth_weight += w;
             }
             const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
             float* px = &cube_[local * size_t(bins_) * 3];
+            if (!sq_.empty()) {
+                // Variance needs this sample's value per bin (several contributions may share
+                // a bin), then w * v into the cube and w * v^2 into the second moment.
+                sample_bins_.clear();
+                for (const auto& c : sample.items()) {
+                    const double t =
+                        film_.world_time_ ? c.path_length - std::max(0.0, sensor) : c.path_length;
+                    scratch_.clear();
+                    film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
+                    for (const BinWeight& bw : scratch_)
+                        sample_bins_.push_back({bw.bin, c.radiance * bw.weight});
+                }
+                std::sort(sample_bins_.begin(), sample_bins_.end(),
+                          [](const auto& a, const auto& b) { return a.first < b.first; });
+                float* q = &sq_[local * size_t(bins_) * 3];
+                for (size_t i = 0; i < sample_bins_.size();) {
+                    const int bin = sample_bins_[i].first;
+                    Color v;
+                    int n = 0;
+                    for (; i < sample_bins_.size() && sample_bins_[i].first == bin; ++i, ++n)
+                        v += sample_bins_[i].second;
+                    for (int ch = 0; ch < 3; ++ch) {
+                        px[size_t(bin) * 3 + ch] += w * v[ch];
+                        q[size_t(bin) * 3 + ch] += w * v[ch] * v[ch];
+                    }
+                    if (!count_.empty()) count_[local * size_t(bins_) + size_t(bin)] += float(n);
+                }
+                return;
+            }
             for (const auto& c : sample.items()) {
                 const double t =
                     film_.world_time_ ? c.path_length - std::max(0.0, sensor) : c.path_length;
@@ -231,15 +311,17 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
 
 }  // namespace
 
-FEMTO_PLUGIN(TransientFilm, femto::PluginKind::Film, "transient",
-             "Time-resolved film: an x-y-t cube of radiance, one EXR part per time bin",
-             {{"width", "integer", "768", "image width in pixels"},
-              {"height", "integer", "576", "image height in pixels"},
-              FEMTO_TIME_GRID_PARAMS,
-              {"world_time", "boolean", "false",
-               "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
-              {"aovs", "string", "",
-               "\"count\": also write OUTBASE_count.npy (contributions per pixel and bin)"},
-              {"exposure", "float", "0", "exposure of the PNG preview, in stops"},
-              {"rfilter", "rfilter", "gaussian", "spatial reconstruction filter (nested)"},
-              {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}})
+FEMTO_PLUGIN(
+    TransientFilm, femto::PluginKind::Film, "transient",
+    "Time-resolved film: an x-y-t cube of radiance, one EXR part per time bin",
+    {{"width", "integer", "768", "image width in pixels"},
+     {"height", "integer", "576", "image height in pixels"},
+     FEMTO_TIME_GRID_PARAMS,
+     {"world_time", "boolean", "false",
+      "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
+     {"aovs", "string", "",
+      "comma-separated: \"count\" writes OUTBASE_count.npy (contributions per pixel and bin), "
+      "\"variance\" OUTBASE_variance.npy (variance of each pixel-bin estimate)"},
+     {"exposure", "float", "0", "exposure of the PNG preview, in stops"},
+     {"rfilter", "rfilter", "gaussian", "spatial reconstruction filter (nested)"},
+     {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}})
