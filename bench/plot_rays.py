@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """Plots femto_bench_rays results: bench/results/rays.csv (+ rays_summary.csv, rays_meta.txt)
--> bench/results/rays.png.
+-> bench/results/rays.png, and the summary as a Markdown table -> bench/results/rays_table.md.
 
-Left: median ray rates per scene and thread count (Embree raw rtcIntersect1, Embree raw
-rtcOccluded1 shadow rays, femto `path`), each run as a dot, the ratio femto / raw annotated.
+Per scene: median ray rates per thread count (Embree raw rtcIntersect1 on random incoherent
+rays, the same rays ordered by origin, rtcOccluded1 shadow rays, femto `path`), each run as a
+dot, the ratio femto / raw (random incoherent) annotated.
 Right: the per-run ratio femto / raw (measured back to back; by wall clock and per second of
 process CPU time), with the 0.7 goal.
 
@@ -38,6 +39,30 @@ def read_meta(path):
     return meta
 
 
+def markdown_table(summary, meta):
+    """The summary as a Markdown table (what bench/README.md quotes)."""
+    lines = [
+        f"Machine: {meta.get('nproc', '?')} cores, {meta.get('cpu', '?')}; {meta.get('date', '?')}; "
+        f"load average at start {meta.get('load_start', '?')}, at end {meta.get('load_end', '?')}. "
+        f"Medians of {meta.get('runs', '?')} runs; Mray/s = million rays per second (wall clock).",
+        "",
+        "| scene | triangles | threads | raw Mray/s | femto Mray/s | **femto / raw** | paired | "
+        "raw sorted Mray/s | femto / sorted | raw shadow Mray/s | femto / raw per CPU-s | "
+        "cores used raw / femto | load before -> after |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+    ]
+    for s in summary:
+        lines.append(
+            f"| {s['scene']} | {int(s['triangles']):,} | {s['threads']} | "
+            f"{float(s['raw_median_mrays_per_s']):.2f} | {float(s['femto_median_mrays_per_s']):.2f} | "
+            f"**{float(s['ratio']):.2f}** | {float(s['paired_ratio']):.2f} | "
+            f"{float(s['raw_sorted_median_mrays_per_s']):.2f} | {float(s['sorted_ratio']):.2f} | "
+            f"{float(s['raw_shadow_median_mrays_per_s']):.2f} | {float(s['cpu_ratio']):.2f} | "
+            f"{float(s['raw_cores_used']):.2f} / {float(s['femto_cores_used']):.2f} | "
+            f"{s['load_before'].split()[0]} -> {s['load_after'].split()[0]} |")
+    return "\n".join(lines) + "\n"
+
+
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
     results = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "results")
@@ -50,19 +75,21 @@ def main():
     groups = [(s["scene"], int(s["threads"])) for s in summary]
     by_group = {g: [r for r in runs if (r["scene"], int(r["threads"])) == g] for g in groups}
     series = [
-        ("raw_mrays_per_s", "Embree raw, rtcIntersect1 (random incoherent)", "#4c72b0", None),
-        ("raw_shadow_mrays_per_s", "Embree raw, rtcOccluded1 (shadow rays)", "#a6bddb", "//"),
-        ("femto_mrays_per_s", "femto path (all rays: camera, bounce, shadow)", "#dd8452", None),
+        ("raw_mrays_per_s", "Embree raw: rtcIntersect1, random incoherent rays", "#4c72b0", None),
+        ("raw_sorted_mrays_per_s", "Embree raw: the same rays ordered by origin", "#8fa9d6", ".."),
+        ("raw_shadow_mrays_per_s", "Embree raw: rtcOccluded1, shadow rays to the lights",
+         "#c6d4ea", "//"),
+        ("femto_mrays_per_s", "femto path: every ray (camera, bounce, shadow)", "#dd8452", None),
     ]
 
     scenes = list(dict.fromkeys(scene for scene, _ in groups))
     fig, axes = plt.subplots(1, len(scenes) + 1, figsize=(5.0 * len(scenes) + 4.5, 5.4),
                              gridspec_kw={"width_ratios": [1.6] * len(scenes) + [1]})
-    width = 0.26
+    width = 0.2
     for ax, scene in zip(axes, scenes):
         idx = [i for i, g in enumerate(groups) if g[0] == scene]
         for k, (col, label, color, hatch) in enumerate(series):
-            offset = (k - 1) * width
+            offset = (k - 1.5) * width
             meds = [statistics.median(float(r[col]) for r in by_group[groups[i]]) for i in idx]
             ax.bar([x + offset for x in range(len(idx))], meds, width, label=label, color=color,
                    hatch=hatch, edgecolor="black", linewidth=0.5)
@@ -116,6 +143,10 @@ def main():
     out = os.path.join(results, "rays.png")
     fig.savefig(out, dpi=110)
     print(f"wrote {out}")
+    table = os.path.join(results, "rays_table.md")
+    with open(table, "w") as f:
+        f.write(markdown_table(summary, meta))
+    print(f"wrote {table}")
 
 
 if __name__ == "__main__":

@@ -1,21 +1,23 @@
 // femto_bench_rays: the `path` integrator's ray rate next to Embree's raw rate, side by side.
 //
-// For each scene (the Cornell box from scenes/, and a procedurally generated room holding a
-// displaced sphere of >= 1M triangles, written as a binary PLY) and each thread count:
+// For each scene (the Cornell box from scenes/, rendered with `path` into an `hdrfilm`, and a
+// procedurally generated room holding a displaced sphere of >= 1M triangles, written as a
+// binary PLY) and each thread count:
 //
 //  - raw: an Embree scene built from the loaded femto scene's shapes exactly as the renderer
 //    builds its own (same geometry, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST), traced
 //    with rtcIntersect1 over an array of pre-generated random incoherent rays: origins
 //    uniform by area over all surfaces (Shape::sample_area), offset along the normal as
 //    femto offsets its own rays, directions uniform on the hemisphere around the normal.
-//    Generation is not timed. As a second, informative figure, shadow rays (rtcOccluded1)
-//    from the same origins to uniform points on the area lights.
+//    Generation is not timed. Informative figures next to it: the same rays sorted by origin
+//    (Morton order), and shadow rays (rtcOccluded1) to uniform points on the area lights.
 //  - femto: femto::render() of the scene with the `path` integrator at a fixed seed and spp;
 //    RenderStats.rays / RenderStats.seconds counts every ray (camera, bounce, shadow).
 //
-// Runs alternate raw and femto measurements (ABBA order, so drift hits both alike) and the
-// results are medians. Output: a table on stdout, <out>/rays.csv (every run),
-// <out>/rays_summary.csv (medians and ratios) and <out>/rays_meta.txt (the machine).
+// Runs alternate raw and femto measurements (ABBA order, so drift hits both alike); results
+// are medians, by wall clock and per second of process CPU time. Output: a table on stdout,
+// <out>/rays.csv (every run), <out>/rays_summary.csv (medians and ratios) and
+// <out>/rays_meta.txt (machine, load, settings). See bench/README.md.
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <pmmintrin.h>
@@ -28,7 +30,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -40,6 +41,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <pugixml.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -162,6 +164,12 @@ Options parse_options(int argc, char** argv) {
             o.raw_robust = false;
             continue;
         }
+        static const char* const kWithValue[] = {
+            "--out",     "--source-dir", "--work-dir", "--preview",     "--runs",
+            "--threads", "--scenes",     "--res",      "--cornell-spp", "--sphere-spp",
+            "--rings",   "--max-depth",  "--raw-rays", "--raw-seconds", "--seed"};
+        if (std::find(std::begin(kWithValue), std::end(kWithValue), a) == std::end(kWithValue))
+            throw std::invalid_argument("unknown option '" + a + "' (see --help)");
         if (i + 1 >= argc) throw std::invalid_argument(a + ": missing value (see --help)");
         const std::string v = argv[++i];
         if (a == "--out") {
@@ -335,7 +343,7 @@ size_t write_displaced_sphere(const fs::path& file, int rings) {
     return triangle_count;
 }
 
-/// The room and light are the Cornell box's; the sphere (radius ~0.55) stands on the floor.
+/// The room and light are the Cornell box's; the sphere (radius ~0.55) hovers just above the floor.
 constexpr const char* kSphereSceneXml = R"(<?xml version="1.0" encoding="utf-8"?>
 <!-- femto bench: a displaced sphere of >= 1M triangles (displaced_sphere.ply, written by
      femto_bench_rays) in a Cornell-style room lit by a small area light. -->
@@ -419,6 +427,52 @@ constexpr const char* kSphereSceneXml = R"(<?xml version="1.0" encoding="utf-8"?
 </scene>
 )";
 
+// -- the Cornell box, steady ------------------------------------------------------------------
+
+/// scenes/cornell-box/scene.xml with the `path` integrator and an `hdrfilm`: the repository's
+/// demo may render in time (transient_path into a transient film); this benchmark measures
+/// `path`. Geometry, materials, lights, sensor, sampler and reconstruction filter are kept;
+/// the integrator keeps the parameters `path` takes, the film its size and rfilter.
+/// Returns the XML text and a note of what was changed.
+std::pair<std::string, std::string> steady_cornell_xml(const std::string& file) {
+    pugi::xml_document doc;
+    const pugi::xml_parse_result parsed = doc.load_file(file.c_str());
+    if (!parsed)
+        throw femto::SceneError(
+            fmt::format("{}: cannot read the scene: {}", file, parsed.description()));
+    pugi::xml_node scene = doc.child("scene");
+    pugi::xml_node integrator = scene.child("integrator");
+    pugi::xml_node film = scene.child("sensor").child("film");
+    if (!integrator || !film)
+        throw femto::SceneError(file + ": expected <integrator> and <sensor><film> in <scene>");
+    std::string note;
+    auto keep_only = [](pugi::xml_node node, std::initializer_list<std::string_view> names,
+                        bool keep_rfilter) {
+        std::vector<pugi::xml_node> drop;
+        for (pugi::xml_node c : node.children()) {
+            if (c.type() != pugi::node_element) continue;
+            const std::string_view name = c.attribute("name").value();
+            const bool keep = (keep_rfilter && std::string_view(c.name()) == "rfilter") ||
+                              std::find(names.begin(), names.end(), name) != names.end();
+            if (!keep) drop.push_back(c);
+        }
+        for (pugi::xml_node c : drop) node.remove_child(c);
+    };
+    if (std::string_view(integrator.attribute("type").value()) != "path") {
+        note += fmt::format("integrator {} -> path; ", integrator.attribute("type").value());
+        integrator.attribute("type").set_value("path");
+        keep_only(integrator, {"max_depth", "rr_depth", "hide_emitters"}, false);
+    }
+    if (std::string_view(film.attribute("type").value()) != "hdrfilm") {
+        note += fmt::format("film {} -> hdrfilm; ", film.attribute("type").value());
+        film.attribute("type").set_value("hdrfilm");
+        keep_only(film, {"width", "height"}, true);
+    }
+    std::ostringstream out;
+    doc.save(out, "    ");
+    return {out.str(), note.empty() ? "used as is" : note.substr(0, note.size() - 2)};
+}
+
 // -- raw Embree ------------------------------------------------------------------------------
 
 void embree_error(void*, RTCError code, const char* message) {
@@ -426,7 +480,7 @@ void embree_error(void*, RTCError code, const char* message) {
     std::fprintf(stderr, "embree error %d: %s\n", int(code), message ? message : "");
 }
 
-/// A ray as the benchmark stores it: 24 bytes, expanded into an RTCRayHit when traced (as
+/// A ray as the benchmark stores it: 28 bytes, expanded into an RTCRayHit when traced (as
 /// femto::Scene::intersect does with a femto::Ray).
 struct CompactRay {
     Vec3 o, d;
@@ -474,8 +528,8 @@ public:
                 std::memcpy(idx, m.indices.data(), m.indices.size() * sizeof(uint32_t));
                 triangles_ += m.triangle_count();
             }
-            // Null surfaces let shadow rays through in femto; no scene here has one, and the
-            // raw figure then counts them as blockers (a little pessimistic for raw).
+            // femto lets shadow rays through emitting `null` surfaces (an occlusion filter);
+            // no benchmark scene has one, and the raw scene would count them as blockers.
             rtcCommitGeometry(geom);
             rtcAttachGeometryByID(scene_, geom, id - 1);
             rtcReleaseGeometry(geom);
@@ -485,15 +539,19 @@ public:
         const auto t0 = Clock::now();
         rtcCommitScene(scene_);
         build_seconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
+        const char* error = nullptr;
         if (rtcGetDeviceError(device_) != RTC_ERROR_NONE)
-            throw std::runtime_error("Embree failed to build the benchmark scene");
+            error = "Embree failed to build the benchmark scene";
+        else if (surfaces_.empty())
+            error = "the scene has no visible surface to start raw rays from";
+        if (error) {
+            release();
+            throw std::runtime_error(error);
+        }
         surface_cdf_ = area_cdf(surfaces_);
         light_cdf_ = area_cdf(lights_);
     }
-    ~RawScene() {
-        rtcReleaseScene(scene_);
-        rtcReleaseDevice(device_);
-    }
+    ~RawScene() { release(); }
     RawScene(const RawScene&) = delete;
     RawScene& operator=(const RawScene&) = delete;
 
@@ -576,6 +634,13 @@ public:
     }
 
 private:
+    void release() {
+        if (scene_) rtcReleaseScene(scene_);
+        if (device_) rtcReleaseDevice(device_);
+        scene_ = nullptr;
+        device_ = nullptr;
+    }
+
     static std::vector<float> area_cdf(const std::vector<const femto::Shape*>& shapes) {
         std::vector<float> cdf;
         double total = 0;
@@ -629,13 +694,45 @@ private:
     double build_seconds_ = 0;
 };
 
+/// Spreads the low 21 bits of x so that bit b moves to bit 3b.
+uint64_t spread_bits(uint64_t x) {
+    x &= 0x1fffffu;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+}
+
+/// The same rays ordered along a Morton (Z-order) curve of their origins: directions stay
+/// random, but consecutive rays start close together, as in a renderer tracing a tile.
+std::vector<CompactRay> sorted_by_origin(std::vector<CompactRay> rays) {
+    femto::Bounds3 b;
+    for (const auto& r : rays) b.expand(r.o);
+    std::vector<std::pair<uint64_t, uint32_t>> keys(rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) {
+        uint64_t key = 0;
+        for (int a = 0; a < 3; ++a) {
+            const float extent = b.max[a] - b.min[a];
+            const float t = extent > 0 ? (rays[i].o[a] - b.min[a]) / extent : 0.f;
+            key |= spread_bits(uint64_t(femto::clamp(t, 0.f, 1.f) * 2097151.f)) << a;
+        }
+        keys[i] = {key, uint32_t(i)};
+    }
+    std::sort(keys.begin(), keys.end());
+    std::vector<CompactRay> out(rays.size());
+    for (size_t i = 0; i < keys.size(); ++i) out[i] = rays[keys[i].second];
+    return out;
+}
+
 // -- the benchmark ---------------------------------------------------------------------------
 
 struct RunRow {
     std::string scene;
     size_t triangles = 0;
     int threads = 0, run = 0;
-    RawScene::Result raw, shadow;
+    RawScene::Result raw, sorted, shadow;
     femto::RenderStats femto;
     double femto_cpu_seconds = 0;  ///< process CPU time around femto::render()
     double load = 0;
@@ -653,7 +750,8 @@ struct SummaryRow {
     int threads = 0, runs = 0;
     double raw_median = 0, raw_min = 0, raw_max = 0;
     double femto_median = 0, femto_min = 0, femto_max = 0;
-    double shadow_median = 0;
+    double shadow_median = 0, sorted_median = 0;
+    double sorted_ratio = 0;  ///< femto median / raw sorted-origins median
     double ratio = 0;         ///< femto median / raw median
     double paired_ratio = 0;  ///< median over runs of femto/raw measured back to back
     double raw_cpu_median = 0, femto_cpu_median = 0;  ///< Mrays per CPU second
@@ -679,7 +777,10 @@ BenchScene load_bench_scene(const std::string& name, const Options& opt, const f
     if (name == "cornell-box") {
         b.spp = opt.cornell_spp;
         lo.defines.emplace_back("spp", std::to_string(b.spp));
-        b.scene = femto::load_scene(opt.source_dir + "/scenes/cornell-box/scene.xml", lo);
+        const std::string dir = opt.source_dir + "/scenes/cornell-box";
+        const auto [xml, note] = steady_cornell_xml(dir + "/scene.xml");
+        fmt::print("{}/scene.xml: {}\n", dir, note);
+        b.scene = femto::load_scene_string(xml, lo, dir);
     } else {
         b.spp = opt.sphere_spp;
         lo.defines.emplace_back("spp", std::to_string(b.spp));
@@ -744,6 +845,7 @@ int run(const Options& opt) {
         BenchScene bs = load_bench_scene(name, opt, work);
         RawScene raw(*bs.scene, opt.raw_robust);
         const auto rays = raw.bounce_rays(opt.raw_rays, opt.seed);
+        const auto sorted = sorted_by_origin(rays);
         const auto shadow =
             raw.has_lights() ? raw.shadow_rays(opt.raw_rays, opt.seed) : std::vector<CompactRay>{};
         fmt::print("{}: {} triangles, {} spheres; loaded in {:.2f} s, raw BVH built in {:.2f} s\n",
@@ -767,7 +869,8 @@ int run(const Options& opt) {
             render_once(*bs.scene, threads, 1, opt.seed);
 
             const std::string load_before = read_loadavg();
-            std::vector<double> raw_rates, femto_rates, shadow_rates, paired, per_sample;
+            std::vector<double> raw_rates, femto_rates, shadow_rates, sorted_rates, paired,
+                per_sample;
             std::vector<double> raw_cpu_rates, femto_cpu_rates, raw_cores, femto_cores;
             for (int r = 0; r < opt.runs; ++r) {
                 RunRow row;
@@ -780,6 +883,7 @@ int run(const Options& opt) {
                     row.raw = raw.trace(rays, threads, opt.raw_seconds, false);
                     if (!shadow.empty())
                         row.shadow = raw.trace(shadow, threads, 0.5 * opt.raw_seconds, true);
+                    row.sorted = raw.trace(sorted, threads, 0.5 * opt.raw_seconds, false);
                 };
                 // ABBA: raw first on even runs, femto first on odd runs.
                 if (r % 2 == 0) measure_raw();
@@ -790,6 +894,7 @@ int run(const Options& opt) {
 
                 raw_rates.push_back(row.raw.mrays_per_s());
                 shadow_rates.push_back(row.shadow.mrays_per_s());
+                sorted_rates.push_back(row.sorted.mrays_per_s());
                 femto_rates.push_back(row.femto_mrays_per_s());
                 paired.push_back(row.femto_mrays_per_s() / row.raw.mrays_per_s());
                 per_sample.push_back(double(row.femto.rays) / double(row.femto.camera_samples));
@@ -798,14 +903,16 @@ int run(const Options& opt) {
                 raw_cores.push_back(row.raw.cpu_seconds / row.raw.seconds);
                 femto_cores.push_back(row.femto_cpu_seconds / row.femto.seconds);
                 fmt::print(
-                    "  {} threads, run {}: raw {:6.2f} Mray/s (hit {:4.1f}%), raw shadow {:6.2f} "
-                    "Mray/s, femto {:6.2f} Mray/s ({:.2f} s, {:.2f} rays/sample); cores used raw "
+                    "  {} threads, run {}: raw {:6.2f} Mray/s (hit {:4.1f}%), sorted {:6.2f}, "
+                    "shadow "
+                    "{:6.2f} Mray/s, femto {:6.2f} Mray/s ({:.2f} s, {:.2f} rays/sample); cores "
+                    "used raw "
                     "{:.2f} femto {:.2f}; load {:.2f}\n",
                     threads, r, row.raw.mrays_per_s(),
                     100.0 * double(row.raw.hits) / double(std::max<uint64_t>(1, row.raw.rays)),
-                    row.shadow.mrays_per_s(), row.femto_mrays_per_s(), row.femto.seconds,
-                    double(row.femto.rays) / double(row.femto.camera_samples), raw_cores.back(),
-                    femto_cores.back(), row.load);
+                    row.sorted.mrays_per_s(), row.shadow.mrays_per_s(), row.femto_mrays_per_s(),
+                    row.femto.seconds, double(row.femto.rays) / double(row.femto.camera_samples),
+                    raw_cores.back(), femto_cores.back(), row.load);
                 std::fflush(stdout);
                 rows.push_back(row);
             }
@@ -821,6 +928,8 @@ int run(const Options& opt) {
             s.femto_min = *std::min_element(femto_rates.begin(), femto_rates.end());
             s.femto_max = *std::max_element(femto_rates.begin(), femto_rates.end());
             s.shadow_median = median(shadow_rates);
+            s.sorted_median = median(sorted_rates);
+            s.sorted_ratio = s.femto_median / s.sorted_median;
             s.ratio = s.femto_median / s.raw_median;
             s.paired_ratio = median(paired);
             s.rays_per_sample = median(per_sample);
@@ -837,21 +946,29 @@ int run(const Options& opt) {
     const std::string load_end = read_loadavg();
 
     // Table.
-    fmt::print("\n{:<17} {:>9} {:>3} {:>8} {:>8} {:>6} {:>6} {:>8} {:>8} {:>6} {:>5} {:>5}\n", "",
-               "", "", "Mray/s", "", "", "", "Mray/CPU-s", "", "", "cores", "");
-    fmt::print("{:<17} {:>9} {:>3} {:>8} {:>8} {:>6} {:>6} {:>8} {:>8} {:>6} {:>5} {:>5}\n",
-               "scene", "triangles", "thr", "raw", "femto", "ratio", "paired", "raw", "femto",
-               "ratio", "raw", "femto");
+    fmt::print(
+        "\n{:<16} {:>9} {:>3} | {:>6} {:>6} {:>6} {:>6} | {:>6} {:>6} | {:>6} | {:>6} {:>6} "
+        "{:>6} | {:>5} {:>5}\n",
+        "", "", "", "Mray/s", "", "femto/", "", "sorted", "femto/", "shadow", "Mray/", "CPU-s",
+        "femto/", "cores", "");
+    fmt::print(
+        "{:<16} {:>9} {:>3} | {:>6} {:>6} {:>6} {:>6} | {:>6} {:>6} | {:>6} | {:>6} {:>6} "
+        "{:>6} | {:>5} {:>5}\n",
+        "scene", "triangles", "thr", "raw", "femto", "raw", "paired", "raw", "sorted", "raw", "raw",
+        "femto", "raw", "raw", "femto");
     for (const auto& s : summary)
         fmt::print(
-            "{:<17} {:>9} {:>3} {:>8.2f} {:>8.2f} {:>6.3f} {:>6.3f} {:>8.2f} {:>8.2f} {:>6.3f} "
-            "{:>5.2f} {:>5.2f}\n",
+            "{:<16} {:>9} {:>3} | {:>6.2f} {:>6.2f} {:>6.3f} {:>6.3f} | {:>6.2f} {:>6.3f} | "
+            "{:>6.2f} | {:>6.2f} {:>6.2f} {:>6.3f} | {:>5.2f} {:>5.2f}\n",
             s.scene, s.triangles, s.threads, s.raw_median, s.femto_median, s.ratio, s.paired_ratio,
-            s.raw_cpu_median, s.femto_cpu_median, s.cpu_ratio, s.raw_cores, s.femto_cores);
+            s.sorted_median, s.sorted_ratio, s.shadow_median, s.raw_cpu_median, s.femto_cpu_median,
+            s.cpu_ratio, s.raw_cores, s.femto_cores);
     fmt::print(
-        "(medians of {} runs. ratio = femto median / raw median (goal >= 0.7); paired = median "
-        "of the per-run ratios;\n Mray/CPU-s = rays per second of process CPU time; cores = CPU "
-        "time / wall time, below the thread count when the machine is busy)\n",
+        "Medians of {} runs. raw = rtcIntersect1 on random incoherent rays; femto/raw = ratio of "
+        "the medians\n(goal >= 0.7); paired = median of the per-run ratios; sorted raw = the same "
+        "rays ordered by origin\n(Morton); shadow raw = rtcOccluded1 to the lights; Mray/CPU-s = "
+        "rays per second of process CPU time;\ncores = CPU time / wall time (below the thread "
+        "count when other processes hold the cores).\n",
         opt.runs);
     fmt::print("load average: start {}, end {}\n", load_start, load_end);
 
@@ -860,17 +977,18 @@ int run(const Options& opt) {
     {
         std::ofstream f(out / "rays.csv");
         f << "scene,triangles,threads,run,raw_mrays_per_s,femto_mrays_per_s,"
-             "raw_shadow_mrays_per_s,raw_rays,raw_seconds,raw_cpu_seconds,raw_hit_fraction,"
+             "raw_shadow_mrays_per_s,raw_sorted_mrays_per_s,raw_rays,raw_seconds,raw_cpu_seconds,"
+             "raw_hit_fraction,"
              "femto_rays,femto_seconds,femto_cpu_seconds,femto_spp,femto_rays_per_sample,load1\n";
         for (const auto& r : rows)
             f << fmt::format(
-                "{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.6f},{:.6f},{:.4f},{},{:.6f},{:.6f},{},{:."
-                "4f},"
-                "{:.2f}\n",
+                "{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{:.6f},{:.6f},{:.4f},{},{:.6f},{:.6f},{"
+                "},"
+                "{:.4f},{:.2f}\n",
                 r.scene, r.triangles, r.threads, r.run, r.raw.mrays_per_s(), r.femto_mrays_per_s(),
-                r.shadow.mrays_per_s(), r.raw.rays, r.raw.seconds, r.raw.cpu_seconds,
-                double(r.raw.hits) / double(std::max<uint64_t>(1, r.raw.rays)), r.femto.rays,
-                r.femto.seconds, r.femto_cpu_seconds, r.femto.spp_done,
+                r.shadow.mrays_per_s(), r.sorted.mrays_per_s(), r.raw.rays, r.raw.seconds,
+                r.raw.cpu_seconds, double(r.raw.hits) / double(std::max<uint64_t>(1, r.raw.rays)),
+                r.femto.rays, r.femto.seconds, r.femto_cpu_seconds, r.femto.spp_done,
                 double(r.femto.rays) / double(r.femto.camera_samples), r.load);
         if (!f) throw std::runtime_error("cannot write " + (out / "rays.csv").string());
     }
@@ -878,17 +996,19 @@ int run(const Options& opt) {
         std::ofstream f(out / "rays_summary.csv");
         f << "scene,triangles,threads,runs,raw_median_mrays_per_s,raw_min,raw_max,"
              "femto_median_mrays_per_s,femto_min,femto_max,ratio,paired_ratio,"
-             "raw_shadow_median_mrays_per_s,raw_median_mrays_per_cpu_s,"
+             "raw_shadow_median_mrays_per_s,raw_sorted_median_mrays_per_s,sorted_ratio,"
+             "raw_median_mrays_per_cpu_s,"
              "femto_median_mrays_per_cpu_s,cpu_ratio,raw_cores_used,femto_cores_used,"
              "femto_rays_per_sample,load_before,load_after\n";
         for (const auto& s : summary)
             f << fmt::format(
                 "{},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},"
-                "{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{},{}\n",
+                "{:.4f},{:.4f},{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{},{}\n",
                 s.scene, s.triangles, s.threads, s.runs, s.raw_median, s.raw_min, s.raw_max,
                 s.femto_median, s.femto_min, s.femto_max, s.ratio, s.paired_ratio, s.shadow_median,
-                s.raw_cpu_median, s.femto_cpu_median, s.cpu_ratio, s.raw_cores, s.femto_cores,
-                s.rays_per_sample, csv_escape(s.load_before), csv_escape(s.load_after));
+                s.sorted_median, s.sorted_ratio, s.raw_cpu_median, s.femto_cpu_median, s.cpu_ratio,
+                s.raw_cores, s.femto_cores, s.rays_per_sample, csv_escape(s.load_before),
+                csv_escape(s.load_after));
         if (!f) throw std::runtime_error("cannot write " + (out / "rays_summary.csv").string());
     }
     {
