@@ -36,12 +36,17 @@ struct Cube {
 
 /// Writes a cube as a multi-part OpenEXR file: one RGB part per time bin (named t00000, ...),
 /// plus a part "depth" (channel Z) when `depth` is given. Every part carries `attributes`.
+/// With `pixel_scale` ([height][width]) every value is multiplied by its pixel's scale while
+/// streaming, one part at a time, so a film can normalise without a second copy of its cube.
 void write_exr_cube(const std::string& path, int width, int height, int bins, const float* data,
-                    const float* depth, const Attributes& attributes);
+                    const float* depth, const Attributes& attributes,
+                    const float* pixel_scale = nullptr);
 /// Reads what write_exr_cube wrote; throws SceneError for other files.
 Cube read_exr_cube(const std::string& path);
 /// Writes a float32 NumPy .npy file of the given shape (C order).
-void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data);
+/// With `pixel_scale`, the leading two dimensions are pixels: each pixel's values are scaled.
+void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data,
+               const float* pixel_scale = nullptr);
 /// Reads a float32 .npy file; returns the data and sets `shape`.
 std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape);
 

@@ -188,7 +188,7 @@ std::string part_name(int bin) { return fmt::format("t{:05}", bin); }
 }  // namespace
 
 void write_exr_cube(const std::string& path, int width, int height, int bins, const float* data,
-                    const float* depth, const Attributes& attributes) {
+                    const float* depth, const Attributes& attributes, const float* pixel_scale) {
     const std::string tmp = temp_path_for(path);
     try {
         std::vector<Imf::Header> headers;
@@ -208,12 +208,22 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
             headers.push_back(std::move(h));
         }
         Imf::MultiPartOutputFile file(tmp.c_str(), headers.data(), parts);
-        const size_t xs = size_t(bins) * 3 * sizeof(float), ys = xs * size_t(width);
+        size_t xs = size_t(bins) * 3 * sizeof(float), ys = xs * size_t(width);
+        const size_t pixels = size_t(width) * size_t(height);
+        std::vector<float> frame(pixel_scale ? pixels * 3 : 0);  // one scaled bin at a time
+        if (pixel_scale) xs = 3 * sizeof(float), ys = xs * size_t(width);
         for (int p = 0; p < parts; ++p) {
             Imf::OutputPart part(file, p);
             Imf::FrameBuffer fb;
             if (p < bins) {
-                char* base = reinterpret_cast<char*>(const_cast<float*>(data + size_t(p) * 3));
+                const float* src = data + size_t(p) * 3;
+                if (pixel_scale) {
+                    for (size_t i = 0; i < pixels; ++i)
+                        for (int c = 0; c < 3; ++c)
+                            frame[3 * i + c] = src[i * size_t(bins) * 3 + size_t(c)] * pixel_scale[i];
+                    src = frame.data();
+                }
+                char* base = reinterpret_cast<char*>(const_cast<float*>(src));
                 fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
                 fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
                 fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
@@ -294,7 +304,8 @@ Cube read_exr_cube(const std::string& path) {
 
 // The .npy format (version 1.0) is a 10-byte preamble, a Python-dict header padded to a
 // multiple of 64 bytes, and the raw little-endian data; small enough that no library is needed.
-void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data) {
+void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data,
+               const float* pixel_scale) {
     std::string dims;
     size_t count = 1;
     for (size_t d : shape) {
@@ -318,7 +329,16 @@ void write_npy(const std::string& path, const std::vector<size_t>& shape, const 
         const char le[2] = {char(len & 0xff), char(len >> 8)};
         out.write(le, 2);
         out << header;
-        out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(float)));
+        if (pixel_scale && shape.size() >= 2 && shape[0] * shape[1] > 0) {
+            const size_t pixels = shape[0] * shape[1], per_pixel = count / pixels;
+            std::vector<float> buf(per_pixel);
+            for (size_t i = 0; i < pixels && out; ++i) {
+                for (size_t k = 0; k < per_pixel; ++k) buf[k] = data[i * per_pixel + k] * pixel_scale[i];
+                out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(per_pixel * sizeof(float)));
+            }
+        } else {
+            out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(float)));
+        }
         if (!out) {
             std::error_code ec;
             fs::remove(tmp, ec);

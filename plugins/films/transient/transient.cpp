@@ -156,16 +156,13 @@ public:
         return rgb;
     }
 
-    /// The normalised cube [H][W][T][3] and per-pixel depth.
-    std::vector<float> normalised_cube() const {
-        const size_t pixels = size_t(width_) * size_t(height_), T3 = size_t(grid_.bins) * 3;
-        std::vector<float> out(cube_.size());
-        for (size_t p = 0; p < pixels; ++p) {
-            const double w = weights_[p].weight;
-            for (size_t i = 0; i < T3; ++i)
-                out[p * T3 + i] = w > 0 ? float(cube_[p * T3 + i] / w) : 0.f;
-        }
-        return out;
+    /// 1 / (sum of filter weights) per pixel: the outputs are the cube times this, applied
+    /// while streaming so that writing needs no second copy of the cube.
+    std::vector<float> pixel_normalisation() const {
+        std::vector<float> scale(weights_.size(), 0.f);
+        for (size_t p = 0; p < weights_.size(); ++p)
+            if (weights_[p].weight > 0) scale[p] = float(1.0 / weights_[p].weight);
+        return scale;
     }
 
     std::vector<std::string> write(const std::string& out_base,
@@ -180,11 +177,11 @@ public:
                 depth[p] = float(weights_[p].depth_sum / weights_[p].depth_weight);
         const io::Attributes attrs =
             io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
-        const std::vector<float> cube = normalised_cube();
+        const std::vector<float> scale = pixel_normalisation();
         std::vector<std::string> files;
         files.push_back(out_base + ".exr");
-        io::write_exr_cube(files.back(), width_, height_, grid_.bins, cube.data(), depth.data(),
-                           attrs);
+        io::write_exr_cube(files.back(), width_, height_, grid_.bins, cube_.data(), depth.data(),
+                           attrs, scale.data());
         const std::vector<float> steady = steady_image();
         files.push_back(out_base + "_steady.exr");
         io::write_exr_rgb(files.back(), width_, height_, steady.data(), attrs);
@@ -193,7 +190,7 @@ public:
         if (info.write_npy) {
             files.push_back(out_base + ".npy");
             io::write_npy(files.back(), {size_t(height_), size_t(width_), size_t(grid_.bins), 3},
-                          cube.data());
+                          cube_.data(), scale.data());
         }
         if (variance_enabled_) {
             // Variance of each pixel-bin estimate (a weighted mean of per-sample values):
