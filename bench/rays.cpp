@@ -813,19 +813,39 @@ std::string csv_escape(const std::string& s) {
     return out + "\"";
 }
 
+/// The folder for the generated scene: `--work-dir`, or a new temporary folder that is
+/// removed again (also when the benchmark fails) unless `--keep` was given.
+class WorkDir {
+public:
+    explicit WorkDir(const Options& opt) : keep_(opt.keep_work) {
+        if (!opt.work_dir.empty()) {
+            path_ = opt.work_dir;
+            fs::create_directories(path_);
+            keep_ = true;
+        } else {
+            std::string tmpl = (fs::temp_directory_path() / "femto-bench-XXXXXX").string();
+            if (!mkdtemp(tmpl.data())) throw std::runtime_error("cannot create a temporary folder");
+            path_ = tmpl;
+        }
+    }
+    ~WorkDir() {
+        std::error_code ec;
+        if (!keep_) fs::remove_all(path_, ec);
+    }
+    WorkDir(const WorkDir&) = delete;
+    WorkDir& operator=(const WorkDir&) = delete;
+    const fs::path& path() const { return path_; }
+    bool kept() const { return keep_; }
+
+private:
+    fs::path path_;
+    bool keep_;
+};
+
 int run(const Options& opt) {
     fs::create_directories(opt.out_dir);
-    fs::path work;
-    bool temp_work = false;
-    if (!opt.work_dir.empty()) {
-        work = opt.work_dir;
-        fs::create_directories(work);
-    } else {
-        std::string tmpl = (fs::temp_directory_path() / "femto-bench-XXXXXX").string();
-        if (!mkdtemp(tmpl.data())) throw std::runtime_error("cannot create a temporary folder");
-        work = tmpl;
-        temp_work = true;
-    }
+    const WorkDir work_dir(opt);
+    const fs::path& work = work_dir.path();
 
     const std::string load_start = read_loadavg();
     const std::string date = now_utc();
@@ -1035,10 +1055,7 @@ int run(const Options& opt) {
     fmt::print("wrote {}, {}, {}\n", (out / "rays.csv").string(),
                (out / "rays_summary.csv").string(), (out / "rays_meta.txt").string());
 
-    if (temp_work && !opt.keep_work)
-        fs::remove_all(work);
-    else
-        fmt::print("generated scene kept in {}\n", work.string());
+    if (work_dir.kept()) fmt::print("generated scene kept in {}\n", work.string());
     return 0;
 }
 

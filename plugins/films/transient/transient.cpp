@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 
 #include "femto/film.h"
 #include "femto/image_io.h"
@@ -34,17 +35,42 @@ struct PixelWeights {
 
 class TransientFilm;
 
+// A block's sums. Kept all-zero between uses and recycled through the film's pool: a pass
+// touches few of a pixel's bins, so clearing and merging only the touched (pixel, bin)
+// entries, instead of whole tiles of the cube, is what keeps a cube film fast.
+struct BlockStorage {
+    // Time-major ([bins][h][w]): a contribution splatted over the filter footprint touches a
+    // few neighbouring cache lines of one bin rather than one line per pixel.
+    std::vector<float> cube;   // [bins][h][w][3]
+    std::vector<float> count;  // [bins][h][w] contributions per bin (aovs="count")
+    std::vector<float> sq;     // [bins][h][w][3] sum of w * (per-sample bin value)^2
+    std::vector<PixelWeights> weights;
+    std::vector<uint64_t> touched_bits;  // one bit per (pixel, bin)
+    std::vector<uint32_t> touched;       // the (bin * pixels + pixel) entries set, in order
+};
+
 class CubeBlock final : public FilmBlock {
 public:
     CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h, int border);
+    ~CubeBlock() override;
     void put(Vec2 pos, const ContributionList& sample) override;
+    /// Index of (local pixel, bin) in the storage; marks it as holding data.
+    size_t touch(size_t local, int bin) {
+        const size_t flat = size_t(bin) * pixels_ + local;
+        uint64_t& word = st_->touched_bits[flat >> 6];
+        const uint64_t bit = uint64_t(1) << (flat & 63);
+        if (!(word & bit)) {
+            word |= bit;
+            st_->touched.push_back(uint32_t(flat));
+        }
+        return flat;
+    }
 
     const TransientFilm& film_;
     int x0_, y0_, w_, h_, bins_;
-    std::vector<float> cube_;   // [h][w][bins][3]
-    std::vector<float> count_;  // [h][w][bins] contributions per bin (aovs="count")
-    std::vector<float> sq_;     // [h][w][bins][3] sum of w * (per-sample bin value)^2
-    std::vector<PixelWeights> weights_;
+    size_t pixels_;
+    std::unique_ptr<BlockStorage> st_;
+    mutable bool clean_ = true;  // all sums merged (and zeroed) since the last put
     std::vector<BinWeight> scratch_;
     std::vector<std::pair<int, Color>> sample_bins_;  // one sample's value per bin
     uint64_t invalid_ = 0;
@@ -99,40 +125,79 @@ public:
         return std::make_unique<CubeBlock>(*this, x0, y0, w, h, filter_border());
     }
 
+    /// A zeroed storage for a block of `pixels` pixels, recycled when possible.
+    std::unique_ptr<BlockStorage> acquire_storage(size_t pixels) const {
+        std::unique_ptr<BlockStorage> st;
+        {
+            std::lock_guard<std::mutex> lock(pool_mutex_);
+            if (!pool_.empty()) {
+                st = std::move(pool_.back());
+                pool_.pop_back();
+            }
+        }
+        if (!st) st = std::make_unique<BlockStorage>();
+        const size_t entries = pixels * size_t(grid_.bins);
+        if (st->weights.size() < pixels) {  // growing keeps the all-zero invariant
+            st->weights.resize(pixels);
+            st->cube.resize(entries * 3, 0.f);
+            if (variance_enabled_) st->sq.resize(entries * 3, 0.f);
+            if (count_enabled_) st->count.resize(entries, 0.f);
+            st->touched_bits.resize((entries + 63) / 64, 0);
+        }
+        return st;
+    }
+    void release_storage(std::unique_ptr<BlockStorage> st) const {
+        std::lock_guard<std::mutex> lock(pool_mutex_);
+        pool_.push_back(std::move(st));
+    }
+
     void merge(const FilmBlock& b) override {
         const auto& block = static_cast<const CubeBlock&>(b);
+        BlockStorage& st = *block.st_;
         invalid_ += block.invalid_;
-        const size_t T3 = size_t(grid_.bins) * 3;
-        for (int by = 0; by < block.h_; ++by) {
-            const int y = block.y0_ + by;
-            if (y < 0 || y >= height_) continue;
-            for (int bx = 0; bx < block.w_; ++bx) {
-                const int x = block.x0_ + bx;
-                if (x < 0 || x >= width_) continue;
-                const size_t src = size_t(by) * size_t(block.w_) + size_t(bx);
-                const size_t dst = size_t(y) * size_t(width_) + size_t(x);
-                const PixelWeights& s = block.weights_[src];
-                if (s.weight == 0) continue;
+        const size_t bins = size_t(grid_.bins);
+        // Film pixel of a block pixel, or SIZE_MAX outside the film.
+        auto film_pixel = [&](size_t local) {
+            const int x = block.x0_ + int(local % size_t(block.w_)),
+                      y = block.y0_ + int(local / size_t(block.w_));
+            return x < 0 || x >= width_ || y < 0 || y >= height_
+                       ? SIZE_MAX
+                       : size_t(y) * size_t(width_) + size_t(x);
+        };
+        const size_t block_pixels = size_t(block.w_) * size_t(block.h_);
+        for (const uint32_t flat : st.touched) {
+            const size_t local = flat % block_pixels, bin = flat / block_pixels;
+            const size_t dst = film_pixel(local);
+            if (dst != SIZE_MAX) {
+                for (int c = 0; c < 3; ++c)
+                    cube_[(dst * bins + bin) * 3 + c] += st.cube[size_t(flat) * 3 + c];
+                if (variance_enabled_)
+                    for (int c = 0; c < 3; ++c)
+                        sq_[(dst * bins + bin) * 3 + c] += st.sq[size_t(flat) * 3 + c];
+                if (count_enabled_) count_[dst * bins + bin] += st.count[flat];
+            }
+            for (int c = 0; c < 3; ++c) st.cube[size_t(flat) * 3 + c] = 0.f;
+            if (variance_enabled_)
+                for (int c = 0; c < 3; ++c) st.sq[size_t(flat) * 3 + c] = 0.f;
+            if (count_enabled_) st.count[flat] = 0.f;
+            st.touched_bits[flat >> 6] = 0;  // whole words: every bit in them is in `touched`
+        }
+        st.touched.clear();
+        const size_t pixels = size_t(block.w_) * size_t(block.h_);
+        for (size_t local = 0; local < pixels; ++local) {
+            PixelWeights& s = st.weights[local];
+            if (s.weight == 0) continue;
+            const size_t dst = film_pixel(local);
+            if (dst != SIZE_MAX) {
                 PixelWeights& d = weights_[dst];
                 d.weight += s.weight;
                 d.weight2 += s.weight2;
                 d.depth_sum += s.depth_sum;
                 d.depth_weight += s.depth_weight;
-                const float* in = &block.cube_[src * T3];
-                float* out = &cube_[dst * T3];
-                for (size_t i = 0; i < T3; ++i) out[i] += in[i];
-                if (variance_enabled_) {
-                    const float* qin = &block.sq_[src * T3];
-                    float* qout = &sq_[dst * T3];
-                    for (size_t i = 0; i < T3; ++i) qout[i] += qin[i];
-                }
-                if (count_enabled_) {
-                    const float* cin = &block.count_[src * size_t(grid_.bins)];
-                    float* cout = &count_[dst * size_t(grid_.bins)];
-                    for (int i = 0; i < grid_.bins; ++i) cout[i] += cin[i];
-                }
             }
+            s = PixelWeights();
         }
+        block.clean_ = true;
     }
 
     void start_pass(uint32_t pass) override { tfilter_->start_pass(pass); }
@@ -225,6 +290,8 @@ public:
     float exposure_ = 0;
     std::shared_ptr<TemporalFilter> tfilter_;
     std::vector<float> cube_, count_, sq_;
+    mutable std::mutex pool_mutex_;
+    mutable std::vector<std::unique_ptr<BlockStorage>> pool_;
     std::vector<PixelWeights> weights_;
     uint64_t invalid_ = 0;
 };
@@ -236,10 +303,20 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h, in
       w_(w + 2 * border),
       h_(h + 2 * border),
       bins_(film.grid_.bins),
-      cube_(size_t(w_) * size_t(h_) * size_t(bins_) * 3, 0.f),
-      count_(film.count_enabled_ ? size_t(w_) * size_t(h_) * size_t(bins_) : 0, 0.f),
-      sq_(film.variance_enabled_ ? cube_.size() : 0, 0.f),
-      weights_(size_t(w_) * size_t(h_)) {}
+      pixels_(size_t(w_) * size_t(h_)),
+      st_(film.acquire_storage(pixels_)) {}
+
+CubeBlock::~CubeBlock() {
+    if (!clean_) {  // never merged (an exception): restore the all-zero invariant
+        std::fill(st_->cube.begin(), st_->cube.end(), 0.f);
+        std::fill(st_->sq.begin(), st_->sq.end(), 0.f);
+        std::fill(st_->count.begin(), st_->count.end(), 0.f);
+        std::fill(st_->touched_bits.begin(), st_->touched_bits.end(), 0);
+        std::fill(st_->weights.begin(), st_->weights.end(), PixelWeights());
+        st_->touched.clear();
+    }
+    film_.release_storage(std::move(st_));
+}
 
 void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
     const double sensor = sample.sensor_distance();
@@ -248,10 +325,13 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
             ++invalid_;
             return;
         }
+    clean_ = false;
+    BlockStorage& st = *st_;
+    const bool variance = !st.sq.empty(), count = !st.count.empty();
     for_each_filter_pixel(
         film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
             const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
-            PixelWeights& pw = weights_[local];
+            PixelWeights& pw = st.weights[local];
             pw.weight += w;
             pw.weight2 += double(w) * w;
             if (sensor >= 0) {
@@ -259,10 +339,9 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                 pw.depth_weight += w;
             }
             const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
-            float* px = &cube_[local * size_t(bins_) * 3];
-            if (!sq_.empty()) {
-                // Variance needs this sample's value per bin (several contributions may share
-                // a bin), then w * v into the cube and w * v^2 into the second moment.
+            if (variance) {
+                // Variance needs this sample's value per bin (several contributions may share a
+                // bin), then w * v into the cube and w * v^2 into the second moment.
                 sample_bins_.clear();
                 for (const auto& c : sample.items()) {
                     const double t =
@@ -274,18 +353,18 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                 }
                 std::sort(sample_bins_.begin(), sample_bins_.end(),
                           [](const auto& a, const auto& b) { return a.first < b.first; });
-                float* q = &sq_[local * size_t(bins_) * 3];
                 for (size_t i = 0; i < sample_bins_.size();) {
                     const int bin = sample_bins_[i].first;
                     Color v;
                     int n = 0;
                     for (; i < sample_bins_.size() && sample_bins_[i].first == bin; ++i, ++n)
                         v += sample_bins_[i].second;
+                    const size_t flat = touch(local, bin);
                     for (int ch = 0; ch < 3; ++ch) {
-                        px[size_t(bin) * 3 + ch] += w * v[ch];
-                        q[size_t(bin) * 3 + ch] += w * v[ch] * v[ch];
+                        st.cube[flat * 3 + size_t(ch)] += w * v[ch];
+                        st.sq[flat * 3 + size_t(ch)] += w * v[ch] * v[ch];
                     }
-                    if (!count_.empty()) count_[local * size_t(bins_) + size_t(bin)] += float(n);
+                    if (count) st.count[flat] += float(n);
                 }
                 return;
             }
@@ -295,12 +374,13 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                 scratch_.clear();
                 film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
                 for (const BinWeight& bw : scratch_) {
+                    const size_t flat = touch(local, bw.bin);
                     const float s = w * bw.weight;
-                    float* v = px + size_t(bw.bin) * 3;
+                    float* v = &st.cube[flat * 3];
                     v[0] += s * c.radiance.r;
                     v[1] += s * c.radiance.g;
                     v[2] += s * c.radiance.b;
-                    if (!count_.empty()) count_[local * size_t(bins_) + size_t(bw.bin)] += 1.f;
+                    if (count) st.count[flat] += 1.f;
                 }
             }
         });
