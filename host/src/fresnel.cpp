@@ -229,4 +229,50 @@ std::string conductor_preset_names() {
     return names;
 }
 
+/// Reads an index of refraction given as a positive number or a name known to lookup_ior()
+/// (case-insensitive); `def` when absent.
+float read_ior(const Properties& props, const std::string& name, float def) {
+    if (!props.has(name)) return def;
+    if (props.type(name) == Properties::Type::String) {
+        const std::string value = props.get_string(name);
+        if (const std::optional<float> ior = lookup_ior(value)) return *ior;
+        props.fail(name, "unknown index of refraction \"" + value + "\" for \"" + name +
+                             "\"; give a number or one of: " + ior_names());
+    }
+    const double v = props.get_float(name);
+    if (!(v > 0.0)) props.fail(name, "\"" + name + "\" must be a positive index of refraction");
+    return static_cast<float>(v);
+}
+
+/// Reads `material`, `eta`, `k` and `ext_eta` as Mitsuba 3 does: material "none" (the default)
+/// with neither eta nor k is a perfect mirror; eta/k (defaults 0 and 1) may be given instead
+/// of a preset, but not together with one.
+ConductorIor read_conductor_ior(const Properties& props) {
+    const std::string material = props.get_string("material", "none");
+    const float ext_eta = read_ior(props, "ext_eta", 1.f);
+    ConductorIor ior;
+    if (material == "none") {
+        ior.perfect = !props.has("eta") && !props.has("k");
+        const Color eta = props.get_color("eta", Color(0.f));
+        const Color k = props.get_color("k", Color(1.f));
+        for (int i = 0; i < 3; ++i) {
+            if (!(eta[i] >= 0.f)) props.fail("eta", "\"eta\" must be non-negative");
+            if (!(k[i] >= 0.f)) props.fail("k", "\"k\" must be non-negative");
+        }
+        ior.eta = eta / ext_eta;
+        ior.k = k / ext_eta;
+        return ior;
+    }
+    if (props.has("eta") || props.has("k"))
+        props.fail(props.has("eta") ? "eta" : "k",
+                   "give either a conductor \"material\" preset or \"eta\"/\"k\", not both");
+    const std::optional<ComplexIor> preset = lookup_conductor_preset(material);
+    if (!preset)
+        props.fail("material", "unknown conductor material \"" + material +
+                                   "\"; valid presets: none, " + conductor_preset_names());
+    ior.eta = preset->eta / ext_eta;
+    ior.k = preset->k / ext_eta;
+    return ior;
+}
+
 }  // namespace femto

@@ -3,6 +3,8 @@
 // error against independent sampling.
 #include <gtest/gtest.h>
 
+#include "chi2.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -37,40 +39,8 @@ std::shared_ptr<Sampler> make_sampler(const std::string& type, int64_t sample_co
 
 // -- chi-square machinery ---------------------------------------------------------------------
 
-/// Regularized upper incomplete gamma function Q(a, x) (series for x < a + 1, Lentz's
-/// continued fraction otherwise; Numerical Recipes 6.2).
-double gamma_q(double a, double x) {
-    if (x <= 0.0) return 1.0;
-    const double log_prefactor = -x + a * std::log(x) - std::lgamma(a);
-    if (x < a + 1.0) {
-        double ap = a, term = 1.0 / a, sum = term;
-        for (int n = 0; n < 100000; ++n) {
-            ap += 1.0;
-            term *= x / ap;
-            sum += term;
-            if (std::abs(term) < std::abs(sum) * 1e-16) break;
-        }
-        return std::max(0.0, 1.0 - sum * std::exp(log_prefactor));
-    }
-    constexpr double kTiny = 1e-300;
-    double b = x + 1.0 - a, c = 1.0 / kTiny, d = 1.0 / b, h = d;
-    for (int i = 1; i < 100000; ++i) {
-        const double an = -i * (i - a);
-        b += 2.0;
-        d = an * d + b;
-        if (std::abs(d) < kTiny) d = kTiny;
-        c = b + an / c;
-        if (std::abs(c) < kTiny) c = kTiny;
-        d = 1.0 / d;
-        const double delta = d * c;
-        h *= delta;
-        if (std::abs(delta - 1.0) < 1e-16) break;
-    }
-    return std::exp(log_prefactor) * h;
-}
-
-/// p-value of a chi-square statistic with `dof` degrees of freedom.
-double chi2_pvalue(double chi2, int dof) { return gamma_q(0.5 * dof, 0.5 * chi2); }
+/// p-value of a chi-square statistic with `dof` degrees of freedom (chi2.h's gamma function).
+double chi2_pvalue(double chi2, int dof) { return femto_test::chi2_p_value(chi2, dof); }
 
 /// Pearson's statistic of observed bin counts against a uniform expectation.
 double chi2_uniform(const std::vector<int>& counts, double total) {

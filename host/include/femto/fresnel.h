@@ -13,6 +13,7 @@
 #include <string_view>
 
 #include "femto/color.h"
+#include "femto/properties.h"
 
 namespace femto {
 
@@ -61,5 +62,25 @@ struct ComplexIor {
 std::optional<ComplexIor> lookup_conductor_preset(std::string_view name);
 /// The names lookup_conductor_preset() accepts, in table order, as "a-C, Ag, Al, ...".
 std::string conductor_preset_names();
+
+/// Reads an index of refraction given as a positive number or a name known to lookup_ior()
+/// (case-insensitive); `def` when absent. Bad values are located SceneErrors.
+float read_ior(const Properties& props, const std::string& name, float def);
+
+/// Relative complex index of refraction of a conductor (eta + i k, already divided by the
+/// exterior index). `perfect` = an ideal mirror (Fresnel term 1).
+struct ConductorIor {
+    Color eta, k;
+    bool perfect = false;
+
+    Color fresnel(float cos_i) const {
+        return perfect ? Color(1.f) : fresnel_conductor(cos_i, eta, k);
+    }
+};
+
+/// Reads `material`, `eta`, `k` and `ext_eta` as Mitsuba 3 does: material "none" (the default)
+/// with neither eta nor k is a perfect mirror; eta/k (defaults 0 and 1) may be given instead
+/// of a preset, but not together with one.
+ConductorIor read_conductor_ior(const Properties& props);
 
 }  // namespace femto

@@ -19,16 +19,15 @@
 
 #include "femto/color.h"
 #include "femto/error.h"
+#include "io/atomic_file.h"
 
 namespace fs = std::filesystem;
 namespace OCIO = OCIO_NAMESPACE;
 
 namespace femto::io {
 
-namespace {
+namespace detail {
 
-// A unique temporary name in the destination folder, keeping the extension (OIIO picks the
-// format from it). Renamed into place only after a complete write.
 std::string temp_path_for(const std::string& path) {
     static std::atomic<unsigned> counter{0};
     const fs::path p(path);
@@ -37,7 +36,7 @@ std::string temp_path_for(const std::string& path) {
         .string();
 }
 
-void commit(const std::string& tmp, const std::string& path) {
+void commit_file(const std::string& tmp, const std::string& path) {
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) {
@@ -45,6 +44,14 @@ void commit(const std::string& tmp, const std::string& path) {
         throw SceneError(fmt::format("cannot write \"{}\": {}", path, ec.message()));
     }
 }
+
+}  // namespace detail
+
+using detail::temp_path_for;
+
+namespace {
+
+void commit(const std::string& tmp, const std::string& path) { detail::commit_file(tmp, path); }
 
 std::string exe_relative_config() {
     Dl_info info{};
@@ -220,7 +227,8 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
                 if (pixel_scale) {
                     for (size_t i = 0; i < pixels; ++i)
                         for (int c = 0; c < 3; ++c)
-                            frame[3 * i + c] = src[i * size_t(bins) * 3 + size_t(c)] * pixel_scale[i];
+                            frame[3 * i + c] =
+                                src[i * size_t(bins) * 3 + size_t(c)] * pixel_scale[i];
                     src = frame.data();
                 }
                 char* base = reinterpret_cast<char*>(const_cast<float*>(src));
@@ -333,8 +341,10 @@ void write_npy(const std::string& path, const std::vector<size_t>& shape, const 
             const size_t pixels = shape[0] * shape[1], per_pixel = count / pixels;
             std::vector<float> buf(per_pixel);
             for (size_t i = 0; i < pixels && out; ++i) {
-                for (size_t k = 0; k < per_pixel; ++k) buf[k] = data[i * per_pixel + k] * pixel_scale[i];
-                out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(per_pixel * sizeof(float)));
+                for (size_t k = 0; k < per_pixel; ++k)
+                    buf[k] = data[i * per_pixel + k] * pixel_scale[i];
+                out.write(reinterpret_cast<const char*>(buf.data()),
+                          std::streamsize(per_pixel * sizeof(float)));
             }
         } else {
             out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(float)));

@@ -15,6 +15,7 @@
 #include <mutex>
 
 #include "femto/error.h"
+#include "io/atomic_file.h"
 
 namespace fs = std::filesystem;
 namespace OCIO = OCIO_NAMESPACE;
@@ -55,22 +56,8 @@ namespace femto::viz {
 
 namespace {
 
-std::string temp_path_for(const std::string& path) {
-    static std::atomic<unsigned> counter{0};
-    const fs::path p(path);
-    return (p.parent_path() / fmt::format(".{}.tmp{}-{}{}", p.stem().string(), getpid(), counter++,
-                                          p.extension().string()))
-        .string();
-}
-
-void commit(const std::string& tmp, const std::string& path) {
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw SceneError(fmt::format("cannot write \"{}\": {}", path, ec.message()));
-    }
-}
+using io::detail::temp_path_for;
+void commit(const std::string& tmp, const std::string& path) { io::detail::commit_file(tmp, path); }
 
 [[noreturn]] void fail_write(const std::string& tmp, const std::string& path,
                              const std::string& err) {

@@ -33,21 +33,6 @@ namespace {
 
 using namespace femto;
 
-/// Reads an index of refraction given as a positive number or a name known to lookup_ior()
-/// (case-insensitive); `def` when absent.
-float read_ior(const Properties& props, const std::string& name, float def) {
-    if (!props.has(name)) return def;
-    if (props.type(name) == Properties::Type::String) {
-        const std::string value = props.get_string(name);
-        if (const std::optional<float> ior = lookup_ior(value)) return *ior;
-        props.fail(name, "unknown index of refraction \"" + value + "\" for \"" + name +
-                             "\"; give a number or one of: " + ior_names());
-    }
-    const double v = props.get_float(name);
-    if (!(v > 0.0)) props.fail(name, "\"" + name + "\" must be a positive index of refraction");
-    return static_cast<float>(v);
-}
-
 /// Unpolarised dielectric Fresnel reflectance in double precision, for light arriving with
 /// cosine mu > 0 at an interface of relative index eta (transmitted side over incident side).
 double fresnel_reflectance_d(double mu, double eta) {
