@@ -203,7 +203,7 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
         headers.reserve(size_t(parts));
         for (int p = 0; p < parts; ++p) {
             Imf::Header h(width, height);
-            h.compression() = Imf::ZIP_COMPRESSION;
+            h.compression() = Imf::ZIPS_COMPRESSION;  // one-line buffers: a cube has a part per bin
             h.setName(p < bins ? part_name(p) : "depth");
             h.setType(Imf::SCANLINEIMAGE);
             if (p < bins)
