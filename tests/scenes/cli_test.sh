@@ -175,6 +175,14 @@ XML
   [ "$(iinfo out/st_row0005.exr | sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\),.*/\1x\2/p')" = 32x30 ] || fail "streak size"
   sed 's/value="5, 12"/value="5, 24"/' streak.xml > bad.xml
   expect_exit 2 'bad\.xml:[0-9]+:[0-9]+: .*row 24 is outside the image' -- "$femto" render bad.xml -o out/b -q;;
+viz_mp4)
+  # MP4 needs ffmpeg, which femto does not require: skipped (ctest SKIP) when it is missing.
+  command -v ffmpeg > /dev/null || { echo "SKIP [$case_name]: no ffmpeg on PATH"; exit 77; }
+  "$femto" render "$scene" -o out/m -D spp=2 -D res=32 -D bins=24 -q || fail "render failed"
+  "$femto" viz frames out/m.exr -o out/frames --mp4 > log.txt 2>&1 || { cat log.txt >&2; fail "viz frames --mp4"; }
+  [ -s out/frames/frames.mp4 ] || fail "no mp4"
+  n=$(ffprobe -v error -select_streams v:0 -count_frames -show_entries stream=nb_read_frames -of csv=p=0 out/frames/frames.mp4)
+  [ "$n" = 24 ] || fail "mp4 has $n frames, expected 24";;
 *) fail "unknown case";;
 esac
 echo "PASS [$case_name]"
