@@ -6,6 +6,7 @@
 
 #include "femto/math.h"
 #include "femto/object.h"
+#include "femto/properties.h"
 
 namespace femto {
 
@@ -26,7 +27,13 @@ public:
     void set_sample_count(uint32_t n) { sample_count_ = n; }
 
 protected:
+    Sampler() = default;
+    /// Reads the parameters every sampler takes: `sample_count` (a positive integer below
+    /// 2^32, default 4) and `seed` (default 0, combined with the render's seed).
+    explicit Sampler(const Properties& props);
+
     uint32_t sample_count_ = 4;
+    uint64_t seed_ = 0;
 };
 
 }  // namespace femto

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "femto/film.h"
+#include "femto/sampler.h"
 #include "femto/sensor.h"
 #include "femto/shape.h"
 #include "scene/loader.h"
@@ -33,6 +34,15 @@ Sensor::Sensor(const Properties& props) {
         samplers.empty()
             ? detail::create_default(PluginKind::Sampler, "independent", props.location())
             : samplers[0]);
+}
+
+Sampler::Sampler(const Properties& props) {
+    const int64_t count = props.get_int("sample_count", 4);
+    if (count <= 0 || count > int64_t(std::numeric_limits<uint32_t>::max()))
+        props.fail("sample_count", "\"sample_count\" must be a positive integer below 2^32, got " +
+                                       std::to_string(count));
+    sample_count_ = uint32_t(count);
+    seed_ = uint64_t(props.get_int("seed", 0));
 }
 
 Film::Film(const Properties& props) {

@@ -16,15 +16,7 @@ namespace {
 
 class IndependentSampler final : public femto::Sampler {
 public:
-    explicit IndependentSampler(const femto::Properties& props) {
-        const int64_t count = props.get_int("sample_count", 4);
-        if (count <= 0 || count > std::numeric_limits<uint32_t>::max())
-            props.fail("sample_count",
-                       "\"sample_count\" must be a positive integer below 2^32, got " +
-                           std::to_string(count));
-        sample_count_ = static_cast<uint32_t>(count);
-        seed_ = static_cast<uint64_t>(props.get_int("seed", 0));
-    }
+    explicit IndependentSampler(const femto::Properties& props) : Sampler(props) {}
 
     std::unique_ptr<femto::Sampler> clone() const override {
         return std::make_unique<IndependentSampler>(*this);
@@ -46,7 +38,6 @@ public:
     }
 
 private:
-    uint64_t seed_ = 0;
     femto::Pcg32 rng_;
 };
 

@@ -106,15 +106,7 @@ constexpr uint32_t low32(uint64_t x) { return static_cast<uint32_t>(x); }
 
 class LowDiscrepancySampler final : public femto::Sampler {
 public:
-    explicit LowDiscrepancySampler(const femto::Properties& props) {
-        const int64_t count = props.get_int("sample_count", 4);
-        if (count <= 0 || count > std::numeric_limits<uint32_t>::max())
-            props.fail("sample_count",
-                       "\"sample_count\" must be a positive integer below 2^32, got " +
-                           std::to_string(count));
-        sample_count_ = static_cast<uint32_t>(count);
-        seed_ = static_cast<uint64_t>(props.get_int("seed", 0));
-    }
+    explicit LowDiscrepancySampler(const femto::Properties& props) : Sampler(props) {}
 
     std::unique_ptr<femto::Sampler> clone() const override {
         return std::make_unique<LowDiscrepancySampler>(*this);
@@ -155,7 +147,6 @@ private:
         return {low32(h), static_cast<uint32_t>(h >> 32), low32(g)};
     }
 
-    uint64_t seed_ = 0;
     uint64_t pixel_seed_ = 0;
     uint32_t reversed_index_ = 0;
     uint64_t slot_ = 0;
