@@ -34,6 +34,13 @@ struct TimeGrid {
     double from_picoseconds(double ps) const;
 };
 
+/// The time a film records for a contribution of optical path length `path_length`: camera
+/// time is the whole path; world time (eq. 4.1) removes the sensor segment (the camera
+/// sample's sensor distance; nothing is removed when the camera ray escaped, distance < 0).
+inline double recorded_time(double path_length, double sensor_distance, bool world_time) {
+    return world_time && sensor_distance > 0 ? path_length - sensor_distance : path_length;
+}
+
 /// Reads a film's time window: `start`, `bin_width`, `bins` in scene units, or `start_ps` and
 /// `bin_width_ps` in picoseconds together with `length_unit`. Throws located SceneErrors.
 TimeGrid read_time_grid(const Properties& props);

@@ -246,8 +246,7 @@ void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
             const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
             float* px = &data_[local * size_t(bins_) * 3];
             for (const auto& c : sample.items()) {
-                const double t =
-                    film_.world_time_ ? c.path_length - std::max(0.0, sensor) : c.path_length;
+                const double t = recorded_time(c.path_length, sensor, film_.world_time_);
                 scratch_.clear();
                 film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
                 for (const BinWeight& bw : scratch_) {

@@ -344,8 +344,7 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                 // bin), then w * v into the cube and w * v^2 into the second moment.
                 sample_bins_.clear();
                 for (const auto& c : sample.items()) {
-                    const double t =
-                        film_.world_time_ ? c.path_length - std::max(0.0, sensor) : c.path_length;
+                    const double t = recorded_time(c.path_length, sensor, film_.world_time_);
                     scratch_.clear();
                     film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
                     for (const BinWeight& bw : scratch_)
@@ -369,8 +368,7 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                 return;
             }
             for (const auto& c : sample.items()) {
-                const double t =
-                    film_.world_time_ ? c.path_length - std::max(0.0, sensor) : c.path_length;
+                const double t = recorded_time(c.path_length, sensor, film_.world_time_);
                 scratch_.clear();
                 film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
                 for (const BinWeight& bw : scratch_) {
