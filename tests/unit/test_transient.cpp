@@ -1,7 +1,8 @@
 // Time-resolved rendering against physics: arrival times and amplitudes over a plane (camera
 // and world time), energy conservation of the x-y-t film against the steady `path` render,
 // the (eta - 1) d delay of a glass slab, and the `fluorescent` material (its sampling, colour
-// transfer and lifetime; its delayed, colour-shifted re-emission in a render).
+// transfer, lifetime and elastic lobe; its undelayed reflection and delayed, colour-shifted
+// re-emission in a render).
 //
 // Tolerances:
 //  - Arrival times are exact: every contribution's time is a sum of segment lengths in double
@@ -156,8 +157,9 @@ int bin_of(double start, double width, int bins, double t) {
 // The fluorescent material on its own
 
 std::shared_ptr<Bsdf> make_fluorescent(Color absorption, Color emission, double efficiency,
-                                       double lifetime) {
+                                       double lifetime, Color reflectance = Color(0.f)) {
     Properties p("fluorescent", {});
+    p.set_color("reflectance", reflectance);
     p.set_color("absorption", absorption);
     p.set_color("emission", emission);
     p.set_float("efficiency", efficiency);
@@ -174,7 +176,7 @@ double dot(const Color& a, const Color& b) {
 TEST(FluorescentMaterial, SampleWeightIsEvalOverPdf) {
     const auto bsdf = make_fluorescent({0, 0, 1}, {0, 1, 0}, 1, 1);
     ASSERT_TRUE(bsdf);
-    EXPECT_TRUE(bsdf->has_delay());
+    EXPECT_TRUE(bsdf->has_vertex_event());
     EXPECT_EQ(bsdf->flags(), uint32_t(kBsdfDiffuseReflection));
     const Hit hit;
     Pcg32 rng(11, 3);
@@ -212,8 +214,11 @@ TEST(FluorescentMaterial, TransferIsAnEnergyConservingRankOneMatrix) {
         const double absorbed = dot(a, L);
         double ML[3];
         for (int c = 0; c < 3; ++c) ML[c] = eff * em[c] / sum_e * absorbed;
-        ASSERT_TRUE(bsdf->has_transfer());
-        const Color out_c = bsdf->transfer(hit) * L;
+        // Without reflectance every vertex fluoresces: the event's transfer is M itself.
+        ASSERT_TRUE(bsdf->has_vertex_event());
+        const VertexEvent ev = bsdf->sample_vertex_event(hit, 0.5f);
+        ASSERT_TRUE(ev.transfers);
+        const Color out_c = ev.transfer * L;
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(out_c[c], ML[c], 1e-6 * (1 + std::abs(ML[c])));
         // Energy (summed over channels): re-emitted = eff * absorbed <= in.
         const double out = double(out_c.r) + out_c.g + out_c.b;
@@ -223,7 +228,7 @@ TEST(FluorescentMaterial, TransferIsAnEnergyConservingRankOneMatrix) {
     // Efficiency 1 and full absorption: all the energy comes back.
     const auto full = make_fluorescent({1, 1, 1}, {0.2f, 0.5f, 0.9f}, 1, 1);
     const Color L(0.3f, 1.7f, 0.25f);
-    const Color back = full->transfer(hit) * L;
+    const Color back = full->sample_vertex_event(hit, 0.5f).transfer * L;
     EXPECT_NEAR(double(back.r) + back.g + back.b, 0.3 + 1.7 + 0.25, 1e-6);
 }
 
@@ -236,7 +241,7 @@ TEST(FluorescentMaterial, DelayIsExponentialWithMeanLifetime) {
     double sum = 0, sum2 = 0;
     int beyond_tau = 0;
     for (int i = 0; i < n; ++i) {
-        const double d = bsdf->sample_delay(hit, rng.next_float());
+        const double d = bsdf->sample_vertex_event(hit, rng.next_float()).delay;
         ASSERT_GE(d, 0.0);
         ASSERT_TRUE(std::isfinite(d));
         sum += d;
@@ -262,6 +267,101 @@ TEST(FluorescentMaterial, RejectsBadParameters) {
     Properties r("fluorescent", {});
     r.set_float("lifetime", -1);
     EXPECT_THROW(create_object(PluginKind::Bsdf, "fluorescent", r), SceneError);
+}
+
+TEST(FluorescentMaterial, RejectsReflectancePlusAbsorptionAboveOne) {
+    // Energy conservation per channel: light is reflected, absorbed or lost.
+    const std::string msg = femto::test::load_error(femto::test::scene_xml(
+        "<shape type=\"rectangle\"><bsdf type=\"fluorescent\">\n"
+        "<rgb name=\"reflectance\" value=\"0.2, 0.5, 0.1\"/>\n"
+        "<rgb name=\"absorption\" value=\"0.3, 0.6, 0.9\"/></bsdf></shape>"));
+    EXPECT_NE(msg.find("reflectance + absorption must not exceed 1"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("channel g"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("reflectance 0.5 + absorption 0.6"), std::string::npos) << msg;
+    // The location is the reflectance entry (line 4 of the generated scene).
+    EXPECT_NE(msg.find(":4:1:"), std::string::npos) << msg;
+    // Exactly 1 (0.4 + 0.6 rounds above 1 in double from float inputs) is allowed.
+    EXPECT_NO_THROW(load_scene_string(femto::test::scene_xml(
+        "<shape type=\"rectangle\"><bsdf type=\"fluorescent\">"
+        "<rgb name=\"reflectance\" value=\"0.4, 0.4, 0.4\"/>"
+        "<rgb name=\"absorption\" value=\"0.6, 0.6, 0.6\"/></bsdf></shape>")));
+    Properties q("fluorescent", {});
+    q.set_color("reflectance", Color(1.5f, 0.f, 0.f));
+    q.set_color("absorption", Color(0.f));
+    EXPECT_THROW(create_object(PluginKind::Bsdf, "fluorescent", q), SceneError);
+}
+
+TEST(FluorescentMaterial, WithoutFluorescenceItIsExactlyDiffuse) {
+    // No fluorescent energy (absorption 0, or efficiency 0): no vertex event, and eval, pdf and
+    // sample compute diffuse's expressions, so the values are equal bit for bit.
+    const Color r(0.1f, 0.5f, 0.08f);
+    Properties dp("diffuse", {});
+    dp.set_color("reflectance", r);
+    const auto diffuse =
+        std::static_pointer_cast<Bsdf>(create_object(PluginKind::Bsdf, "diffuse", dp));
+    for (const auto& bsdf : {make_fluorescent(Color(0.f), {1, 0, 0}, 1, 1, r),
+                             make_fluorescent({0.6f, 0.4f, 0.9f}, {1, 0, 0}, 0, 1, r)}) {
+        EXPECT_FALSE(bsdf->has_vertex_event());
+        const Hit hit;
+        Pcg32 rng(7, 2);
+        for (int i = 0; i < 500; ++i) {
+            const Vec3 wi = normalize(
+                Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.2f));
+            const Vec2 u(rng.next_float(), rng.next_float());
+            const BsdfSample a = bsdf->sample(hit, wi, 0.5f, u),
+                             b = diffuse->sample(hit, wi, 0.5f, u);
+            ASSERT_EQ(a.valid(), b.valid());
+            if (!a.valid()) continue;
+            EXPECT_EQ(a.pdf, b.pdf);
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(a.weight[c], b.weight[c]);
+            const Color fa = bsdf->eval(hit, wi, a.wo), fb = diffuse->eval(hit, wi, a.wo);
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(fa[c], fb[c]);
+            EXPECT_EQ(bsdf->pdf(hit, wi, a.wo), diffuse->pdf(hit, wi, a.wo));
+        }
+    }
+}
+
+TEST(FluorescentMaterial, EventsAverageToReflectancePlusFluorescence) {
+    // With both parts the vertex is elastic (no delay, transfer diag(r) / p) with probability
+    // p = sum(r) / (sum(r) + eff sum(a)), else fluorescent (Exp(tau) delay, transfer M / (1 - p)).
+    // Averaged over u the transfer must be diag(r) + M (unbiasedness). u runs over the midpoints
+    // of N equal strata, so averages are exact up to the one stratum straddling p (max |T| / N
+    // ~ 3e-6) and float rounding; the mean delay's midpoint rule errs by ~tau ln(N) / N ~ 2e-5.
+    const Color r(0.1f, 0.5f, 0.08f), a(0.6f, 0.4f, 0.9f), em(1.f, 0.25f, 0.f);
+    const double eff = 0.9, tau = 1.5, sum_em = 1.25;
+    const auto bsdf = make_fluorescent(a, em, eff, tau, r);
+    ASSERT_TRUE(bsdf->has_vertex_event());
+    const double sum_r = double(r.r) + r.g + r.b, sum_a = double(a.r) + a.g + a.b;
+    const double p = sum_r / (sum_r + eff * sum_a);
+    const Hit hit;
+    const int N = 1 << 20;
+    double T[3][3] = {}, delay_sum = 0;
+    int elastic = 0;
+    for (int k = 0; k < N; ++k) {
+        const VertexEvent ev = bsdf->sample_vertex_event(hit, float((k + 0.5) / N));
+        ASSERT_TRUE(ev.transfers);
+        const ColorMatrix& t = ev.transfer;
+        const bool diagonal = t.m[0][1] == 0 && t.m[0][2] == 0 && t.m[1][0] == 0 &&
+                              t.m[1][2] == 0 && t.m[2][0] == 0 && t.m[2][1] == 0;
+        if (diagonal) {  // elastic: at once, the reflectance over its probability
+            ++elastic;
+            ASSERT_EQ(ev.delay, 0.0);
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(t.m[c][c], r[c] / p, 1e-6);
+        } else {
+            ASSERT_GE(ev.delay, 0.0);
+            ASSERT_TRUE(std::isfinite(ev.delay));
+            delay_sum += ev.delay;
+        }
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) T[i][j] += t.m[i][j];
+    }
+    EXPECT_NEAR(double(elastic) / N, p, 2.0 / N);
+    EXPECT_NEAR(delay_sum / (N - elastic), tau, 1e-3 * tau);
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const double expected = (i == j ? r[i] : 0.0) + eff * em[i] / sum_em * a[j];
+            EXPECT_NEAR(T[i][j] / N, expected, 1e-4) << i << "," << j;
+        }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -674,6 +774,125 @@ TEST(Transient, FluorescenceIsReemittedInTheEmissionColour) {
                           << img[3 * p + 2] << "), expected (0, " << L << ", 0)";
     }
     EXPECT_EQ(wrong, 0);
+}
+
+TEST(Transient, FluorescentWithoutFluorescenceRendersLikeDiffuse) {
+    // Without fluorescent energy (absorption 0, or efficiency 0) the material has no vertex
+    // event and evaluates diffuse's expressions: the path tracer makes the same calls and draws
+    // the same random numbers, so the images agree bit for bit, not only within noise. The
+    // `fluorescent` scene at max_depth 4 exercises NEE, MIS and bounces off sphere and floor.
+    const std::string xml = read_text(kScenes + "fluorescent/scene.xml");
+    ASSERT_FALSE(xml.empty());
+    const std::string r = "<rgb name=\"reflectance\" value=\"0.1, 0.5, 0.08\"/>";
+    auto render_with = [&](const std::string& bsdf) {
+        auto scene = load_scene_string(
+            replace_element(xml, "<bsdf type=\"fluorescent\">", "</bsdf>", bsdf),
+            defines({{"res", "16"}, {"spp", "16"}, {"max_depth", "4"}}), kScenes + "fluorescent");
+        return render_steady(*scene, 7);
+    };
+    const auto diffuse = render_with("<bsdf type=\"diffuse\">" + r + "</bsdf>");
+    const auto no_absorption = render_with("<bsdf type=\"fluorescent\">" + r +
+                                           "<rgb name=\"absorption\" value=\"0, 0, 0\"/></bsdf>");
+    const auto no_yield = render_with("<bsdf type=\"fluorescent\">" + r +
+                                      "<rgb name=\"absorption\" value=\"0.6, 0.4, 0.9\"/>"
+                                      "<float name=\"efficiency\" value=\"0\"/></bsdf>");
+    ASSERT_EQ(diffuse.size(), no_absorption.size());
+    ASSERT_EQ(diffuse.size(), no_yield.size());
+    int differ_a = 0, differ_y = 0;
+    double total = 0;
+    for (size_t i = 0; i < diffuse.size(); ++i) {
+        differ_a += diffuse[i] != no_absorption[i];
+        differ_y += diffuse[i] != no_yield[i];
+        total += diffuse[i];
+    }
+    EXPECT_GT(total, 0.0);
+    EXPECT_EQ(differ_a, 0) << "absorption 0: values differing from `diffuse`";
+    EXPECT_EQ(differ_y, 0) << "efficiency 0: values differing from `diffuse`";
+}
+
+TEST(Transient, ElasticReflectionArrivesAtOnceFluorescenceOneLifetimeLater) {
+    // Fig. 5.16 in the sphere seen from inside (white point light at the centre, direct light
+    // only): the material reflects r = (0, 0.6, 0.2) at once and absorbs a = (0.7, 0.3, 0.8),
+    // re-emitting it as red (efficiency 0.8) after an Exp(tau) delay. Red is pure fluorescence,
+    // green and blue pure elastic reflection. Every camera sample sees the same geometry, so
+    // each is elastic with probability p = sum(r) / (sum(r) + eff sum(a)), contributing
+    // (0, r.g, r.b) L / p at t0 = 2R, or fluorescent, contributing (eff sum(a) L / (1 - p), 0, 0)
+    // at t0 + D, with L = I / (pi R^2).
+    const double eff = 0.8, rg = 0.6, rb = 0.2, sum_a = 0.7 + 0.3 + 0.8;
+    const std::string bsdf =
+        "<bsdf type=\"fluorescent\"><rgb name=\"reflectance\" value=\"0, 0.6, 0.2\"/>"
+        "<rgb name=\"absorption\" value=\"0.7, 0.3, 0.8\"/><rgb name=\"emission\" "
+        "value=\"1, 0, 0\"/><float name=\"efficiency\" value=\"0.8\"/><float "
+        "name=\"lifetime\" value=\"" +
+        std::to_string(kTau) + "\"/></bsdf>";
+    auto scene = load_scene_string(sphere_scene(bsdf));
+    const Cube cube = render_cube(*scene, 37, "fluo-elastic");
+    ASSERT_EQ(cube.T, kBins);
+    const double L = kSphereI / (M_PI * kSphereR * kSphereR), t0 = 2 * kSphereR;
+    const int b0 = bin_of(kStart, kWidth, kBins, t0), spp = 16;
+    const double p = (rg + rb) / (rg + rb + eff * sum_a);
+    const double red_per_sample = eff * sum_a * L / (1 - p), green_per_sample = rg * L / p;
+
+    // Per pixel, exactly: green and blue only at t0 in the ratio r.g : r.b, nothing before t0;
+    // the number of elastic samples k (from green) is an integer and the red (time-integrated)
+    // is what the other spp - k samples carry. Tolerances are float rounding (the cube sums
+    // in float, < 1e-5 relative), plus the red tail past the window (exp(-7.9 / tau) ~ 1e-7).
+    double green = 0, blue = 0, red = 0;
+    for (int y = 0; y < kRes; ++y)
+        for (int x = 0; x < kRes; ++x) {
+            double red_px = 0;
+            for (int t = 0; t < kBins; ++t) {
+                if (t != b0) {
+                    ASSERT_EQ(cube.at(y, x, t, 1), 0.f) << x << "," << y << " bin " << t;
+                    ASSERT_EQ(cube.at(y, x, t, 2), 0.f) << x << "," << y << " bin " << t;
+                }
+                if (t < b0) {
+                    ASSERT_EQ(cube.at(y, x, t, 0), 0.f) << x << "," << y << " bin " << t;
+                }
+                red_px += cube.at(y, x, t, 0);
+            }
+            const double g = cube.at(y, x, b0, 1), b = cube.at(y, x, b0, 2);
+            EXPECT_NEAR(b, g * rb / rg, 1e-5 * g);
+            const double k = g * spp / green_per_sample;
+            EXPECT_NEAR(k, std::round(k), 1e-3) << x << "," << y;
+            EXPECT_NEAR(red_px, (spp - std::round(k)) / spp * red_per_sample,
+                        1e-5 * red_per_sample);
+            green += g;
+            blue += b;
+            red += red_px;
+        }
+    // The colour split over the image: N = res^2 spp independent binary choices, so the means
+    // are r.g L (elastic) and eff sum(a) L (fluorescent) with binomial standard errors
+    // r.g L sqrt((1 - p) / (p N)) and eff sum(a) L sqrt(p / ((1 - p) N)); 4 of them allowed.
+    const double n = double(kRes) * kRes * spp, pixels = double(kRes) * kRes;
+    EXPECT_NEAR(green / pixels, rg * L, 4 * rg * L * std::sqrt((1 - p) / (p * n)));
+    EXPECT_NEAR(blue / pixels, rb * L, 4 * rb * L * std::sqrt((1 - p) / (p * n)));
+    EXPECT_NEAR(red / pixels, eff * sum_a * L, 4 * eff * sum_a * L * std::sqrt(p / ((1 - p) * n)));
+
+    // Timing: the elastic part at t0 exactly, the fluorescent part's mean arrival t0 + tau (up
+    // to binning and the window, expected_binned_mean), within 4 standard errors of the ratio
+    // estimator (mean_time).
+    EXPECT_NEAR(mean_time(cube, 1).mean, kStart + (b0 + 0.5) * kWidth, 1e-9);
+    const MeanTime m = mean_time(cube, 0);
+    EXPECT_GT(m.standard_error, 0.0);
+    EXPECT_NEAR(m.mean, expected_binned_mean(t0, kTau), 4 * m.standard_error)
+        << "fluorescent mean arrival " << m.mean << ", elastic " << t0 << ", lifetime " << kTau;
+}
+
+TEST(Transient, TwoSidedForwardsTheVertexEvent) {
+    // `twosided` forwards its child's vertex event: seen from the front, the wrapped material
+    // makes the same calls with the same random numbers as the material itself (bit-identical
+    // images). Without forwarding the sphere would render white instead of green.
+    auto plain = load_scene_string(sphere_scene(kFluorescentBsdf));
+    auto wrapped =
+        load_scene_string(sphere_scene("<bsdf type=\"twosided\">" + kFluorescentBsdf + "</bsdf>"));
+    const auto a = render_steady(*plain, 13), b = render_steady(*wrapped, 13);
+    ASSERT_EQ(a.size(), b.size());
+    int differ = 0;
+    for (size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
+    EXPECT_EQ(differ, 0);
+    EXPECT_EQ(a[0], 0.f);  // red: absorbed blue comes back green only
+    EXPECT_GT(a[1], 0.f);
 }
 
 TEST(Transient, VarianceAovMatchesTheSpreadAcrossSeeds) {

@@ -36,6 +36,22 @@ struct BsdfSample {
     bool valid() const { return pdf > 0.f; }
 };
 
+/// One sampled event at a path vertex, on top of the directional scattering of eval() and
+/// sample(). A material with several kinds of event (e.g. elastic reflection or fluorescence,
+/// thesis Fig. 5.16) picks one per vertex at random.
+struct VertexEvent {
+    /// Scattering delay Delta t_i (eq. 5.13), >= 0, in optical path length (scene units): how
+    /// long the material holds the light before it leaves, e.g. a fluorescence lifetime.
+    double delay = 0.0;
+    /// When true, `transfer` weights the light: in the light direction, light leaving the vertex
+    /// is transfer * (light arriving), applied on top of the eval()/sample() weights. The matrix
+    /// includes 1 / (probability of choosing this event), so the estimator stays unbiased. A
+    /// diagonal matrix is a per-channel weight (applied as cheaply as a BSDF colour);
+    /// off-diagonal entries move energy between colour channels (fluorescence).
+    bool transfers = false;
+    ColorMatrix transfer;  ///< identity by default; only used when `transfers` is true
+};
+
 class Bsdf : public Object {
 public:
     PluginKind kind() const override { return PluginKind::Bsdf; }
@@ -48,16 +64,16 @@ public:
     /// Density of sample() returning wo (non-delta lobes only).
     virtual float pdf(const Hit& hit, const Vec3& wi, const Vec3& wo) const = 0;
 
-    /// Scattering delay (eq. 5.13) in optical path length (scene units): time the material
-    /// holds the light before re-emitting it, e.g. a fluorescence lifetime. Sampled once per
-    /// path vertex; 0 for ordinary materials.
-    virtual double sample_delay(const Hit& /*hit*/, float /*u*/) const { return 0.0; }
-    virtual bool has_delay() const { return false; }
-    /// Colour transfer at a vertex for materials that move energy between colour channels
-    /// (fluorescence): in the light direction, light leaving the vertex is M * (light arriving),
-    /// applied on top of eval()/sample() weights. Only consulted when has_transfer() is true.
-    virtual bool has_transfer() const { return false; }
-    virtual ColorMatrix transfer(const Hit& /*hit*/) const { return {}; }
+    /// Materials whose vertices do more than scatter directionally (delay and/or colour
+    /// transfer, e.g. fluorescence) return true and implement sample_vertex_event(). The
+    /// default (false) is an ordinary material: no delay, colour only in eval()/sample(), and
+    /// no extra cost or random number per vertex.
+    virtual bool has_vertex_event() const { return false; }
+    /// Chooses what happens at this vertex from one uniform `u` in [0, 1) (hit.wi is set).
+    /// The path tracer calls it once per vertex, before next-event estimation and sample(), and
+    /// applies the event to everything leaving the vertex: the light connection and the
+    /// continued path. Only called when has_vertex_event() is true.
+    virtual VertexEvent sample_vertex_event(const Hit& /*hit*/, float /*u*/) const { return {}; }
 
     bool has_delta_only() const { return (flags() & kBsdfSmooth) == 0; }
     bool is_null() const { return flags() == kBsdfNull; }

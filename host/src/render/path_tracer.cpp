@@ -13,6 +13,11 @@ inline float power_heuristic(float a, float b) {
     const float a2 = a * a, b2 = b * b;
     return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.f;
 }
+
+inline bool is_diagonal(const ColorMatrix& m) {
+    return m.m[0][1] == 0.f && m.m[0][2] == 0.f && m.m[1][0] == 0.f && m.m[1][2] == 0.f &&
+           m.m[2][0] == 0.f && m.m[2][1] == 0.f;
+}
 }  // namespace
 
 void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, ContributionList& out,
@@ -23,7 +28,7 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
     Ray ray = camera_ray;
     Color throughput(1.f);
     // Camera-side weight = mix * diag(throughput); mix stays the identity (and unused) until
-    // a colour-transferring material (fluorescence) is met.
+    // a vertex event moves energy between colour channels (fluorescence).
     ColorMatrix mix;
     bool mixing = false;
     auto weighted = [&](const Color& c) {
@@ -60,11 +65,20 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
         }
         if (opt.max_depth >= 0 && depth >= opt.max_depth) break;
 
-        if (bsdf.has_delay()) path_length += bsdf.sample_delay(hit, sampler.next_1d());
-        if (bsdf.has_transfer()) {
-            mix = (mixing ? mix : ColorMatrix()).scale_columns(throughput) * bsdf.transfer(hit);
-            mixing = true;
-            throughput = Color(1.f);
+        // The vertex's event (delay, colour transfer) applies to everything leaving it.
+        if (bsdf.has_vertex_event()) {
+            const VertexEvent ev = bsdf.sample_vertex_event(hit, sampler.next_1d());
+            path_length += ev.delay;
+            if (ev.transfers) {
+                const ColorMatrix& t = ev.transfer;
+                if (is_diagonal(t)) {  // mix * diag(throughput) * diag(t): stay in the fast path
+                    throughput *= Color(t.m[0][0], t.m[1][1], t.m[2][2]);
+                } else {
+                    mix = (mixing ? mix : ColorMatrix()).scale_columns(throughput) * t;
+                    mixing = true;
+                    throughput = Color(1.f);
+                }
+            }
         }
 
         // Next-event estimation: its contribution arrives at its own time.

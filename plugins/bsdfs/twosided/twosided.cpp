@@ -4,6 +4,7 @@
 // (wi.z > 0). On the back side (wi.z < 0) the second child is used (the first when there is
 // only one), evaluated in the mirrored frame: both directions have their z negated before
 // the call, and a sampled direction has its z negated after it. wi.z == 0 scatters nothing.
+// The children's vertex events (Bsdf::sample_vertex_event) are forwarded the same way.
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,6 +56,23 @@ public:
         if (wi.z > 0.f) return front_->pdf(hit, wi, wo);
         if (wi.z < 0.f) return back_->pdf(hit, flip_z(wi), flip_z(wo));
         return 0.f;
+    }
+
+    // The side's vertex event (delay, colour transfer: e.g. a two-sided `fluorescent`), with
+    // wi mirrored on the back side as for the other calls.
+    bool has_vertex_event() const override {
+        return front_->has_vertex_event() || back_->has_vertex_event();
+    }
+
+    VertexEvent sample_vertex_event(const Hit& hit, float u) const override {
+        if (hit.wi.z > 0.f && front_->has_vertex_event())
+            return front_->sample_vertex_event(hit, u);
+        if (hit.wi.z < 0.f && back_->has_vertex_event()) {
+            Hit mirrored = hit;
+            mirrored.wi = flip_z(hit.wi);
+            return back_->sample_vertex_event(mirrored, u);
+        }
+        return {};  // this side has no event
     }
 
 private:
