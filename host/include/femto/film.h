@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,10 @@ public:
         items_.clear();
         sensor_distance_ = -1.0;
     }
+    /// Index of this camera sample within its pixel (0, 1, ...), set by the renderer. A
+    /// progressive temporal filter uses it as the iteration number of its bandwidth schedule.
+    void set_sample_index(uint32_t index) { sample_index_ = index; }
+    uint32_t sample_index() const { return sample_index_; }
     const std::vector<Contribution>& items() const { return items_; }
     /// Length of the camera ray's first segment (scene units), set by the integrator at the
     /// first hit; negative when the ray escaped. Films use it for world time (eq. 4.1) and
@@ -42,6 +47,7 @@ public:
 private:
     std::vector<Contribution> items_;
     double sensor_distance_ = -1.0;
+    uint32_t sample_index_ = 0;
 };
 
 /// Metadata recorded into every output file.
@@ -101,6 +107,13 @@ public:
     virtual void merge(const FilmBlock& block) = 0;
     /// Called before each render pass (pass 0, 1, ...) starts.
     virtual void start_pass(uint32_t /*pass*/) {}
+    /// Samples per pixel of a pilot pass this film needs before rendering (0: none), e.g. for
+    /// a temporal filter that estimates its bandwidth from the pilot's arrival times. The
+    /// renderer then calls begin_pilot(), runs that pass (with its own random streams) through
+    /// make_block()/merge(), and calls end_pilot(); pilot samples are not part of the image.
+    virtual uint32_t pilot_samples() const { return 0; }
+    virtual void begin_pilot() {}
+    virtual void end_pilot() {}
     /// Latest path length (scene units) this film records; paths beyond it may stop.
     virtual double max_path_length() const;
     /// Whether pixel row y receives any sample (a streak film records only a few rows);

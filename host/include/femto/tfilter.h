@@ -3,8 +3,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "femto/color.h"
+#include "femto/film.h"
 #include "femto/object.h"
 #include "femto/time.h"
 
@@ -18,15 +21,74 @@ struct BinWeight {
 class TemporalFilter : public Object {
 public:
     PluginKind kind() const override { return PluginKind::TemporalFilter; }
-    /// Appends the bins a unit contribution at time t reaches, for pixel `pixel` (index
-    /// y * width + x), with the integral of the kernel over each bin. Weights sum to the part
-    /// of the kernel inside the window (1 for a histogram when t is inside it).
-    virtual void splat(const TimeGrid& grid, uint64_t pixel, double t,
+
+    /// Called once by the film before anything else, with its time grid and pixel count
+    /// (pixels are indexed y * width + x).
+    virtual void prepare(const TimeGrid& /*grid*/, uint64_t /*pixels*/) {}
+
+    /// Appends the bins that a unit contribution at time t reaches in pixel `pixel`, with the
+    /// integral of the filter's kernel over each bin. `sample_index` is the camera sample's
+    /// index within its pixel (0, 1, ...): progressive filters shrink their kernel with it.
+    /// The weights sum to the part of the kernel inside the window (for a histogram: 1 when
+    /// t is inside it, else nothing). Called concurrently from several threads.
+    virtual void splat(const TimeGrid& grid, uint64_t pixel, uint32_t sample_index, double t,
                        std::vector<BinWeight>& out) const = 0;
-    /// Called before render pass `pass` (0, 1, ...) starts; progressive kernels shrink here.
-    virtual void start_pass(uint32_t /*pass*/) {}
-    /// How far (in time) a contribution may spread from t; 0 for a histogram.
+
+    /// Largest distance in time from t that splat() may reach; 0 for a histogram. Films let
+    /// paths run this much past the end of the window.
     virtual double max_radius() const { return 0.0; }
+
+    /// Samples per pixel of a pilot pass this filter needs (0: none). After the pilot, the
+    /// film calls pilot_pixel() once for every pixel the pilot reached (concurrently for
+    /// different pixels) and then end_pilot() once.
+    virtual uint32_t pilot_samples() const { return 0; }
+    /// The recorded times of all contributions of the pilot samples in `pixel` (unordered;
+    /// the filter may reorder them).
+    virtual void pilot_pixel(uint64_t /*pixel*/, std::vector<double>& /*times*/) {}
+    virtual void end_pilot() {}
+};
+
+/// The nested <tfilter> of a film's properties, or a histogram when there is none.
+std::shared_ptr<TemporalFilter> read_temporal_filter(const Properties& props);
+
+/// Reconstructs one camera sample's contributions in time for one film pixel: calls
+/// add(bin, value) for every (contribution, bin) pair, value = radiance x bin weight.
+/// Returns the energy the filter moved across the window's edges (kernel mass of in-window
+/// contributions that fell outside, minus that of outside contributions that fell inside),
+/// so that the sum over bins + the returned spill = the sum of the in-window contributions.
+template <typename Add>
+Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t pixel,
+                   const ContributionList& sample, bool world_time, std::vector<BinWeight>& scratch,
+                   Add&& add) {
+    const bool spreads = filter.max_radius() > 0;
+    Color spill(0.f);
+    for (const Contribution& c : sample.items()) {
+        const double t = recorded_time(c.path_length, sample.sensor_distance(), world_time);
+        scratch.clear();
+        filter.splat(grid, pixel, sample.sample_index(), t, scratch);
+        float inside = 0.f;
+        for (const BinWeight& bw : scratch) {
+            add(bw.bin, c.radiance * bw.weight);
+            inside += bw.weight;
+        }
+        if (spreads) spill += c.radiance * ((grid.bin_of(t) >= 0 ? 1.f : 0.f) - inside);
+    }
+    return spill;
+}
+
+/// Film block for a temporal filter's pilot pass: keeps, for every pixel of its tile, the
+/// recorded times of the contributions of the samples that fall in the pixel, and hands
+/// them to the filter in deliver() (call it from the film's merge()).
+class PilotBlock final : public FilmBlock {
+public:
+    PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time);
+    void put(Vec2 pos, const ContributionList& sample) override;
+    void deliver(TemporalFilter& filter) const;
+
+private:
+    int x0_, y0_, w_, h_, film_width_;
+    bool world_time_;
+    mutable std::vector<std::vector<double>> times_;  // [h_][w_]
 };
 
 }  // namespace femto

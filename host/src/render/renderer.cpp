@@ -129,19 +129,14 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     constexpr uint64_t kMaxPassSamples = uint64_t(1) << 22;
     const uint32_t pass_spp = uint32_t(
         std::max<uint64_t>(1, std::min<uint64_t>((spp + 15) / 16, kMaxPassSamples / pixels)));
-    Progress progress(options.progress, pixels * spp);
+    const uint32_t pilot_spp = film.pilot_samples();
+    Progress progress(options.progress, pixels * (uint64_t(spp) + pilot_spp));
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
         [&] { return prototype.clone(); });
     tbb::enumerable_thread_specific<ContributionList> lists;
 
-    const uint64_t rays_before = scene.rays_traced();
-    const auto start = Clock::now();
-    RenderStats stats;
-    stats.spp_requested = spp;
-    uint32_t pass = 0;
-    for (uint32_t s0 = 0; s0 < spp; s0 += pass_spp, ++pass) {
-        const uint32_t s1 = std::min(spp, s0 + pass_spp);
-        film.start_pass(pass);
+    // Samples [s0, s1) of every pixel, tiles of one colour at a time.
+    auto run_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1) {
         for (const auto& tiles : by_colour) {
             tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
                 enable_flush_to_zero();
@@ -154,11 +149,12 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                     for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
                         const uint64_t pixel = uint64_t(y) * uint64_t(W) + uint64_t(x);
                         for (uint32_t s = s0; s < s1; ++s) {
-                            sampler.start(options.seed, pixel, s);
+                            sampler.start(seed, pixel, s);
                             const Vec2 jitter = sampler.next_2d();
                             const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
                             const Ray ray = sensor.sample_ray(pos, sampler.next_2d());
                             list.clear();
+                            list.set_sample_index(s);
                             integrator.sample(scene, sampler, ray, list);
                             block->put(pos, list);
                         }
@@ -168,6 +164,23 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                 progress.advance(uint64_t(tile.w) * uint64_t(tile.h) * (s1 - s0));
             });
         }
+    };
+
+    const uint64_t rays_before = scene.rays_traced();
+    const auto start = Clock::now();
+    RenderStats stats;
+    stats.spp_requested = spp;
+    if (pilot_spp > 0) {
+        // The pilot's random streams are independent of the image's (another seed).
+        film.begin_pilot();
+        run_pass(options.seed ^ 0x9E3779B97F4A7C15ull, 0, pilot_spp);
+        film.end_pilot();
+    }
+    uint32_t pass = 0;
+    for (uint32_t s0 = 0; s0 < spp; s0 += pass_spp, ++pass) {
+        const uint32_t s1 = std::min(spp, s0 + pass_spp);
+        film.start_pass(pass);
+        run_pass(options.seed, s0, s1);
         stats.spp_done = s1;
         if (options.stop && options.stop->load() && s1 < spp) {
             stats.interrupted = true;

@@ -90,12 +90,8 @@ public:
         exposure_ = float(props.get_float("exposure", 0.0));
         rows_ = parse_rows(props, height_);
         std::sort(rows_.begin(), rows_.end());
-        auto filters = props.objects(PluginKind::TemporalFilter);
-        if (filters.size() > 1) props.fail("tfilter", "a film takes at most one <tfilter>");
-        tfilter_ = std::static_pointer_cast<TemporalFilter>(
-            filters.empty()
-                ? create_default_object(PluginKind::TemporalFilter, "histogram", props.location())
-                : filters[0]);
+        tfilter_ = read_temporal_filter(props);
+        tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
         const double bytes = double(rows_.size()) * width_ * grid_.bins * 3 * sizeof(float);
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the streak images would need {:.1f} GiB (limit 64 GiB)",
@@ -115,10 +111,21 @@ public:
     }
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
+        if (pilot_) return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time_);
         return std::make_unique<StreakBlock>(*this, x0, y0, w, h, filter_border());
+    }
+    uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
+    void begin_pilot() override { pilot_ = true; }
+    void end_pilot() override {
+        tfilter_->end_pilot();
+        pilot_ = false;
     }
 
     void merge(const FilmBlock& b) override {
+        if (pilot_) {
+            static_cast<const PilotBlock&>(b).deliver(*tfilter_);
+            return;
+        }
         const auto& block = static_cast<const StreakBlock&>(b);
         invalid_ += block.invalid_;
         const size_t T3 = size_t(grid_.bins) * 3;
@@ -138,7 +145,6 @@ public:
         }
     }
 
-    void start_pass(uint32_t pass) override { tfilter_->start_pass(pass); }
     double max_path_length() const override {
         // As the transient film: in world time the sensor segment is subtracted later.
         return world_time_ ? std::numeric_limits<double>::infinity()
@@ -202,6 +208,7 @@ public:
 
     TimeGrid grid_;
     bool world_time_ = false;
+    bool pilot_ = false;  // between begin_pilot() and end_pilot()
     float exposure_ = 0;
     std::shared_ptr<TemporalFilter> tfilter_;
     std::vector<int> rows_;         // sorted
@@ -231,7 +238,6 @@ StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, i
 
 void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
     if (rows_.empty()) return;
-    const double sensor = sample.sensor_distance();
     for (const auto& c : sample.items())
         if (!c.radiance.is_finite()) {
             ++invalid_;
@@ -245,18 +251,13 @@ void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
             weights_[local] += w;
             const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
             float* px = &data_[local * size_t(bins_) * 3];
-            for (const auto& c : sample.items()) {
-                const double t = recorded_time(c.path_length, sensor, film_.world_time_);
-                scratch_.clear();
-                film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
-                for (const BinWeight& bw : scratch_) {
-                    const float s = w * bw.weight;
-                    float* v = px + size_t(bw.bin) * 3;
-                    v[0] += s * c.radiance.r;
-                    v[1] += s * c.radiance.g;
-                    v[2] += s * c.radiance.b;
-                }
-            }
+            splat_sample(*film_.tfilter_, film_.grid_, pixel, sample, film_.world_time_, scratch_,
+                         [&](int bin, const Color& v) {
+                             float* dst = px + size_t(bin) * 3;
+                             dst[0] += w * v.r;
+                             dst[1] += w * v.g;
+                             dst[2] += w * v.b;
+                         });
         });
 }
 

@@ -27,10 +27,11 @@ namespace {
 using namespace femto;
 
 struct PixelWeights {
-    double weight = 0;        // sum of filter weights of all samples
-    double weight2 = 0;       // sum of their squares (effective sample count, aovs="variance")
-    double depth_sum = 0;     // sum of w * sensor distance over samples that hit something
-    double depth_weight = 0;  // sum of w over those samples
+    double weight = 0;            // sum of filter weights of all samples
+    double weight2 = 0;           // sum of their squares (effective sample count, aovs="variance")
+    double depth_sum = 0;         // sum of w * sensor distance over samples that hit something
+    double depth_weight = 0;      // sum of w over those samples
+    double spill[3] = {0, 0, 0};  // sum of w * energy the tfilter moved out of the window
 };
 
 class TransientFilm;
@@ -96,13 +97,9 @@ public:
                 props.fail("aovs", fmt::format("unknown AOV \"{}\"; valid: count, variance", item));
             pos = end + 1;
         }
-        auto filters = props.objects(PluginKind::TemporalFilter);
-        if (filters.size() > 1) props.fail("tfilter", "a film takes at most one <tfilter>");
-        tfilter_ = std::static_pointer_cast<TemporalFilter>(
-            filters.empty()
-                ? create_default_object(PluginKind::TemporalFilter, "histogram", props.location())
-                : filters[0]);
+        tfilter_ = read_temporal_filter(props);
         const size_t pixels = size_t(width_) * size_t(height_);
+        tfilter_->prepare(grid_, pixels);
         const double bytes = double(pixels) * grid_.bins * 3 * sizeof(float);
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the cube would need {:.1f} GiB (limit 64 GiB)",
@@ -122,7 +119,14 @@ public:
     }
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
+        if (pilot_) return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time_);
         return std::make_unique<CubeBlock>(*this, x0, y0, w, h, filter_border());
+    }
+    uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
+    void begin_pilot() override { pilot_ = true; }
+    void end_pilot() override {
+        tfilter_->end_pilot();
+        pilot_ = false;
     }
 
     /// A zeroed storage for a block of `pixels` pixels, recycled when possible.
@@ -152,6 +156,10 @@ public:
     }
 
     void merge(const FilmBlock& b) override {
+        if (pilot_) {
+            static_cast<const PilotBlock&>(b).deliver(*tfilter_);
+            return;
+        }
         const auto& block = static_cast<const CubeBlock&>(b);
         BlockStorage& st = *block.st_;
         invalid_ += block.invalid_;
@@ -194,13 +202,13 @@ public:
                 d.weight2 += s.weight2;
                 d.depth_sum += s.depth_sum;
                 d.depth_weight += s.depth_weight;
+                for (int c = 0; c < 3; ++c) d.spill[c] += s.spill[c];
             }
             s = PixelWeights();
         }
         block.clean_ = true;
     }
 
-    void start_pass(uint32_t pass) override { tfilter_->start_pass(pass); }
     double max_path_length() const override {
         // In world time the sensor segment is subtracted later, so paths may run that much
         // longer; the integrator cannot know it in advance, so do not cut them early.
@@ -230,6 +238,19 @@ public:
         return scale;
     }
 
+    /// Image mean of the energy the temporal kernel moved out of the window (per pixel,
+    /// normalised like the image): adding it to the steady image's mean gives what a
+    /// histogram would sum to over the window.
+    std::pair<std::string, std::string> window_spill_attribute() const {
+        double mean[3] = {0, 0, 0};
+        for (const PixelWeights& pw : weights_)
+            if (pw.weight > 0)
+                for (int c = 0; c < 3; ++c) mean[c] += pw.spill[c] / pw.weight;
+        const double n = double(weights_.size());
+        return {"femto:window_spill",
+                fmt::format("{:.9g} {:.9g} {:.9g}", mean[0] / n, mean[1] / n, mean[2] / n)};
+    }
+
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
         if (invalid_ > 0)
@@ -240,8 +261,9 @@ public:
         for (size_t p = 0; p < pixels; ++p)
             if (weights_[p].depth_weight > 0)
                 depth[p] = float(weights_[p].depth_sum / weights_[p].depth_weight);
-        const io::Attributes attrs =
+        io::Attributes attrs =
             io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
+        if (tfilter_->max_radius() > 0) attrs.push_back(window_spill_attribute());
         const std::vector<float> scale = pixel_normalisation();
         std::vector<std::string> files;
         files.push_back(out_base + ".exr");
@@ -287,6 +309,7 @@ public:
 
     TimeGrid grid_;
     bool world_time_ = false, count_enabled_ = false, variance_enabled_ = false;
+    bool pilot_ = false;  // between begin_pilot() and end_pilot()
     float exposure_ = 0;
     std::shared_ptr<TemporalFilter> tfilter_;
     std::vector<float> cube_, count_, sq_;
@@ -328,6 +351,7 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
     clean_ = false;
     BlockStorage& st = *st_;
     const bool variance = !st.sq.empty(), count = !st.count.empty();
+    const TemporalFilter& tfilter = *film_.tfilter_;
     for_each_filter_pixel(
         film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
             const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
@@ -339,17 +363,15 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                 pw.depth_weight += w;
             }
             const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
+            Color spill;
             if (variance) {
                 // Variance needs this sample's value per bin (several contributions may share a
                 // bin), then w * v into the cube and w * v^2 into the second moment.
                 sample_bins_.clear();
-                for (const auto& c : sample.items()) {
-                    const double t = recorded_time(c.path_length, sensor, film_.world_time_);
-                    scratch_.clear();
-                    film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
-                    for (const BinWeight& bw : scratch_)
-                        sample_bins_.push_back({bw.bin, c.radiance * bw.weight});
-                }
+                spill = splat_sample(tfilter, film_.grid_, pixel, sample, film_.world_time_,
+                                     scratch_, [&](int bin, const Color& v) {
+                                         sample_bins_.push_back({bin, v});
+                                     });
                 std::sort(sample_bins_.begin(), sample_bins_.end(),
                           [](const auto& a, const auto& b) { return a.first < b.first; });
                 for (size_t i = 0; i < sample_bins_.size();) {
@@ -365,22 +387,18 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                     }
                     if (count) st.count[flat] += float(n);
                 }
-                return;
+            } else {
+                spill = splat_sample(tfilter, film_.grid_, pixel, sample, film_.world_time_,
+                                     scratch_, [&](int bin, const Color& v) {
+                                         const size_t flat = touch(local, bin);
+                                         float* dst = &st.cube[flat * 3];
+                                         dst[0] += w * v.r;
+                                         dst[1] += w * v.g;
+                                         dst[2] += w * v.b;
+                                         if (count) st.count[flat] += 1.f;
+                                     });
             }
-            for (const auto& c : sample.items()) {
-                const double t = recorded_time(c.path_length, sensor, film_.world_time_);
-                scratch_.clear();
-                film_.tfilter_->splat(film_.grid_, pixel, t, scratch_);
-                for (const BinWeight& bw : scratch_) {
-                    const size_t flat = touch(local, bw.bin);
-                    const float s = w * bw.weight;
-                    float* v = &st.cube[flat * 3];
-                    v[0] += s * c.radiance.r;
-                    v[1] += s * c.radiance.g;
-                    v[2] += s * c.radiance.b;
-                    if (count) st.count[flat] += 1.f;
-                }
-            }
+            for (int ch = 0; ch < 3; ++ch) pw.spill[ch] += double(w) * spill[ch];
         });
 }
 

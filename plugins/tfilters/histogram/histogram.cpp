@@ -12,7 +12,7 @@ class Histogram final : public TemporalFilter {
 public:
     explicit Histogram(const Properties&) {}
 
-    void splat(const TimeGrid& grid, uint64_t, double t,
+    void splat(const TimeGrid& grid, uint64_t, uint32_t, double t,
                std::vector<BinWeight>& out) const override {
         const int bin = grid.bin_of(t);
         if (bin >= 0) out.push_back({bin, 1.f});

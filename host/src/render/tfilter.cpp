@@ -1,0 +1,51 @@
+// Shared parts of temporal reconstruction: reading a film's <tfilter> and the pilot pass.
+#include "femto/tfilter.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "femto/plugin.h"
+#include "femto/properties.h"
+
+namespace femto {
+
+std::shared_ptr<TemporalFilter> read_temporal_filter(const Properties& props) {
+    auto filters = props.objects(PluginKind::TemporalFilter);
+    if (filters.size() > 1) props.fail("tfilter", "a film takes at most one <tfilter>");
+    return std::static_pointer_cast<TemporalFilter>(
+        filters.empty()
+            ? create_default_object(PluginKind::TemporalFilter, "histogram", props.location())
+            : filters[0]);
+}
+
+PilotBlock::PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time)
+    : x0_(x0),
+      y0_(y0),
+      w_(w),
+      h_(h),
+      film_width_(film_width),
+      world_time_(world_time),
+      times_(size_t(w) * size_t(h)) {}
+
+void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
+    // The pixel that holds the sample (no reconstruction filter: the pilot only measures how
+    // arrivals spread in time).
+    const int x = int(std::floor(pos.x)), y = int(std::floor(pos.y));
+    if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) return;
+    auto& times = times_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
+    for (const Contribution& c : sample.items())
+        if (c.radiance.is_finite() && std::isfinite(c.path_length))
+            times.push_back(recorded_time(c.path_length, sample.sensor_distance(), world_time_));
+}
+
+void PilotBlock::deliver(TemporalFilter& filter) const {
+    for (int y = 0; y < h_; ++y)
+        for (int x = 0; x < w_; ++x) {
+            auto& times = times_[size_t(y) * size_t(w_) + size_t(x)];
+            filter.pilot_pixel(uint64_t(y0_ + y) * uint64_t(film_width_) + uint64_t(x0_ + x),
+                               times);
+            std::vector<double>().swap(times);
+        }
+}
+
+}  // namespace femto

@@ -1,0 +1,237 @@
+// Progressive kernel density estimation in time (thesis ch. 5.5, eq. 5.17, appendix 5.A).
+//
+// Each contribution at time t is spread over the bins by a normalised kernel K_T of
+// half-width ("bandwidth") T, integrated exactly over every bin it overlaps, so the bins of a
+// pixel still sum to its steady value (up to the kernel mass that falls outside the window;
+// the films account for it). The estimate is progressive: the j-th camera sample of every
+// pixel (j = 1, 2, ...) uses T_j, shrinking as T_{j+1} / T_j = (j + alpha) / (j + 1), i.e.
+// T_j = T_1 / (j alpha B(alpha, j)) (eq. 5.47). The film's average over samples is then the
+// average of the per-iteration estimates, whose variance falls as O(n^-alpha) and squared
+// bias as O(n^-4(1-alpha)); alpha = 4/5 balances them (AMSE O(n^-4/5), eq. 5.52).
+// Iterations are counted per pixel sample, not per render pass, so the result does not depend
+// on how the renderer groups samples into passes or threads.
+//
+// T_1 is `bandwidth` when given. Otherwise it adapts to where arrivals are dense (ch. 5.7
+// uses 40 nearest neighbours): a pilot pass of `pilot_spp` samples per pixel (independent
+// random streams, not part of the image) records each pixel's arrival times, and a
+// contribution at time t gets T_1 = the distance from t to its k-th nearest pilot arrival in
+// its pixel (`k_neighbors`). A sharp direct-light peak thus keeps a narrow kernel while the
+// sparse indirect tail is smoothed widely; each kernel is still normalised, so energy is
+// kept (a "sample-point" adaptive estimate). T_1 is clamped to [half a bin, 1/8 of the
+// window]. Memory is bounded: a pixel keeps at most 128 evenly spaced order statistics of its
+// arrivals, with k scaled by the same factor. Pixels with fewer than two pilot arrivals use
+// the median bandwidth of the others.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "femto/plugin.h"
+#include "femto/tfilter.h"
+
+namespace {
+
+using namespace femto;
+
+enum class Shape { Box, Epanechnikov, Perlin, Gaussian };
+
+// Cumulative distribution of the canonical kernel on [-1, 1] (0 below, 1 above).
+double kernel_cdf(Shape shape, double u) {
+    if (u <= -1.0) return 0.0;
+    if (u >= 1.0) return 1.0;
+    switch (shape) {
+        case Shape::Box:
+            return 0.5 * (u + 1.0);
+        case Shape::Epanechnikov:  // k(u) = 3/4 (1 - u^2)
+            return 0.5 + 0.75 * u - 0.25 * u * u * u;
+        case Shape::Perlin: {  // k(u) = 1 - (6x^5 - 15x^4 + 10x^3), x = |u|: Perlin's smootherstep
+            const double x = std::abs(u), x4 = x * x * x * x;
+            const double half = x - 2.5 * x4 + 3.0 * x4 * x - x4 * x * x;  // integral over [0, x]
+            return u >= 0 ? 0.5 + half : 0.5 - half;
+        }
+        case Shape::Gaussian: {  // sigma = 1/3, truncated at 3 sigma and renormalised
+            static const double norm = std::erf(3.0 / std::sqrt(2.0));
+            return 0.5 + 0.5 * std::erf(3.0 * u / std::sqrt(2.0)) / norm;
+        }
+    }
+    return 0.0;
+}
+
+class KernelFilter final : public TemporalFilter {
+public:
+    explicit KernelFilter(const Properties& props) {
+        const std::string kernel = props.get_string("kernel", "perlin");
+        if (kernel == "box")
+            shape_ = Shape::Box;
+        else if (kernel == "epanechnikov")
+            shape_ = Shape::Epanechnikov;
+        else if (kernel == "perlin")
+            shape_ = Shape::Perlin;
+        else if (kernel == "gaussian")
+            shape_ = Shape::Gaussian;
+        else
+            props.fail("kernel",
+                       fmt::format("unknown kernel \"{}\"; valid: box, epanechnikov, perlin, "
+                                   "gaussian",
+                                   kernel));
+        alpha_ = props.get_float("alpha", 0.8);
+        if (!(alpha_ > 0.0 && alpha_ <= 1.0))
+            props.fail("alpha", "alpha must lie in (0, 1] (1 keeps the bandwidth fixed)");
+        if (props.has("bandwidth")) {
+            fixed_bandwidth_ = props.get_float("bandwidth");
+            if (!(fixed_bandwidth_ > 0.0) || !std::isfinite(fixed_bandwidth_))
+                props.fail("bandwidth", "bandwidth must be positive and finite (scene units)");
+        }
+        const int64_t k = props.get_int("k_neighbors", 40);
+        if (k < 1 || k > 100000) props.fail("k_neighbors", "k_neighbors must lie in [1, 100000]");
+        k_neighbors_ = size_t(k);
+        const int64_t pilot = props.get_int("pilot_spp", 64);
+        if (pilot < 1 || pilot > 65536) props.fail("pilot_spp", "pilot_spp must lie in [1, 65536]");
+        pilot_spp_ = uint32_t(pilot);
+        if (fixed_bandwidth_ > 0 && (props.has("k_neighbors") || props.has("pilot_spp")))
+            props.fail(props.has("k_neighbors") ? "k_neighbors" : "pilot_spp",
+                       "k_neighbors and pilot_spp choose the bandwidth from a pilot pass; they "
+                       "cannot be combined with a given bandwidth");
+        schedule_.resize(4096);
+        for (size_t j = 0; j < schedule_.size(); ++j) schedule_[j] = closed_form(uint32_t(j));
+    }
+
+    void prepare(const TimeGrid& grid, uint64_t pixels) override {
+        grid_ = grid;
+        if (fixed_bandwidth_ > 0) {
+            max_t1_ = fixed_bandwidth_;
+        } else {
+            pilot_.assign(size_t(pixels), PixelPilot());
+            arrivals_.assign(size_t(pixels) * kMaxArrivals, 0.f);
+            max_t1_ = 0.0;  // during the pilot: paths stop at the window's end
+        }
+    }
+
+    /// T_j / T_1 for sample index j - 1: the product of eq. 5.47 in closed form,
+    /// Gamma(alpha + j) / (Gamma(alpha + 1) Gamma(j + 1)).
+    double closed_form(uint32_t sample_index) const {
+        const double j = double(sample_index) + 1.0;
+        return std::exp(std::lgamma(alpha_ + j) - std::lgamma(alpha_ + 1.0) - std::lgamma(j + 1.0));
+    }
+    double shrink(uint32_t sample_index) const {
+        return sample_index < schedule_.size() ? schedule_[sample_index]
+                                               : closed_form(sample_index);
+    }
+
+    /// T_1 for a contribution at time t in `pixel` (0 before the pilot has run).
+    double initial_bandwidth(uint64_t pixel, double t) const {
+        if (fixed_bandwidth_ > 0) return fixed_bandwidth_;
+        if (pixel >= pilot_.size()) return 0.0;
+        const PixelPilot& pp = pilot_[size_t(pixel)];
+        if (pp.count < 2) return pp.fallback;
+        const float* a = &arrivals_[size_t(pixel) * kMaxArrivals];
+        const size_t n = pp.count, k = pp.k;
+        // The k nearest arrivals form a run of k consecutive sorted arrivals next to t.
+        const size_t p = size_t(std::lower_bound(a, a + n, float(t)) - a);
+        double best = std::numeric_limits<double>::infinity();
+        const size_t l0 = p >= k ? p - k : 0, l1 = std::min(p, n - k);
+        for (size_t l = l0; l <= l1; ++l)
+            best = std::min(best, std::max(t - double(a[l]), double(a[l + k - 1]) - t));
+        return clamp_bandwidth(best);
+    }
+
+    void splat(const TimeGrid& grid, uint64_t pixel, uint32_t sample_index, double t,
+               std::vector<BinWeight>& out) const override {
+        const double T = initial_bandwidth(pixel, t) * shrink(sample_index);
+        if (!(T > 0.0)) {  // no bandwidth known (pilot not run for this pixel): a histogram
+            const int bin = grid.bin_of(t);
+            if (bin >= 0) out.push_back({bin, 1.f});
+            return;
+        }
+        const double lo = std::max(t - T, grid.start), hi = std::min(t + T, grid.end());
+        if (!(lo < hi)) return;
+        const int first = std::max(0, int(std::floor((lo - grid.start) / grid.bin_width)));
+        const int last =
+            std::min(grid.bins - 1, int(std::floor((hi - grid.start) / grid.bin_width)));
+        const double inv = 1.0 / T;
+        double below = kernel_cdf(shape_, (lo - t) * inv);
+        for (int b = first; b <= last; ++b) {
+            const double edge = std::min(hi, grid.start + double(b + 1) * grid.bin_width);
+            const double upto = kernel_cdf(shape_, (edge - t) * inv);
+            if (upto > below) out.push_back({b, float(upto - below)});
+            below = upto;
+        }
+    }
+
+    double max_radius() const override { return max_t1_; }
+
+    uint32_t pilot_samples() const override { return fixed_bandwidth_ > 0 ? 0 : pilot_spp_; }
+
+    void pilot_pixel(uint64_t pixel, std::vector<double>& times) override {
+        if (pixel >= pilot_.size() || times.size() < 2) return;
+        std::sort(times.begin(), times.end());
+        const size_t n = times.size(), m = std::min(n, kMaxArrivals);
+        PixelPilot& pp = pilot_[size_t(pixel)];
+        float* a = &arrivals_[size_t(pixel) * kMaxArrivals];
+        for (size_t i = 0; i < m; ++i)  // evenly spaced order statistics
+            a[i] = float(times[m == n ? i : (i * (n - 1)) / (m - 1)]);
+        pp.count = uint32_t(m);
+        // k of n neighbours, scaled to the m kept; at least 1 and at most m - 1.
+        pp.k = uint32_t(std::clamp<size_t>(
+            size_t(std::lround(double(k_neighbors_) * double(m) / double(n))), 1, m - 1));
+    }
+
+    void end_pilot() override {
+        // Fallback for pixels without pilot arrivals: the median over pixels of the bandwidth
+        // at their median arrival.
+        std::vector<double> typical;
+        for (size_t p = 0; p < pilot_.size(); ++p)
+            if (pilot_[p].count >= 2)
+                typical.push_back(initial_bandwidth(
+                    p, double(arrivals_[p * kMaxArrivals + pilot_[p].count / 2])));
+        double fallback = clamp_bandwidth(std::numeric_limits<double>::infinity());
+        if (!typical.empty()) {
+            std::nth_element(typical.begin(), typical.begin() + ptrdiff_t(typical.size() / 2),
+                             typical.end());
+            fallback = typical[typical.size() / 2];
+        }
+        for (PixelPilot& pp : pilot_) pp.fallback = float(fallback);
+        max_t1_ = clamp_bandwidth(std::numeric_limits<double>::infinity());
+    }
+
+private:
+    double clamp_bandwidth(double t) const {
+        const double lo = 0.5 * grid_.bin_width,
+                     hi = std::max(lo, 0.125 * grid_.bin_width * grid_.bins);
+        return std::clamp(std::isnan(t) ? hi : t, lo, hi);
+    }
+
+    Shape shape_ = Shape::Perlin;
+    double alpha_ = 0.8;
+    double fixed_bandwidth_ = 0.0;
+    size_t k_neighbors_ = 40;
+    uint32_t pilot_spp_ = 64;
+    TimeGrid grid_;
+    std::vector<double> schedule_;  // T_j / T_1 for the first sample indices
+    static constexpr size_t kMaxArrivals = 128;
+    struct PixelPilot {
+        uint32_t count = 0;  // arrivals kept (sorted) in arrivals_
+        uint32_t k = 0;      // neighbours counted among them
+        float fallback = 0;  // T_1 when the pixel had fewer than two arrivals
+    };
+    std::vector<PixelPilot> pilot_;  // per pixel
+    std::vector<float> arrivals_;    // [pixel][kMaxArrivals]
+    double max_t1_ = 0.0;
+};
+
+}  // namespace
+
+FEMTO_PLUGIN(
+    KernelFilter, femto::PluginKind::TemporalFilter, "kernel",
+    "Progressive kernel density estimation in time (ch. 5.5): the bandwidth shrinks with "
+    "every sample per pixel",
+    {{"kernel", "string", "perlin", "kernel shape: box, epanechnikov, perlin or gaussian"},
+     {"alpha", "float", "0.8",
+      "shrinking rate: T_{j+1} / T_j = (j + alpha) / (j + 1); 4/5 minimises the asymptotic MSE"},
+     {"bandwidth", "float", "",
+      "initial half-width T_1 of the kernel (scene units); without it, a pilot pass estimates "
+      "T_1 per pixel"},
+     {"k_neighbors", "integer", "40",
+      "pilot: T_1 at time t is the distance from t to its k-th nearest pilot arrival"},
+     {"pilot_spp", "integer", "64", "pilot: samples per pixel of the pilot pass"}})

@@ -1,0 +1,229 @@
+// Tests of the `kernel` temporal filter (progressive kernel density estimation in time,
+// thesis ch. 5.5 and appendix 5.A): exact bin integrals of each kernel, the shrinking
+// schedule of eq. 5.47, the pilot's nearest-neighbour bandwidth, and bad parameters.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "femto/error.h"
+#include "femto/host.h"
+#include "femto/tfilter.h"
+
+namespace {
+
+using namespace femto;
+
+struct Param {
+    std::string name;
+    std::string value;  // parsed by type below
+    char type;          // 'f' float, 'i' integer, 's' string
+};
+
+std::shared_ptr<TemporalFilter> make_kernel(const std::vector<Param>& params) {
+    Properties props("kernel", {});
+    for (const Param& p : params) {
+        if (p.type == 'f') props.set_float(p.name, std::stod(p.value));
+        if (p.type == 'i') props.set_int(p.name, std::stoll(p.value));
+        if (p.type == 's') props.set_string(p.name, p.value);
+    }
+    return std::static_pointer_cast<TemporalFilter>(
+        create_object(PluginKind::TemporalFilter, "kernel", props));
+}
+
+TimeGrid grid(double start, double width, int bins) {
+    TimeGrid g;
+    g.start = start;
+    g.bin_width = width;
+    g.bins = bins;
+    return g;
+}
+
+// The canonical kernels on [-1, 1], written out independently of the plugin's CDFs.
+double kernel_density(const std::string& kernel, double u) {
+    if (std::abs(u) > 1) return 0;
+    if (kernel == "box") return 0.5;
+    if (kernel == "epanechnikov") return 0.75 * (1 - u * u);
+    if (kernel == "perlin") {
+        const double x = std::abs(u);
+        return 1 - x * x * x * (x * (6 * x - 15) + 10);
+    }
+    // gaussian, sigma = 1/3, truncated at 3 sigma
+    const double sigma = 1.0 / 3.0;
+    return std::exp(-0.5 * u * u / (sigma * sigma)) /
+           (sigma * std::sqrt(2 * M_PI) * std::erf(3 / std::sqrt(2.0)));
+}
+
+// Integral of K_T(s - t) over s in [a, b] by the midpoint rule (error ~1e-9 here).
+double kernel_integral(const std::string& kernel, double T, double t, double a, double b) {
+    constexpr int kSteps = 20000;
+    const double h = (b - a) / kSteps;
+    double sum = 0;
+    for (int i = 0; i < kSteps; ++i) sum += kernel_density(kernel, (a + (i + 0.5) * h - t) / T);
+    return sum * h / T;
+}
+
+const char* const kKernels[] = {"box", "epanechnikov", "perlin", "gaussian"};
+
+TEST(KernelFilter, BinWeightsAreTheKernelIntegratedOverEachBin) {
+    const TimeGrid g = grid(1.0, 0.1, 50);  // window [1, 6)
+    const double T = 0.37;
+    for (const char* kernel : kKernels) {
+        SCOPED_TRACE(kernel);
+        EXPECT_NEAR(kernel_integral(kernel, 1.0, 0.0, -1.0, 1.0), 1.0, 1e-6);  // normalised
+        auto f = make_kernel({{"kernel", kernel, 's'}, {"bandwidth", "0.37", 'f'}});
+        f->prepare(g, 4);
+        // Inside, across both edges, and (partly) outside the window.
+        for (double t : {3.0, 3.013, 1.05, 0.8, 5.9, 6.2, 0.5, 6.5}) {
+            SCOPED_TRACE(t);
+            std::vector<BinWeight> out;
+            f->splat(g, 2, 0, t, out);
+            std::vector<double> got(size_t(g.bins), 0.0);
+            for (const BinWeight& bw : out) {
+                ASSERT_GE(bw.bin, 0);
+                ASSERT_LT(bw.bin, g.bins);
+                got[size_t(bw.bin)] += bw.weight;
+            }
+            double total = 0;
+            for (int b = 0; b < g.bins; ++b) {
+                const double a = g.start + b * g.bin_width;
+                const double expected = kernel_integral(kernel, T, t, a, a + g.bin_width);
+                EXPECT_NEAR(got[size_t(b)], expected, 2e-6) << "bin " << b;
+                total += got[size_t(b)];
+            }
+            // What lands in the window is the kernel's mass inside it.
+            EXPECT_NEAR(total, kernel_integral(kernel, T, t, g.start, g.end()), 1e-5);
+            if (t - T >= g.start && t + T <= g.end()) {
+                EXPECT_NEAR(total, 1.0, 1e-5);
+            }
+        }
+        EXPECT_DOUBLE_EQ(f->max_radius(), T);
+    }
+}
+
+// Measures T_j with a box kernel: a bin that lies wholly inside the support holds
+// bin_width / (2 T_j).
+double measured_bandwidth(const TemporalFilter& f, const TimeGrid& g, uint32_t sample_index) {
+    std::vector<BinWeight> out;
+    const double t = g.start + (g.bins / 2 + 0.5) * g.bin_width;
+    f.splat(g, 0, sample_index, t, out);
+    for (const BinWeight& bw : out)
+        if (bw.bin == g.bins / 2) return g.bin_width / (2.0 * bw.weight);
+    return 0;
+}
+
+TEST(KernelFilter, BandwidthShrinksAsEq547) {
+    // T_{j+1} / T_j = (j + alpha) / (j + 1), so T_j = T_1 prod_{k<j} (k + alpha) / (k + 1)
+    // = T_1 / (j alpha B(alpha, j)) (eq. 5.47). Checked against the product, accumulated here
+    // in long double, for sample indices within and beyond the plugin's precomputed table.
+    const TimeGrid g = grid(0.0, 1e-4, 40000);  // bins much narrower than any T_j below
+    for (double alpha : {0.5, 0.8, 2.0 / 3.0, 1.0}) {
+        SCOPED_TRACE(alpha);
+        auto f = make_kernel({{"kernel", "box", 's'},
+                              {"bandwidth", "1", 'f'},
+                              {"alpha", std::to_string(alpha), 'f'}});
+        f->prepare(g, 1);
+        long double product = 1.0L;
+        for (uint32_t j = 1; j <= 20000; ++j) {
+            if (j == 1 || j == 2 || j == 10 || j == 4096 || j == 4097 || j == 20000) {
+                const double expected = double(product);
+                EXPECT_NEAR(measured_bandwidth(*f, g, j - 1), expected, 2e-4 * expected)
+                    << "j = " << j;
+                // The closed form with the Beta function, B(a, j) = G(a) G(j) / G(a + j).
+                const double beta =
+                    std::exp(std::lgamma(alpha) + std::lgamma(double(j)) - std::lgamma(alpha + j));
+                EXPECT_NEAR(1.0 / (j * alpha * beta), expected, 1e-9 * expected);
+            }
+            product *= (j + (long double)alpha) / (j + 1.0L);
+        }
+        if (alpha == 1.0) {
+            EXPECT_NEAR(measured_bandwidth(*f, g, 5000), 1.0, 2e-4);
+        }
+        // Asymptotically T_j ~ j^(alpha - 1) (Stirling): the variance of a pass grows as
+        // (j + 1) / (j + alpha), eq. 5.41.
+    }
+}
+
+TEST(KernelFilter, PilotBandwidthIsTheDistanceToTheKthNearestArrival) {
+    const TimeGrid g = grid(0.0, 0.001, 1000);  // window [0, 1)
+    auto f = make_kernel({{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}});
+    EXPECT_EQ(f->pilot_samples(), 64u);  // default pilot
+    f->prepare(g, 3);
+    // Pixel 0: 1000 arrivals evenly spread over [0, 1): the 40th nearest neighbour of a time
+    // in the middle is 40 / 2 spacings away, 0.02. (The plugin keeps 128 order statistics,
+    // with k scaled to round(40 * 128 / 1000) = 5: 2.5 of their spacings, 1/127 each.)
+    std::vector<double> uniform(1000);
+    for (size_t i = 0; i < uniform.size(); ++i) uniform[i] = (double(i) + 0.5) / 1000.0;
+    std::shuffle(uniform.begin(), uniform.end(), std::mt19937(3));
+    f->pilot_pixel(0, uniform);
+    // Pixel 1: a sharp peak of 500 arrivals at 0.3 on the same background: the kernel there
+    // must stay narrow (at the lower clamp of half a bin), while the background keeps a
+    // wide one.
+    std::vector<double> peaked(uniform);
+    for (int i = 0; i < 500; ++i) peaked.push_back(0.3 + 1e-7 * i);
+    f->pilot_pixel(1, peaked);
+    // Pixel 2: no arrivals: the median of the others' bandwidths.
+    std::vector<double> none;
+    f->pilot_pixel(2, none);
+    f->end_pilot();
+
+    auto bandwidth_at = [&](uint64_t pixel, double t) {
+        std::vector<BinWeight> out;
+        f->splat(g, pixel, 0, t, out);
+        double max_weight = 0;
+        for (const BinWeight& bw : out) max_weight = std::max(max_weight, double(bw.weight));
+        return g.bin_width / (2.0 * max_weight);  // box: a full bin holds width / (2 T)
+    };
+    EXPECT_NEAR(bandwidth_at(0, 0.5), 2.5 / 127.0, 0.002);
+    EXPECT_NEAR(bandwidth_at(0, 0.5), 0.02, 0.002);
+    EXPECT_NEAR(bandwidth_at(1, 0.3005), 0.5 * g.bin_width, 1e-9);  // bin 300's centre
+    EXPECT_GT(bandwidth_at(1, 0.8), 0.01);
+    // Pixel 2 takes the larger (upper median of two) of the others' bandwidths at their median
+    // arrivals: pixel 0's, where the run of 5 kept arrivals holding it spans 2 spacings
+    // either side (pixel 1's median arrival is in the peak).
+    EXPECT_NEAR(bandwidth_at(2, 0.5), 2.0 / 127.0, 0.001);
+    // Wide enough for any pixel: at most 1/8 of the window.
+    EXPECT_NEAR(f->max_radius(), 0.125, 1e-12);
+}
+
+TEST(KernelFilter, WithoutPilotDataItActsAsAHistogram) {
+    // Before the pilot has run (or for pixels the film never sent to it) nothing is known
+    // about the arrivals: the contribution lands in its own bin, so energy is never lost.
+    const TimeGrid g = grid(0.0, 0.1, 10);
+    auto f = make_kernel({});
+    f->prepare(g, 1);
+    std::vector<BinWeight> out;
+    f->splat(g, 0, 0, 0.55, out);
+    ASSERT_EQ(out.size(), 1u);
+    EXPECT_EQ(out[0].bin, 5);
+    EXPECT_FLOAT_EQ(out[0].weight, 1.f);
+    EXPECT_DOUBLE_EQ(f->max_radius(), 0.0);  // the pilot's paths stop at the window's end
+}
+
+TEST(KernelFilter, RejectsBadParameters) {
+    auto error = [](const std::vector<Param>& params) {
+        try {
+            make_kernel(params);
+        } catch (const SceneError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(error({{"kernel", "triangle", 's'}}).find("epanechnikov"), std::string::npos);
+    EXPECT_NE(error({{"alpha", "0", 'f'}}).find("alpha"), std::string::npos);
+    EXPECT_NE(error({{"alpha", "1.5", 'f'}}).find("alpha"), std::string::npos);
+    EXPECT_NE(error({{"alpha", "nan", 'f'}}).find("alpha"), std::string::npos);
+    EXPECT_NE(error({{"bandwidth", "-1", 'f'}}).find("bandwidth"), std::string::npos);
+    EXPECT_NE(error({{"bandwidth", "inf", 'f'}}).find("bandwidth"), std::string::npos);
+    EXPECT_NE(error({{"k_neighbors", "0", 'i'}}).find("k_neighbors"), std::string::npos);
+    EXPECT_NE(error({{"pilot_spp", "-3", 'i'}}).find("pilot_spp"), std::string::npos);
+    EXPECT_NE(
+        error({{"bandwidth", "1", 'f'}, {"k_neighbors", "10", 'i'}}).find("cannot be combined"),
+        std::string::npos);
+}
+
+}  // namespace
