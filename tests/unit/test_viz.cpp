@@ -371,7 +371,7 @@ TEST(Viz, LoadsExrAndNpyCubesAndRejectsOtherFiles) {
 // An orthographic camera at z = 5 over a diffuse plane lit by a point light at height 2; the
 // film is `film` (transient or streak) with `filter`.
 std::string streak_scene(const std::string& film_type, const std::string& extra,
-                         const std::string& filter) {
+                         const std::string& filter, const std::string& tfilter = "") {
     return "<scene version=\"3.0.0\"><integrator type=\"transient_path\"><integer "
            "name=\"max_depth\" value=\"3\"/></integrator>"
            "<sensor type=\"orthographic\"><transform name=\"to_world\"><scale x=\"3\" y=\"3\"/>"
@@ -382,7 +382,7 @@ std::string streak_scene(const std::string& film_type, const std::string& extra,
            "\"><integer name=\"width\" value=\"40\"/><integer name=\"height\" value=\"36\"/>"
            "<float name=\"start\" value=\"6.5\"/><float name=\"bin_width\" value=\"0.1\"/>"
            "<integer name=\"bins\" value=\"40\"/>" +
-           extra + "<rfilter type=\"" + filter +
+           extra + tfilter + "<rfilter type=\"" + filter +
            "\"/></film></sensor>"
            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2.5\"/>"
            "</transform><bsdf type=\"diffuse\"/></shape>"
@@ -403,11 +403,11 @@ void expect_close(float a, float b, const std::string& what) {
     ASSERT_NEAR(a, b, 1e-6 * std::max(std::abs(a), std::abs(b)) + 1e-12) << what;
 }
 
-void check_streak_matches_transient(const std::string& filter) {
+void check_streak_matches_transient(const std::string& filter, const std::string& tfilter = "") {
     const std::vector<int> rows = {3, 32};  // 32 starts the second row of 32-pixel tiles
-    auto transient = load_scene_string(streak_scene("transient", "", filter));
+    auto transient = load_scene_string(streak_scene("transient", "", filter, tfilter));
     auto streak = load_scene_string(
-        streak_scene("streak", "<string name=\"rows\" value=\"32, 3\"/>", filter));
+        streak_scene("streak", "<string name=\"rows\" value=\"32, 3\"/>", filter, tfilter));
     RenderOptions ro;
     ro.seed = 7;
     ro.threads = 2;
@@ -458,6 +458,14 @@ void check_streak_matches_transient(const std::string& filter) {
 }
 
 TEST(StreakFilm, EqualsTransientRowsBoxFilter) { check_streak_matches_transient("box"); }
+// The kernel filter's pilot samples each pixel of the recorded rows with the same random
+// streams in both films, so the bandwidths, and then the rows, agree.
+TEST(StreakFilm, EqualsTransientRowsKernelFilter) {
+    check_streak_matches_transient("gaussian",
+                                   "<tfilter type=\"kernel\"><integer name=\"pilot_spp\" "
+                                   "value=\"8\"/><integer name=\"k_neighbors\" value=\"5\"/>"
+                                   "</tfilter>");
+}
 TEST(StreakFilm, EqualsTransientRowsGaussianFilter) { check_streak_matches_transient("gaussian"); }
 
 TEST(StreakFilm, SkipsRowsOutsideTheFootprint) {
