@@ -219,10 +219,10 @@ int cmd_streak(const io::Cube& cube) {
         viz::tone_map(img.data(), pixels, viz::reference_level(img), g_opts.exposure, tone));
     announce(g_opts.output);
     if (!g_opts.exr.empty()) {
+        // The streak film's format, with the row's depth in channel Z when the cube has it.
         io::Attributes attrs = time_attributes(cube);
         attrs.emplace_back("femto:row", std::to_string(g_opts.row));
-        attrs.emplace_back("femto:layout", "streak image: x to the right, time downward");
-        io::write_exr_rgb(g_opts.exr, cube.width, cube.bins, img.data(), attrs);
+        viz::write_streak_exr(g_opts.exr, cube, g_opts.row, std::move(attrs));
         announce(g_opts.exr);
     }
     return 0;
@@ -239,17 +239,23 @@ int cmd_unwarp(const io::Cube& cube, const viz::TimeAxis& axis) {
                    "femto viz: warning: {:.3g}% of the energy was shifted outside the time "
                    "window (--keep-window) and dropped\n",
                    100.0 * r.dropped);
-    io::write_exr_cube(g_opts.output, r.cube.width, r.cube.height, r.cube.bins, r.cube.data.data(),
-                       r.cube.depth.data(), r.cube.attributes);
+    const bool streak = viz::is_streak(r.cube);
+    if (streak)  // a streak image in, a streak image out (RGB + Z, same layout)
+        viz::write_streak_exr(g_opts.output, r.cube, 0, r.cube.attributes);
+    else
+        io::write_exr_cube(g_opts.output, r.cube.width, r.cube.height, r.cube.bins,
+                           r.cube.data.data(), r.cube.depth.data(), r.cube.attributes);
     if (!g_opts.quiet)
-        fmt::print(stderr, "wrote {} ({} time, {} bins from {})\n", g_opts.output, g_opts.to,
-                   r.cube.bins, *r.cube.attribute("femto:start"));
+        fmt::print(stderr, "wrote {} ({}{} time, {} bins from {})\n", g_opts.output,
+                   streak ? "streak image, " : "", g_opts.to, r.cube.bins,
+                   *r.cube.attribute("femto:start"));
     return 0;
 }
 
 CLI::App* add_common(CLI::App* sub) {
     sub->add_option("cube", g_opts.cube,
-                    "The cube: OUTBASE.exr of a transient film, or OUTBASE.npy ([H, W, T, C])")
+                    "The cube: OUTBASE.exr of a transient film, or OUTBASE.npy ([H, W, T, C]); "
+                    "unwarp also takes a streak image (OUTBASE_rowRRRR.exr)")
         ->required();
     sub->add_option("--start", g_opts.start,
                     "Start of the time window (scene units); needed for a .npy when times matter");
@@ -315,14 +321,18 @@ CLI::App* add_viz_command(CLI::App& app) {
         "time increasing downward"));
     g_streak->add_option("--row", g_opts.row, "The row (0 = top)")->required();
     g_streak->add_option("-o,--output", g_opts.output, "Output PNG")->required();
-    g_streak->add_option("--exr", g_opts.exr, "Also write the slice (linear RGB) as EXR");
+    g_streak->add_option("--exr", g_opts.exr,
+                         "Also write the slice as EXR in the streak film's format (linear RGB, "
+                         "plus the row's depth as channel Z when the cube has it)");
     add_tone(g_streak);
 
     g_unwarp = add_common(g_viz->add_subcommand(
         "unwarp",
         "Time unwarping (eq. 4.1): shift each pixel's time series by its sensor distance (the "
-        "cube's depth part) to convert camera time to world time or back; writes a cube EXR"));
-    g_unwarp->add_option("-o,--output", g_opts.output, "Output cube (.exr)")->required();
+        "cube's depth part, a streak image's channel Z) to convert camera time to world time "
+        "or back; writes a cube EXR, or a streak image for a streak image"));
+    g_unwarp->add_option("-o,--output", g_opts.output, "Output cube or streak image (.exr)")
+        ->required();
     g_unwarp->add_option("--to", g_opts.to, "Target time frame: world or camera")
         ->required()
         ->check(CLI::IsMember({"world", "camera"}));
@@ -334,6 +344,17 @@ CLI::App* add_viz_command(CLI::App& app) {
 
 int run_viz_command() {
     const io::Cube cube = viz::load_cube(g_opts.cube);
+    if (viz::is_streak(cube) && !g_unwarp->parsed()) {
+        // Frames, peak-time and rainbow images of one row are a pixel tall, and a streak
+        // image already is the streak slice of its row.
+        const std::string* row = cube.attribute("femto:row");
+        const CLI::App* sub = g_viz->get_subcommands().front();
+        throw SceneError(fmt::format(
+            "\"{}\" is a streak image (the x-t image of row {}), not an x-y-t cube: `femto viz "
+            "{}` needs a cube (OUTBASE.exr of a transient film); of the viz subcommands only "
+            "unwarp takes streak images",
+            g_opts.cube, row ? *row : "?", sub->get_name()));
+    }
     const viz::TimeAxis axis = viz::time_axis(cube, g_opts.start, g_opts.bin_width);
     if (g_frames->parsed()) return cmd_frames(cube);
     if (g_peak->parsed()) return cmd_peak_time(cube, axis);

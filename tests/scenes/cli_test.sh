@@ -17,6 +17,25 @@ expect_exit() {
 }
 exr_attr() { iinfo -v "$1" | sed -n "s/^ *$2: *\"\{0,1\}\([^\"]*\)\"\{0,1\}$/\1/p"; }
 no_temp_files() { ! ls -A "$1" | grep -q '\.tmp'; }
+# A small streak-film scene (rows 5 and 12 of 32x24, 30 bins) on stdout.
+streak_scene() {
+  cat <<'XML'
+<scene version="3.0.0">
+  <integrator type="transient_path"/>
+  <sensor type="orthographic">
+    <transform name="to_world"><scale x="2" y="2"/><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+    <film type="streak">
+      <integer name="width" value="32"/><integer name="height" value="24"/>
+      <string name="rows" value="5, 12"/>
+      <float name="start" value="6.5"/><float name="bin_width" value="0.1"/><integer name="bins" value="30"/>
+    </film>
+  </sensor>
+  <shape type="rectangle"><transform name="to_world"><scale value="3"/></transform></shape>
+  <emitter type="point"><point name="position" x="0" y="0" z="2"/><rgb name="intensity" value="5"/></emitter>
+</scene>
+XML
+}
 
 case "$case_name" in
 version)
@@ -151,22 +170,7 @@ viz_bad_input)
   expect_exit 2 'subcommand' -- "$femto" viz
   [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;
 streak_film)
-  cat > streak.xml <<'XML'
-<scene version="3.0.0">
-  <integrator type="transient_path"/>
-  <sensor type="orthographic">
-    <transform name="to_world"><scale x="2" y="2"/><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
-    <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
-    <film type="streak">
-      <integer name="width" value="32"/><integer name="height" value="24"/>
-      <string name="rows" value="5, 12"/>
-      <float name="start" value="6.5"/><float name="bin_width" value="0.1"/><integer name="bins" value="30"/>
-    </film>
-  </sensor>
-  <shape type="rectangle"><transform name="to_world"><scale value="3"/></transform></shape>
-  <emitter type="point"><point name="position" x="0" y="0" z="2"/><rgb name="intensity" value="5"/></emitter>
-</scene>
-XML
+  streak_scene > streak.xml
   "$femto" render streak.xml -o out/st -q || fail "render failed"
   for r in 0005 0012; do
     [ -s out/st_row$r.exr ] && [ -s out/st_row$r.png ] || fail "row $r outputs missing"; done
@@ -175,6 +179,44 @@ XML
   [ "$(iinfo out/st_row0005.exr | sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\),.*/\1x\2/p')" = 32x30 ] || fail "streak size"
   sed 's/value="5, 12"/value="5, 24"/' streak.xml > bad.xml
   expect_exit 2 'bad\.xml:[0-9]+:[0-9]+: .*row 24 is outside the image' -- "$femto" render bad.xml -o out/b -q;;
+viz_streak)
+  # A streak image carries its row's depth (channel Z), so `femto viz unwarp` takes it and
+  # writes a streak image back; the other subcommands refuse it.
+  streak_scene > streak.xml
+  "$femto" render streak.xml -o out/st -q || fail "render failed"
+  oiiotool --info -v out/st_row0012.exr > info.txt 2>&1 || { cat info.txt >&2; fail "oiiotool cannot read the streak EXR"; }
+  grep -q 'channel list: R, G, B, Z' info.txt || { cat info.txt >&2; fail "no channel Z"; }
+  # Z holds each column's depth in every time row: the first and the last row agree.
+  oiiotool out/st_row0012.exr --ch Z --cut 32x1+0+0 -o z_first.exr &&
+    oiiotool out/st_row0012.exr --ch Z --cut 32x1+0+29 -o z_last.exr || fail "oiiotool --ch Z"
+  idiff -fail 0 -warn 0 z_first.exr z_last.exr > idiff.txt || { cat idiff.txt >&2; fail "Z differs between time rows"; }
+  iinfo out/st_row0012.png | grep -q '32 x  *30, 3 channel' || { iinfo out/st_row0012.png >&2; fail "PNG preview"; }
+  "$femto" viz unwarp out/st_row0012.exr -o out/world.exr --to world -q || fail "unwarp to world"
+  [ -s out/world.exr ] || fail "no unwarped streak image"
+  [ "$(exr_attr out/world.exr femto:time)" = world ] || fail "femto:time not world"
+  [ "$(exr_attr out/world.exr femto:row)" = 12 ] || fail "femto:row not kept"
+  exr_attr out/world.exr femto:layout | grep -q '^streak image' || fail "femto:layout not kept"
+  exr_attr out/world.exr femto:unwarped | grep -q 'camera -> world' || fail "femto:unwarped"
+  iinfo -v out/world.exr | grep -q 'channel list: R, G, B, Z' || fail "unwarped image has no Z"
+  [ "$(iinfo out/world.exr | sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\),.*/\1/p')" = 32 ] || fail "unwarped width"
+  "$femto" viz unwarp out/world.exr -o out/camera.exr --to camera -q || fail "unwarp to camera"
+  [ "$(exr_attr out/camera.exr femto:time)" = camera ] || fail "femto:time not camera"
+  expect_exit 2 'already in world time' -- "$femto" viz unwarp out/world.exr -o out/again.exr --to world
+  expect_exit 2 'is a streak image \(the x-t image of row 12\).*`femto viz frames` needs a cube.*only unwarp' -- "$femto" viz frames out/st_row0012.exr -o out/f
+  expect_exit 2 'is a streak image.*`femto viz peak-time`' -- "$femto" viz peak-time out/st_row0012.exr -o out/p.png
+  expect_exit 2 'is a streak image.*`femto viz rainbow`' -- "$femto" viz rainbow out/st_row0012.exr -o out/r.png
+  expect_exit 2 'is a streak image.*`femto viz streak`' -- "$femto" viz streak out/st_row0012.exr --row 0 -o out/s.png
+  # A cube's slice (viz streak --exr) is a streak image too: with the depth of an OpenEXR
+  # cube it can be unwarped; from a .npy (no depth) it has no channel Z.
+  "$femto" render "$scene" -o out/cb -D spp=1 -D res=16 -D bins=8 -q --npy || fail "cube render failed"
+  "$femto" viz streak out/cb.exr --row 5 -o out/slice.png --exr out/slice.exr -q || fail "viz streak"
+  "$femto" viz unwarp out/slice.exr -o out/slice_world.exr --to world -q || fail "unwarp a slice"
+  [ "$(exr_attr out/slice_world.exr femto:time)" = world ] || fail "slice femto:time"
+  "$femto" viz streak out/cb.npy --row 5 -o out/nslice.png --exr out/nslice.exr -q || fail "viz streak .npy"
+  expect_exit 2 'streak image has no channel Z' -- "$femto" viz unwarp out/nslice.exr -o out/nu.exr --to world
+  [ ! -e out/f ] && [ ! -e out/p.png ] && [ ! -e out/r.png ] && [ ! -e out/s.png ] &&
+    [ ! -e out/again.exr ] && [ ! -e out/nu.exr ] || fail "output written"
+  no_temp_files out || fail "temporary files left";;
 viz_mp4)
   # MP4 needs ffmpeg, which femto does not require: skipped (ctest SKIP) when it is missing.
   command -v ffmpeg > /dev/null || { echo "SKIP [$case_name]: no ffmpeg on PATH"; exit 77; }

@@ -8,7 +8,10 @@
 //  - The streak film and the transient film receive the same camera samples (the samplers are
 //    deterministic per pixel and sample index) and add them in the same order (the renderer
 //    merges tiles in a fixed 2x2 colouring), so their rows agree to float rounding: 1e-6
-//    relative, plus 1e-12 absolute for empty bins.
+//    relative, plus 1e-12 absolute for empty bins. Their depths are sums of the same terms in
+//    the same order (1e-6 too). Unwarping both with the same depth interpolates the same two
+//    bins with the same weights: 2e-6 (the inputs' 1e-6 plus the rounding of each side).
+//  - PNG previews of equal images may differ by one 8-bit step (float rounding at a step).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -253,6 +256,115 @@ TEST(Viz, UnwarpNeedsDepthAndTimeFrame) {
     EXPECT_THROW(viz::unwarp(unknown, viz::time_axis(unknown), true), SceneError);  // no axis
 }
 
+// ---- streak images (the x-t image of one row, a cube of height 1) -----------------------------
+
+TEST(Viz, StreakImageFileRoundTrip) {
+    const auto dir = test::temp_dir("viz-streak-file");
+    io::Cube c = make_cube(5, 3, 4, 1.5, 0.25);
+    for (size_t i = 0; i < c.data.size(); ++i) c.data[i] = float(i) * 0.5f;
+    c.depth = {1, 2, 3, 4, 5, 6, 7, -1, 9, 10, 11, 12, 13, 14, 15};
+    io::Attributes attrs = c.attributes;
+    attrs.push_back({"femto:row", "1"});
+    const std::string path = (dir / "s.exr").string();
+    viz::write_streak_exr(path, c, 1, attrs);
+    EXPECT_THROW(viz::write_streak_exr((dir / "x.exr").string(), c, 3, attrs), SceneError);
+    // The image as any reader sees it: RGB, width x bins, time downward.
+    int w = 0, h = 0;
+    const std::vector<float> rgb = io::read_image_rgb(path, w, h, false);
+    EXPECT_EQ(w, 5);
+    EXPECT_EQ(h, 4);
+    EXPECT_EQ(rgb, viz::streak_slice(c, 1));
+    // femto viz reads it as a cube of height 1 with the row's depth (channel Z).
+    const io::Cube s = viz::load_cube(path);
+    ASSERT_TRUE(viz::is_streak(s));
+    EXPECT_FALSE(viz::is_streak(c));
+    EXPECT_EQ(s.width, 5);
+    EXPECT_EQ(s.height, 1);
+    EXPECT_EQ(s.bins, 4);
+    EXPECT_EQ(s.data, std::vector<float>(c.data.begin() + 5 * 4 * 3, c.data.begin() + 10 * 4 * 3));
+    EXPECT_EQ(s.depth, std::vector<float>({6, 7, -1, 9, 10}));
+    EXPECT_EQ(*s.attribute("femto:row"), "1");
+    EXPECT_DOUBLE_EQ(viz::time_axis(s).start, 1.5);
+    EXPECT_EQ(viz::time_axis(s).time, "camera");
+    // Without depth there is no channel Z, and unwarping says what is missing.
+    io::Cube flat = c;
+    flat.depth.clear();
+    viz::write_streak_exr(path, flat, 2, attrs);
+    const io::Cube f = viz::load_cube(path);
+    ASSERT_TRUE(viz::is_streak(f));
+    EXPECT_TRUE(f.depth.empty());
+    try {
+        viz::unwarp(f, viz::time_axis(f), true);
+        ADD_FAILURE();
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("streak image has no channel Z"), std::string::npos)
+            << e.what();
+    }
+    std::filesystem::remove_all(dir);
+}
+
+// As Viz.UnwarpWholeBinsRoundTripIsExact, for a streak image through its file: camera ->
+// world -> camera returns the image, and each output is again a streak image.
+TEST(Viz, StreakImageUnwarpWholeBinsRoundTripIsExact) {
+    const auto dir = test::temp_dir("viz-streak-unwarp");
+    const int W = 6, T = 16;
+    const double bw = 0.25;
+    std::vector<float> depth(W);
+    for (int x = 0; x < W; ++x) depth[size_t(x)] = 0.25f * float(2 * x + 1);  // 1..11 bins
+    depth[3] = -1.f;  // nothing hit: not shifted
+    const io::Cube cam = warped_cube(bw, 6, depth, W, 1, T);
+    io::Attributes attrs = cam.attributes;
+    attrs.push_back({"femto:row", "7"});
+    auto through_file = [&](const io::Cube& c, const std::string& name) {
+        const std::string path = (dir / name).string();
+        viz::write_streak_exr(path, c, 0, c.attributes);
+        io::Cube back = viz::load_cube(path);
+        EXPECT_TRUE(viz::is_streak(back)) << name;
+        EXPECT_EQ(back.data, c.data) << name;
+        EXPECT_EQ(back.depth, c.depth) << name;
+        return back;
+    };
+    io::Cube labelled = cam;
+    labelled.attributes = attrs;
+    const io::Cube in = through_file(labelled, "cam.exr");
+    const io::Cube world = through_file(viz::unwarp(in, viz::time_axis(in), true).cube, "w.exr");
+    EXPECT_EQ(*world.attribute("femto:time"), "world");
+    EXPECT_EQ(*world.attribute("femto:row"), "7");
+    EXPECT_NE(world.attribute("femto:unwarped"), nullptr);
+    EXPECT_EQ(*world.attribute("femto:bins"), std::to_string(world.bins));
+    const double ws = start_of(world);
+    for (int x = 0; x < W; ++x) {
+        const size_t p = size_t(x);
+        const double z = depth[p] > 0 ? depth[p] : 0.0;
+        EXPECT_EQ(pixel_energy(world, x, 0), pixel_energy(cam, x, 0));
+        for (int j = 0; j < world.bins; ++j) {
+            const long i = std::lround((ws + j * bw + z - 3.0) / bw);  // t_world = t_camera - z
+            for (int ch = 0; ch < 3; ++ch) {
+                const float expect =
+                    i >= 0 && i < T ? cam.data[((p * T) + size_t(i)) * 3 + size_t(ch)] : 0.f;
+                ASSERT_EQ(world.data[(p * size_t(world.bins) + size_t(j)) * 3 + size_t(ch)], expect)
+                    << x << " bin " << j;
+            }
+        }
+    }
+    const io::Cube back =
+        through_file(viz::unwarp(world, viz::time_axis(world), false).cube, "c.exr");
+    EXPECT_EQ(*back.attribute("femto:time"), "camera");
+    const double bs = start_of(back);
+    for (size_t p = 0; p < size_t(W); ++p)
+        for (int j = 0; j < back.bins; ++j) {
+            const long i = std::lround((bs + j * bw - 3.0) / bw);
+            for (int ch = 0; ch < 3; ++ch) {
+                const float expect =
+                    i >= 0 && i < T ? cam.data[(p * T + size_t(i)) * 3 + size_t(ch)] : 0.f;
+                ASSERT_EQ(back.data[(p * size_t(back.bins) + size_t(j)) * 3 + size_t(ch)], expect);
+            }
+        }
+    EXPECT_LE(bs, 3.0 + 6 * bw + 1e-12);
+    EXPECT_GE(bs + back.bins * bw, 3.0 + T * bw - 1e-12);
+    std::filesystem::remove_all(dir);
+}
+
 // ---- streak slice, frames, rainbow ----------------------------------------------------------
 
 TEST(Viz, StreakSliceEqualsCubeRow) {
@@ -369,7 +481,8 @@ TEST(Viz, LoadsExrAndNpyCubesAndRejectsOtherFiles) {
 // ---- the streak film ------------------------------------------------------------------------
 
 // An orthographic camera at z = 5 over a diffuse plane lit by a point light at height 2; the
-// film is `film` (transient or streak) with `filter`.
+// film is `film` (transient or streak) with `filter`. The plane is tilted by 10 degrees about
+// y, so that the depth (4.6 to 5.4) varies along a row and across a pixel's filter footprint.
 std::string streak_scene(const std::string& film_type, const std::string& extra,
                          const std::string& filter, const std::string& tfilter = "") {
     return "<scene version=\"3.0.0\"><integrator type=\"transient_path\"><integer "
@@ -385,7 +498,7 @@ std::string streak_scene(const std::string& film_type, const std::string& extra,
            extra + tfilter + "<rfilter type=\"" + filter +
            "\"/></film></sensor>"
            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2.5\"/>"
-           "</transform><bsdf type=\"diffuse\"/></shape>"
+           "<rotate y=\"1\" angle=\"10\"/></transform><bsdf type=\"diffuse\"/></shape>"
            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"0.5\"/>"
            "<rotate x=\"1\" angle=\"90\"/><translate x=\"1\" z=\"0.5\"/></transform>"
            "<bsdf type=\"diffuse\"/></shape>"
@@ -399,22 +512,40 @@ std::string fmt_row(int r) {
     return buf;
 }
 
-void expect_close(float a, float b, const std::string& what) {
-    ASSERT_NEAR(a, b, 1e-6 * std::max(std::abs(a), std::abs(b)) + 1e-12) << what;
+void expect_close(float a, float b, const std::string& what, double rel = 1e-6) {
+    ASSERT_NEAR(a, b, rel * std::max(std::abs(a), std::abs(b)) + 1e-12) << what;
 }
 
-void check_streak_matches_transient(const std::string& filter, const std::string& tfilter = "") {
-    const std::vector<int> rows = {3, 32};  // 32 starts the second row of 32-pixel tiles
-    auto transient = load_scene_string(streak_scene("transient", "", filter, tfilter));
-    auto streak = load_scene_string(
+// The streak scene rendered with the transient film (DIR/t.exr) and with the streak film
+// recording rows 3 and 32 (DIR/s_row0003.exr, DIR/s_row0032.exr), same seed.
+struct StreakAndCube {
+    std::unique_ptr<Scene> transient, streak;
+    std::vector<std::string> streak_files;
+};
+StreakAndCube render_streak_and_cube(const std::filesystem::path& dir, const std::string& filter,
+                                     const std::string& tfilter = "") {
+    StreakAndCube r;
+    r.transient = load_scene_string(streak_scene("transient", "", filter, tfilter));
+    r.streak = load_scene_string(
         streak_scene("streak", "<string name=\"rows\" value=\"32, 3\"/>", filter, tfilter));
     RenderOptions ro;
     ro.seed = 7;
     ro.threads = 2;
-    const RenderStats st = render(*transient, ro);
-    const RenderStats ss = render(*streak, ro);
-    const Film& tf = transient->sensor().film();
-    const Film& sf = streak->sensor().film();
+    const RenderStats st = render(*r.transient, ro);
+    const RenderStats ss = render(*r.streak, ro);
+    r.transient->sensor().film().write((dir / "t").string(),
+                                       make_render_info(*r.transient, ro, st));
+    r.streak_files =
+        r.streak->sensor().film().write((dir / "s").string(), make_render_info(*r.streak, ro, ss));
+    return r;
+}
+
+void check_streak_matches_transient(const std::string& filter, const std::string& tfilter = "") {
+    const std::vector<int> rows = {3, 32};  // 32 starts the second row of 32-pixel tiles
+    const auto dir = test::temp_dir("streak-" + filter);
+    const StreakAndCube both = render_streak_and_cube(dir, filter, tfilter);
+    const Film& tf = both.transient->sensor().film();
+    const Film& sf = both.streak->sensor().film();
     ASSERT_EQ(tf.width(), 40);
     // Steady images: the recorded rows agree, the others are black.
     const std::vector<float> ti = tf.steady_image(), si = sf.steady_image();
@@ -432,12 +563,10 @@ void check_streak_matches_transient(const std::string& filter, const std::string
             }
     EXPECT_GT(energy, 0.0);
     // Per bin: the EXR outputs read back.
-    const auto dir = test::temp_dir("streak-" + filter);
     const std::string tbase = (dir / "t").string(), sbase = (dir / "s").string();
-    tf.write(tbase, make_render_info(*transient, ro, st));
-    const auto files = sf.write(sbase, make_render_info(*streak, ro, ss));
-    ASSERT_EQ(files.size(), 4u);
+    ASSERT_EQ(both.streak_files.size(), 4u);
     const io::Cube cube = io::read_exr_cube(tbase + ".exr");
+    ASSERT_EQ(cube.depth.size(), size_t(40 * 36));
     for (int r : rows) {
         const std::string exr = sbase + fmt_row(r) + ".exr";
         ASSERT_TRUE(std::filesystem::exists(sbase + fmt_row(r) + ".png"));
@@ -452,6 +581,36 @@ void check_streak_matches_transient(const std::string& filter, const std::string
             sum += img[i];
         }
         EXPECT_GT(sum, 0.0);
+        // The depth (channel Z) is the cube's depth row: the same sums of the same samples.
+        const io::Cube s = viz::load_cube(exr);
+        ASSERT_TRUE(viz::is_streak(s));
+        ASSERT_EQ(s.height, 1);
+        ASSERT_EQ(s.depth.size(), 40u);
+        EXPECT_EQ(*s.attribute("femto:row"), std::to_string(r));
+        int hit = 0;
+        float zmin = 1e30f, zmax = 0;
+        for (int x = 0; x < 40; ++x) {
+            const float z = cube.depth[size_t(r) * 40 + size_t(x)];
+            expect_close(s.depth[size_t(x)], z, filter + " depth row " + std::to_string(r));
+            if (z > 0) {
+                ++hit;
+                zmin = std::min(zmin, z);
+                zmax = std::max(zmax, z);
+            }
+        }
+        EXPECT_GT(hit, 20);
+        EXPECT_GT(zmax - zmin, 0.5f);  // the tilted plane
+        // The PNG preview is that of the RGB image.
+        const std::string ref = (dir / "ref.png").string();
+        io::write_png_preview(ref, 40, 40, slice.data());
+        int pw = 0, ph = 0, rw = 0, rh = 0;
+        const std::vector<float> png =
+            io::read_image_rgb(sbase + fmt_row(r) + ".png", pw, ph, false);
+        const std::vector<float> want = io::read_image_rgb(ref, rw, rh, false);
+        ASSERT_EQ(pw, 40);
+        ASSERT_EQ(ph, 40);
+        ASSERT_EQ(png.size(), want.size());
+        for (size_t i = 0; i < png.size(); ++i) ASSERT_NEAR(png[i], want[i], 1.01 / 255) << i;
     }
     EXPECT_EQ(*cube.attribute("femto:bins"), "40");
     std::filesystem::remove_all(dir);
@@ -467,6 +626,66 @@ TEST(StreakFilm, EqualsTransientRowsKernelFilter) {
                                    "</tfilter>");
 }
 TEST(StreakFilm, EqualsTransientRowsGaussianFilter) { check_streak_matches_transient("gaussian"); }
+
+// Unwarping a streak image gives the corresponding row of the unwarped cube: the same depth
+// shifts the same series. Each output window is the bins that hold its energy, so the two are
+// compared on the common time grid. (Keeping the input's window would drop everything here:
+// the scene's world times lie a camera distance, 5, before the window.)
+TEST(StreakFilm, UnwarpEqualsUnwarpedCubeRow) {
+    const auto dir = test::temp_dir("streak-unwarp");
+    render_streak_and_cube(dir, "gaussian");
+    const io::Cube cube = viz::load_cube((dir / "t.exr").string());
+    ASSERT_FALSE(viz::is_streak(cube));
+    const viz::UnwarpResult cw = viz::unwarp(cube, viz::time_axis(cube), true);
+    const double bw = viz::time_axis(cube).bin_width, cs = start_of(cw.cube);
+    for (int r : {3, 32}) {
+        const io::Cube s = viz::load_cube((dir / ("s" + fmt_row(r) + ".exr")).string());
+        const viz::UnwarpResult sw = viz::unwarp(s, viz::time_axis(s), true);
+        ASSERT_TRUE(viz::is_streak(sw.cube));
+        EXPECT_EQ(*sw.cube.attribute("femto:time"), "world");
+        EXPECT_EQ(*sw.cube.attribute("femto:row"), std::to_string(r));
+        // Streak bin j - k is cube bin j (both grids keep the input's alignment).
+        const double ks = (start_of(sw.cube) - cs) / bw;
+        const long k = std::lround(ks);
+        ASSERT_NEAR(ks, double(k), 1e-6);
+        ASSERT_GE(k, 0);  // the cube's window holds every row's energy
+        ASSERT_LE(k + sw.cube.bins, cw.cube.bins);
+        const std::string what = "row " + std::to_string(r);
+        double energy = 0;
+        for (int x = 0; x < 40; ++x) {
+            expect_close(sw.cube.depth[size_t(x)], cw.cube.depth[size_t(r) * 40 + size_t(x)],
+                         what + " depth");
+            for (int j = 0; j < cw.cube.bins; ++j) {  // every bin of the cube's row
+                const long js = long(j) - k;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const float cv =
+                        cw.cube.data[((size_t(r) * 40 + size_t(x)) * size_t(cw.cube.bins) +
+                                      size_t(j)) *
+                                         3 +
+                                     size_t(ch)];
+                    const float sv =
+                        js >= 0 && js < sw.cube.bins
+                            ? sw.cube.data[(size_t(x) * size_t(sw.cube.bins) + size_t(js)) * 3 +
+                                           size_t(ch)]
+                            : 0.f;
+                    expect_close(sv, cv, what + " x " + std::to_string(x), 2e-6);
+                    energy += sv;
+                }
+            }
+        }
+        EXPECT_GT(energy, 0.0) << what;
+        // What `femto viz unwarp` writes for a streak image reads back as the same image.
+        const std::string out = (dir / ("w" + fmt_row(r) + ".exr")).string();
+        viz::write_streak_exr(out, sw.cube, 0, sw.cube.attributes);
+        const io::Cube back = viz::load_cube(out);
+        EXPECT_TRUE(viz::is_streak(back));
+        EXPECT_EQ(back.data, sw.cube.data);
+        EXPECT_EQ(back.depth, sw.cube.depth);
+        EXPECT_EQ(*back.attribute("femto:start"), *sw.cube.attribute("femto:start"));
+        EXPECT_EQ(*back.attribute("femto:time"), "world");
+    }
+    std::filesystem::remove_all(dir);
+}
 
 TEST(StreakFilm, SkipsRowsOutsideTheFootprint) {
     auto scene =

@@ -12,9 +12,11 @@ namespace femto::io {
 /// A string attribute stored in EXR headers (e.g. {"femto:samples", "64"}).
 using Attributes = std::vector<std::pair<std::string, std::string>>;
 
-/// Writes an RGB float image (row-major, top row first) as a single-part OpenEXR file.
+/// Writes an RGB float image (row-major, top row first) as a single-part OpenEXR file. With
+/// `depth` ([height][width] floats) the file has a fourth float channel Z holding it (the
+/// streak film's per-pixel sensor distance, femto/viz.h write_streak_exr).
 void write_exr_rgb(const std::string& path, int width, int height, const float* rgb,
-                   const Attributes& attributes);
+                   const Attributes& attributes, const float* depth = nullptr);
 /// Tone-maps linear RGB through the OpenColorIO display transform (linear -> sRGB) of the
 /// config shipped with femto and writes an 8-bit PNG. `exposure` is in stops.
 void write_png_preview(const std::string& path, int width, int height, const float* rgb,

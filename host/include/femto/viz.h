@@ -4,7 +4,8 @@
 // rainbow fusion, streak (x-t) slices and camera <-> world time unwarping (eq. 4.1).
 //
 // Cubes are femto::io::Cube: float32 [height][width][bins][3], optional depth [height][width]
-// (distance from the sensor to the first surface, -1 where nothing was hit).
+// (distance from the sensor to the first surface, -1 where nothing was hit). A streak image
+// (the x-t image of one row, see write_streak_exr) is handled as a cube of height 1.
 #pragma once
 
 #include <cstdint>
@@ -38,11 +39,15 @@ struct TimeAxis {
     double bin_centre(int bin) const { return start + (bin + 0.5) * bin_width; }
 };
 
-/// Reads a cube written by a transient film: an OpenEXR cube (io::read_exr_cube) or a .npy
-/// of shape [H, W, T, C] (C = 1, 3 or 4; converted to RGB). `start` / `bin_width` override
-/// or supply the time axis (they are required for a .npy when time matters). Throws
-/// SceneError with a message naming the file for anything else.
+/// Reads a cube written by a transient film: an OpenEXR cube (io::read_exr_cube), a streak
+/// image (write_streak_exr; recognised by its femto:layout and femto:row attributes) as a cube
+/// of height 1 with the depth from its channel Z, or a .npy of shape [H, W, T, C] (C = 1, 3
+/// or 4; converted to RGB). Throws SceneError with a message naming the file for anything
+/// else.
 io::Cube load_cube(const std::string& path);
+/// Whether the cube was read from a streak image (its femto:layout attribute): a cube of
+/// height 1 whose row is the image's femto:row.
+bool is_streak(const io::Cube& cube);
 /// The time axis from the cube's femto:* attributes, overridden by `start` / `bin_width`.
 TimeAxis time_axis(const io::Cube& cube, std::optional<double> start = std::nullopt,
                    std::optional<double> bin_width = std::nullopt);
@@ -104,8 +109,9 @@ std::vector<float> streak_slice(const io::Cube& cube, int y);
 /// The output keeps the input's bin width and grid alignment; with `keep_window` it keeps the
 /// input's window too (energy shifted outside is dropped and reported in `dropped`), else the
 /// window becomes the bins that hold energy after the shift (nothing is dropped). Attributes
-/// femto:time, femto:start, femto:bins (and femto:start_ps) are updated; the depth is kept. Throws
-/// SceneError when the cube has no depth, is already in that time, or has no time axis.
+/// femto:time, femto:start, femto:bins (and femto:start_ps) are updated and femto:unwarped is
+/// set; the depth and the other attributes are kept, so a streak image (is_streak) stays one.
+/// Throws SceneError when the cube has no depth, is already in that time, or has no time axis.
 struct UnwarpResult {
     io::Cube cube;
     double dropped = 0.0;  ///< fraction of the total energy shifted outside (keep_window)
@@ -121,6 +127,14 @@ void write_png8(const std::string& path, int width, int height, const std::vecto
 /// `fps` frames per second, through OpenImageIO's multi-subimage GIF writer (atomically).
 void write_gif(const std::string& path, int width, int height,
                const std::vector<std::vector<float>>& frames, int fps = 12);
+/// Writes row `y` of the cube as a streak image, the format of the streak film (docs/viz.md):
+/// a single-part OpenEXR file `width` wide and `bins` tall (x to the right, time increasing
+/// downward) with float channels R, G, B and, when the cube has depth, Z: each pixel's depth
+/// repeated down its column (every time row holds it). The header is `attributes`, which
+/// should hold the time-resolved attributes and femto:row, plus femto:layout
+/// ("streak image: x to the right, time downward"). Throws SceneError when y is out of range.
+void write_streak_exr(const std::string& path, const io::Cube& cube, int y,
+                      io::Attributes attributes);
 /// Writes a single-channel float image (e.g. peak times) as OpenEXR (channel Y), atomically.
 void write_exr_gray(const std::string& path, int width, int height, const float* values,
                     const io::Attributes& attributes);

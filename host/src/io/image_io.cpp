@@ -95,12 +95,13 @@ std::string ocio_config_path() {
 }
 
 void write_exr_rgb(const std::string& path, int width, int height, const float* rgb,
-                   const Attributes& attributes) {
+                   const Attributes& attributes, const float* depth) {
     const std::string tmp = temp_path_for(path);
     try {
         Imf::Header header(width, height);
         header.compression() = Imf::ZIP_COMPRESSION;
         for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+        if (depth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
         for (const auto& [k, v] : attributes) header.insert(k, Imf::StringAttribute(v));
         Imf::FrameBuffer fb;
         const size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
@@ -108,6 +109,10 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
         fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
         fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
         fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+        if (depth)
+            fb.insert("Z",
+                      Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(depth)),
+                                 sizeof(float), sizeof(float) * size_t(width)));
         Imf::OutputFile file(tmp.c_str(), header);
         file.setFrameBuffer(fb);
         file.writePixels(height);

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <optional>
 
 #include "femto/error.h"
 #include "io/atomic_file.h"
@@ -117,19 +118,83 @@ float percentile_of(std::vector<float> values, double percentile) {
     return values[k] > 0 ? values[k] : 1.f;
 }
 
+constexpr const char* kStreakLayout = "streak image: x to the right, time downward";
+
+bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
+
+// A streak image (write_streak_exr) as a cube of height 1; nullopt when the file's header does
+// not mark it as one (a cube, a steady image: read_exr_cube then names the problem).
+std::optional<io::Cube> read_streak(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+        (void)OIIO::geterror();  // not readable here: read_exr_cube reports it
+        return std::nullopt;
+    }
+    const OIIO::ImageSpec& spec = in->spec();
+    if (!starts_with(std::string(spec.get_string_attribute("femto:layout")), "streak image") ||
+        !spec.find_attribute("femto:row"))
+        return std::nullopt;
+    const int W = spec.width, T = spec.height, nc = spec.nchannels;
+    if (W <= 0 || T <= 0 || spec.depth > 1 || int64_t(W) * T > (int64_t(1) << 28))
+        throw SceneError(fmt::format("streak image \"{}\" has an unsupported size {}x{}", path,
+                                     spec.width, spec.height));
+    const char* names[4] = {"R", "G", "B", "Z"};
+    int channel[4] = {-1, -1, -1, -1};
+    for (int c = 0; c < nc; ++c)
+        for (int k = 0; k < 4; ++k)
+            if (spec.channelnames[size_t(c)] == names[k]) channel[k] = c;
+    if (channel[0] < 0 || channel[1] < 0 || channel[2] < 0)
+        throw SceneError(fmt::format("streak image \"{}\" has no channels R, G and B", path));
+    std::vector<float> pixels(size_t(W) * size_t(T) * size_t(nc));
+    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw SceneError(fmt::format("cannot read streak image \"{}\": {}", path, in->geterror()));
+    io::Cube cube;
+    cube.width = W;
+    cube.height = 1;
+    cube.bins = T;
+    cube.data.resize(size_t(W) * size_t(T) * 3);
+    for (size_t t = 0; t < size_t(T); ++t)
+        for (size_t x = 0; x < size_t(W); ++x)
+            for (size_t c = 0; c < 3; ++c)
+                cube.data[(x * size_t(T) + t) * 3 + c] =
+                    pixels[(t * size_t(W) + x) * size_t(nc) + size_t(channel[c])];
+    if (channel[3] >= 0) {  // every time row holds the depth: take the first
+        cube.depth.resize(size_t(W));
+        for (size_t x = 0; x < size_t(W); ++x)
+            cube.depth[x] = pixels[x * size_t(nc) + size_t(channel[3])];
+    }
+    for (const OIIO::ParamValue& p : spec.extra_attribs)
+        if (p.type() == OIIO::TypeString && starts_with(p.name().string(), "femto:"))
+            cube.attributes.emplace_back(p.name().string(), p.get_string());
+    return cube;
+}
+
 }  // namespace
+
+bool is_streak(const io::Cube& cube) {
+    const std::string* layout = cube.attribute("femto:layout");
+    return cube.height == 1 && layout && starts_with(*layout, "streak image");
+}
 
 io::Cube load_cube(const std::string& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw SceneError(fmt::format("\"{}\" does not exist", path));
     if (fs::is_directory(path, ec))
         throw SceneError(fmt::format("\"{}\" is a folder, not a cube file", path));
-    char magic[6] = {};
+    char magic[8] = {};
     {
         std::ifstream in(path, std::ios::binary);
-        in.read(magic, 6);
+        in.read(magic, 8);
     }
-    if (std::string(magic, 6) != "\x93NUMPY") return io::read_exr_cube(path);
+    if (std::string(magic, 6) != "\x93NUMPY") {
+        // A single-part OpenEXR file (the version field's multi-part bit, 0x1000, is clear)
+        // may be a streak image; a cube has a part per bin.
+        const bool single_part_exr =
+            std::string(magic, 4) == "\x76\x2f\x31\x01" && (uint8_t(magic[5]) & 0x10) == 0;
+        if (single_part_exr)
+            if (std::optional<io::Cube> streak = read_streak(path)) return std::move(*streak);
+        return io::read_exr_cube(path);
+    }
     std::vector<size_t> shape;
     std::vector<float> data = io::read_npy(path, shape);
     if (shape.size() != 4 || !(shape[3] == 1 || shape[3] == 3 || shape[3] == 4))
@@ -361,8 +426,12 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeAxis& axis, bool to_world, b
     const char* target = to_world ? "world" : "camera";
     if (cube.depth.empty())
         throw SceneError(
-            "the cube has no depth part (per-pixel sensor distance), which unwarping needs: "
-            "use the OpenEXR cube a transient film wrote, not a .npy");
+            is_streak(cube)
+                ? "the streak image has no channel Z (per-pixel sensor distance), which "
+                  "unwarping needs: use the OUTBASE_rowRRRR.exr a streak film wrote, or a slice "
+                  "of an OpenEXR cube (femto viz streak CUBE.exr --exr)"
+                : "the cube has no depth part (per-pixel sensor distance), which unwarping "
+                  "needs: use the OpenEXR cube a transient film wrote, not a .npy");
     if (!axis.known) throw SceneError("the cube has no time axis (femto:start, femto:bin_width)");
     if (axis.time == target)
         throw SceneError(fmt::format("the cube is already in {} time (femto:time)", target));
@@ -514,6 +583,21 @@ void write_gif(const std::string& path, int width, int height,
     ok = ok && out->close();
     if (!ok) fail_write(tmp, path, out->geterror());
     commit(tmp, path);
+}
+
+void write_streak_exr(const std::string& path, const io::Cube& cube, int y,
+                      io::Attributes attributes) {
+    const std::vector<float> rgb = streak_slice(cube, y);  // checks y
+    std::vector<float> depth;
+    if (!cube.depth.empty()) {
+        const float* row = &cube.depth[size_t(y) * size_t(cube.width)];
+        depth.resize(size_t(cube.width) * size_t(cube.bins));
+        for (size_t t = 0; t < size_t(cube.bins); ++t)
+            std::copy_n(row, size_t(cube.width), &depth[t * size_t(cube.width)]);
+    }
+    set_attribute(attributes, "femto:layout", kStreakLayout);
+    io::write_exr_rgb(path, cube.width, cube.bins, rgb.data(), attributes,
+                      depth.empty() ? nullptr : depth.data());
 }
 
 void write_exr_gray(const std::string& path, int width, int height, const float* values,

@@ -2,11 +2,16 @@
 // reconstructed exactly as the `transient` film reconstructs that row of its x-y-t cube
 // (<rfilter> in space, <tfilter> in time, histogram by default), so a streak image equals
 // the corresponding slice of a transient cube rendered with the same scene and seed.
-// Writes OUTBASE_rowRRRR.exr (width x bins: x to the right, time increasing downward) and
-// OUTBASE_rowRRRR.png (its preview) for every recorded row.
+// Writes OUTBASE_rowRRRR.exr and OUTBASE_rowRRRR.png (its preview) for every recorded row.
+// The EXR is the streak image format of viz::write_streak_exr (docs/viz.md): width x bins,
+// x to the right, time increasing downward, float channels R, G, B and Z. Z is the pixel's
+// depth as the transient film's depth part defines it (the mean sensor distance of the
+// samples that hit something, weighted by the reconstruction filter; -1 where nothing was
+// hit), repeated in every time row of the pixel's column; `femto viz unwarp` uses it.
 //
-// Memory: per recorded row, width * bins * 3 floats plus per-pixel filter weight sums
-// (double). The renderer skips rows whose samples cannot reach a recorded row (row_active).
+// Memory: per recorded row, width * bins * 3 floats plus per-pixel filter weight and depth
+// sums (double). The renderer skips rows whose samples cannot reach a recorded row
+// (row_active).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -27,6 +32,13 @@ using namespace femto;
 
 class StreakFilm;
 
+// Per recorded pixel: the sums the transient film keeps in its PixelWeights.
+struct PixelSums {
+    double weight = 0;        // sum of filter weights of all samples
+    double depth_sum = 0;     // sum of w * sensor distance over samples that hit something
+    double depth_weight = 0;  // sum of w over those samples
+};
+
 // One block: the recorded rows that fall inside a tile plus its filter border.
 class StreakBlock final : public FilmBlock {
 public:
@@ -38,7 +50,7 @@ public:
     std::vector<int> rows_;        // recorded rows inside [y0_, y0_ + h_)
     std::vector<int> slot_of_y_;   // per block row: index into rows_, or -1
     std::vector<float> data_;      // [rows_][w_][bins][3]
-    std::vector<double> weights_;  // [rows_][w_]
+    std::vector<PixelSums> sums_;  // [rows_][w_]
     std::vector<BinWeight> scratch_;
     uint64_t invalid_ = 0;
 };
@@ -107,7 +119,7 @@ public:
                 if (double(y) <= r + 0.5 + radius && double(y) + 1.0 > r + 0.5 - radius)
                     active_[size_t(y)] = 1;
         data_.assign(rows_.size() * size_t(width_) * size_t(grid_.bins) * 3, 0.f);
-        weights_.assign(rows_.size() * size_t(width_), 0.0);
+        sums_.assign(rows_.size() * size_t(width_), PixelSums());
     }
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
@@ -136,8 +148,11 @@ public:
                 if (x < 0 || x >= width_) continue;
                 const size_t src = s * size_t(block.w_) + size_t(bx);
                 const size_t dst = slot * size_t(width_) + size_t(x);
-                if (block.weights_[src] == 0) continue;
-                weights_[dst] += block.weights_[src];
+                const PixelSums& in_sums = block.sums_[src];
+                if (in_sums.weight == 0) continue;
+                sums_[dst].weight += in_sums.weight;
+                sums_[dst].depth_sum += in_sums.depth_sum;
+                sums_[dst].depth_weight += in_sums.depth_weight;
                 const float* in = &block.data_[src * T3];
                 float* out = &data_[dst * T3];
                 for (size_t i = 0; i < T3; ++i) out[i] += in[i];
@@ -160,29 +175,35 @@ public:
         for (size_t s = 0; s < rows_.size(); ++s)
             for (int x = 0; x < width_; ++x) {
                 const size_t p = s * size_t(width_) + size_t(x);
-                if (weights_[p] == 0) continue;
+                if (sums_[p].weight == 0) continue;
                 double sum[3] = {0, 0, 0};
                 for (size_t t = 0; t < T; ++t)
                     for (int c = 0; c < 3; ++c) sum[c] += data_[(p * T + t) * 3 + size_t(c)];
                 float* o = &rgb[(size_t(rows_[s]) * size_t(width_) + size_t(x)) * 3];
-                for (int c = 0; c < 3; ++c) o[c] = float(sum[c] / weights_[p]);
+                for (int c = 0; c < 3; ++c) o[c] = float(sum[c] / sums_[p].weight);
             }
         return rgb;
     }
 
-    /// Recorded row `slot` as an x-t image [bins][width][3], normalised by the filter weights.
-    std::vector<float> streak_image(size_t slot) const {
+    /// Recorded row `slot` as a cube of height 1 ([1][width][bins][3], normalised by the
+    /// filter weights) with its depth, as the transient film computes both.
+    io::Cube row_cube(size_t slot) const {
         const size_t T = size_t(grid_.bins), W = size_t(width_);
-        std::vector<float> img(W * T * 3, 0.f);
+        io::Cube c;
+        c.width = width_;
+        c.height = 1;
+        c.bins = grid_.bins;
+        c.data.assign(W * T * 3, 0.f);
+        c.depth.assign(W, -1.f);
         for (size_t x = 0; x < W; ++x) {
-            const size_t p = slot * W + x;
-            const double w = weights_[p];
-            if (w == 0) continue;
-            for (size_t t = 0; t < T; ++t)
-                for (size_t c = 0; c < 3; ++c)
-                    img[(t * W + x) * 3 + c] = float(data_[(p * T + t) * 3 + c] / w);
+            const PixelSums& ps = sums_[slot * W + x];
+            if (ps.depth_weight > 0) c.depth[x] = float(ps.depth_sum / ps.depth_weight);
+            if (ps.weight == 0) continue;
+            const float* in = &data_[(slot * W + x) * T * 3];
+            float* out = &c.data[x * T * 3];
+            for (size_t i = 0; i < T * 3; ++i) out[i] = float(in[i] / ps.weight);
         }
-        return img;
+        return c;
     }
 
     std::vector<std::string> write(const std::string& out_base,
@@ -195,12 +216,12 @@ public:
             io::Attributes attrs =
                 io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
             attrs.push_back({"femto:row", std::to_string(rows_[s])});
-            attrs.push_back({"femto:layout", "streak image: x to the right, time downward"});
-            const std::vector<float> img = streak_image(s);
+            const io::Cube row = row_cube(s);
             const std::string base = fmt::format("{}_row{:04}", out_base, rows_[s]);
             files.push_back(base + ".exr");
-            io::write_exr_rgb(files.back(), width_, grid_.bins, img.data(), attrs);
+            viz::write_streak_exr(files.back(), row, 0, std::move(attrs));  // adds femto:layout
             files.push_back(base + ".png");
+            const std::vector<float> img = viz::streak_slice(row, 0);
             io::write_png_preview(files.back(), width_, grid_.bins, img.data(), exposure_);
         }
         return files;
@@ -215,7 +236,7 @@ public:
     std::vector<int> slot_of_row_;  // per image row: index into rows_, or -1
     std::vector<char> active_;      // per image row: samples there reach a recorded row
     std::vector<float> data_;       // [rows_][width][bins][3]
-    std::vector<double> weights_;   // [rows_][width]
+    std::vector<PixelSums> sums_;   // [rows_][width]
     uint64_t invalid_ = 0;
 };
 
@@ -233,11 +254,12 @@ StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, i
             rows_.push_back(r);
         }
     data_.assign(rows_.size() * size_t(w_) * size_t(bins_) * 3, 0.f);
-    weights_.assign(rows_.size() * size_t(w_), 0.0);
+    sums_.assign(rows_.size() * size_t(w_), PixelSums());
 }
 
 void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
     if (rows_.empty()) return;
+    const double sensor = sample.sensor_distance();
     for (const auto& c : sample.items())
         if (!c.radiance.is_finite()) {
             ++invalid_;
@@ -248,7 +270,12 @@ void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
             const int slot = slot_of_y_[size_t(y - y0_)];
             if (slot < 0) return;
             const size_t local = size_t(slot) * size_t(w_) + size_t(x - x0_);
-            weights_[local] += w;
+            PixelSums& ps = sums_[local];
+            ps.weight += w;
+            if (sensor >= 0) {  // as the transient film: the depth of samples that hit
+                ps.depth_sum += w * sensor;
+                ps.depth_weight += w;
+            }
             const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
             float* px = &data_[local * size_t(bins_) * 3];
             splat_sample(*film_.tfilter_, film_.grid_, pixel, sample, film_.world_time_, scratch_,
