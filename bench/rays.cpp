@@ -58,11 +58,21 @@
 #include "femto/shape.h"
 #include "femto/warp.h"
 
+#include "common.h"
+
 namespace fs = std::filesystem;
 using femto::Vec2;
 using femto::Vec3;
 
 namespace {
+
+using femto_bench::cpu_model;
+using femto_bench::cpu_seconds;
+using femto_bench::load1;
+using femto_bench::median;
+using femto_bench::now_utc;
+using femto_bench::read_loadavg;
+using femto_bench::split;
 
 using Clock = std::chrono::steady_clock;
 
@@ -110,14 +120,6 @@ void usage() {
         "  --raw-not-robust   diagnostic: build the raw scene without RTC_SCENE_FLAG_ROBUST\n"
         "                     (femto's scene always sets it, so the ratio is then not like\n"
         "                     for like)");
-}
-
-std::vector<std::string> split(const std::string& s, char sep) {
-    std::vector<std::string> out;
-    std::stringstream ss(s);
-    for (std::string item; std::getline(ss, item, sep);)
-        if (!item.empty()) out.push_back(item);
-    return out;
 }
 
 long long parse_int(const std::string& flag, const std::string& v, long long lo, long long hi) {
@@ -218,59 +220,9 @@ Options parse_options(int argc, char** argv) {
 
 // -- machine ---------------------------------------------------------------------------------
 
-std::string read_loadavg() {
-    std::ifstream f("/proc/loadavg");
-    std::string a, b, c;
-    if (!(f >> a >> b >> c)) return "unknown";
-    return a + " " + b + " " + c;
-}
-
-double load1() {
-    std::ifstream f("/proc/loadavg");
-    double a = -1;
-    f >> a;
-    return a;
-}
-
-std::string cpu_model() {
-    std::ifstream f("/proc/cpuinfo");
-    for (std::string line; std::getline(f, line);)
-        if (line.rfind("model name", 0) == 0) {
-            const auto colon = line.find(':');
-            if (colon != std::string::npos) {
-                std::string m = line.substr(colon + 1);
-                m.erase(0, m.find_first_not_of(" \t"));
-                return m;
-            }
-        }
-    return "unknown";
-}
-
-std::string now_utc() {
-    const std::time_t t = std::time(nullptr);
-    char buf[64];
-    std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&t));
-    return buf;
-}
-
 void enable_flush_to_zero() {
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-}
-
-/// CPU time of the whole process (every thread), user + system, in seconds.
-double cpu_seconds() {
-    rusage ru{};
-    getrusage(RUSAGE_SELF, &ru);
-    auto sec = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
-    return sec(ru.ru_utime) + sec(ru.ru_stime);
-}
-
-double median(std::vector<double> v) {
-    if (v.empty()) return NAN;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 // -- the generated scene: a displaced sphere of >= 1M triangles in a Cornell-style room -------

@@ -53,9 +53,23 @@
 #include "femto/scene.h"
 #include "femto/sensor.h"
 
+#include "common.h"
+
 namespace fs = std::filesystem;
 
 namespace {
+
+using femto_bench::cpu_model;
+using femto_bench::film_cube;
+using femto_bench::load1;
+using femto_bench::median;
+using femto_bench::now_utc;
+using femto_bench::read_loadavg;
+using femto_bench::read_text;
+using femto_bench::rel_mse;
+using femto_bench::replace_block;
+using femto_bench::replace_once;
+using femto_bench::split;
 
 // -- options -----------------------------------------------------------------------------------
 
@@ -98,14 +112,6 @@ struct Options {
         "                    size as the reference: res, bins, window)\n"
         "  --append          append to transient_error.csv");
     std::exit(code);
-}
-
-std::vector<std::string> split(const std::string& s, char sep) {
-    std::vector<std::string> out;
-    std::stringstream ss(s);
-    for (std::string item; std::getline(ss, item, sep);)
-        if (!item.empty()) out.push_back(item);
-    return out;
 }
 
 Options parse(int argc, char** argv) {
@@ -167,40 +173,6 @@ Options parse(int argc, char** argv) {
 
 // -- machine -----------------------------------------------------------------------------------
 
-std::string read_loadavg() {
-    std::ifstream f("/proc/loadavg");
-    std::string a, b, c;
-    if (!(f >> a >> b >> c)) return "unknown";
-    return a + " " + b + " " + c;
-}
-
-double load1() {
-    std::ifstream f("/proc/loadavg");
-    double a = -1;
-    f >> a;
-    return a;
-}
-
-std::string cpu_model() {
-    std::ifstream f("/proc/cpuinfo");
-    for (std::string line; std::getline(f, line);)
-        if (line.rfind("model name", 0) == 0) {
-            const auto colon = line.find(':');
-            if (colon == std::string::npos) break;
-            std::string m = line.substr(colon + 1);
-            m.erase(0, m.find_first_not_of(" \t"));
-            return m;
-        }
-    return "unknown";
-}
-
-std::string now_utc() {
-    const std::time_t t = std::time(nullptr);
-    char buf[64];
-    std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&t));
-    return buf;
-}
-
 /// A field of /proc/self/status in kB (VmHWM = peak RSS, VmRSS = current), or -1.
 long status_kb(const std::string& key) {
     std::ifstream f("/proc/self/status");
@@ -209,40 +181,7 @@ long status_kb(const std::string& key) {
     return -1;
 }
 
-double median(std::vector<double> v) {
-    if (v.empty()) return NAN;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 // -- scene text --------------------------------------------------------------------------------
-
-std::string read_text(const std::string& path) {
-    std::ifstream f(path);
-    if (!f) throw std::runtime_error("cannot read " + path);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-/// Replaces the single occurrence of `from` (throws when it is missing, so a changed scene
-/// file fails loudly instead of silently benchmarking something else).
-std::string replace_once(std::string text, const std::string& from, const std::string& to) {
-    const size_t pos = text.find(from);
-    if (pos == std::string::npos) throw std::runtime_error("scene text lacks: " + from);
-    return text.replace(pos, from.size(), to);
-}
-
-/// Replaces from `begin` up to and including the next `end`.
-std::string replace_block(std::string text, const std::string& begin, const std::string& end,
-                          const std::string& to) {
-    const size_t a = text.find(begin);
-    if (a == std::string::npos) throw std::runtime_error("scene text lacks: " + begin);
-    const size_t b = text.find(end, a);
-    if (b == std::string::npos) throw std::runtime_error("scene text lacks: " + end);
-    return text.replace(a, b + end.size() - a, to);
-}
 
 struct CornellBox {
     std::string xml;  // the transient scene as shipped
@@ -516,30 +455,6 @@ void memory(const Options& o, std::ostream& meta) {
 }
 
 // -- error against time ------------------------------------------------------------------------
-
-/// The film's normalised cube [H][W][T][3], through its own writer (OUTBASE.npy).
-std::vector<float> film_cube(femto::Scene& scene, const femto::RenderOptions& ro,
-                             const femto::RenderStats& st, std::vector<size_t>& shape) {
-    const fs::path tmp = fs::temp_directory_path() / fmt::format("femto_bench_err_{}", getpid());
-    fs::create_directories(tmp);
-    femto::RenderInfo info = femto::make_render_info(scene, ro, st);
-    info.write_npy = true;
-    scene.sensor().film().write((tmp / "cube").string(), info);
-    std::vector<float> cube = femto::io::read_npy((tmp / "cube.npy").string(), shape);
-    fs::remove_all(tmp);
-    return cube;
-}
-
-double rel_mse(const std::vector<float>& x, const std::vector<float>& ref) {
-    if (x.size() != ref.size()) throw std::runtime_error("cube sizes differ");
-    double se = 0, sr = 0;
-    for (size_t i = 0; i < x.size(); ++i) {
-        const double d = double(x[i]) - double(ref[i]);
-        se += d * d;
-        sr += double(ref[i]) * double(ref[i]);
-    }
-    return se / sr;
-}
 
 std::string tfilter_of(const std::string& xml) {
     std::smatch m;
