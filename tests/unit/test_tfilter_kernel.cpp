@@ -151,27 +151,42 @@ TEST(KernelFilter, BandwidthShrinksAsEq547) {
     }
 }
 
+std::vector<PilotArrival> arrivals_at(const std::vector<double>& times, float energy) {
+    std::vector<PilotArrival> out;
+    for (double t : times) out.push_back({t, energy});
+    return out;
+}
+
 TEST(KernelFilter, PilotBandwidthIsTheDistanceToTheKthNearestArrival) {
     const TimeGrid g = grid(0.0, 0.001, 1000);  // window [0, 1)
     auto f = make_kernel({{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}});
     EXPECT_EQ(f->pilot_samples(), 64u);  // default pilot
-    f->prepare(g, 3);
-    // Pixel 0: 1000 arrivals evenly spread over [0, 1): the 40th nearest neighbour of a time
-    // in the middle is 40 / 2 spacings away, 0.02. (The plugin keeps 128 order statistics,
-    // with k scaled to round(40 * 128 / 1000) = 5: 2.5 of their spacings, 1/127 each.)
+    f->prepare(g, 4);
+    // Pixel 0: 1000 equal arrivals evenly spread over [0, 1): the 40th nearest neighbour of a
+    // time in the middle is 40 / 2 spacings away, 0.02. (The plugin keeps 128 energy
+    // quantiles, 1/128 apart here, with k scaled to round(40 * 128 / 1000) = 5: 2.5 of their
+    // spacings.)
     std::vector<double> uniform(1000);
     for (size_t i = 0; i < uniform.size(); ++i) uniform[i] = (double(i) + 0.5) / 1000.0;
     std::shuffle(uniform.begin(), uniform.end(), std::mt19937(3));
-    f->pilot_pixel(0, uniform);
+    auto pixel0 = arrivals_at(uniform, 1.f);
+    f->pilot_pixel(0, pixel0);
     // Pixel 1: a sharp peak of 500 arrivals at 0.3 on the same background: the kernel there
     // must stay narrow (at the lower clamp of half a bin), while the background keeps a
     // wide one.
-    std::vector<double> peaked(uniform);
-    for (int i = 0; i < 500; ++i) peaked.push_back(0.3 + 1e-7 * i);
-    f->pilot_pixel(1, peaked);
+    auto pixel1 = arrivals_at(uniform, 1.f);
+    for (int i = 0; i < 500; ++i) pixel1.push_back({0.3 + 1e-7 * i, 1.f});
+    f->pilot_pixel(1, pixel1);
     // Pixel 2: no arrivals: the median of the others' bandwidths.
-    std::vector<double> none;
+    std::vector<PilotArrival> none;
     f->pilot_pixel(2, none);
+    // Pixel 3: neighbours count by energy. 1000 dim arrivals (total energy 1) and only 10
+    // bright ones at 0.6 (total 10): counted by samples the peak would be 1 % of the
+    // arrivals and get a wide kernel; by energy it is 10/11 of the pixel's light and stays
+    // sharp, while the dim background (1/11 of the quantiles) is smoothed more widely still.
+    auto pixel3 = arrivals_at(uniform, 1e-3f);
+    for (int i = 0; i < 10; ++i) pixel3.push_back({0.6005 + 1e-7 * i, 1.f});
+    f->pilot_pixel(3, pixel3);
     f->end_pilot();
 
     auto bandwidth_at = [&](uint64_t pixel, double t) {
@@ -181,14 +196,16 @@ TEST(KernelFilter, PilotBandwidthIsTheDistanceToTheKthNearestArrival) {
         for (const BinWeight& bw : out) max_weight = std::max(max_weight, double(bw.weight));
         return g.bin_width / (2.0 * max_weight);  // box: a full bin holds width / (2 T)
     };
-    EXPECT_NEAR(bandwidth_at(0, 0.5), 2.5 / 127.0, 0.002);
+    EXPECT_NEAR(bandwidth_at(0, 0.5), 2.5 / 128.0, 0.002);
     EXPECT_NEAR(bandwidth_at(0, 0.5), 0.02, 0.002);
     EXPECT_NEAR(bandwidth_at(1, 0.3005), 0.5 * g.bin_width, 1e-9);  // bin 300's centre
     EXPECT_GT(bandwidth_at(1, 0.8), 0.01);
-    // Pixel 2 takes the larger (upper median of two) of the others' bandwidths at their median
-    // arrivals: pixel 0's, where the run of 5 kept arrivals holding it spans 2 spacings
-    // either side (pixel 1's median arrival is in the peak).
-    EXPECT_NEAR(bandwidth_at(2, 0.5), 2.0 / 127.0, 0.001);
+    // Pixel 2 takes the median of the others' bandwidths at their median quantiles: pixel
+    // 0's is wide (2 of its spacings, the run of 5 around a kept quantile), pixels 1's and
+    // 3's lie in their peaks and are narrow, so the median is the narrow lower clamp.
+    EXPECT_NEAR(bandwidth_at(2, 0.5005), 0.5 * g.bin_width, 1e-9);
+    EXPECT_NEAR(bandwidth_at(3, 0.6005), 0.5 * g.bin_width, 1e-9);
+    EXPECT_GT(bandwidth_at(3, 0.2), 0.05);
     // Wide enough for any pixel: at most 1/8 of the window.
     EXPECT_NEAR(f->max_radius(), 0.125, 1e-12);
 }

@@ -13,6 +13,12 @@
 
 namespace femto {
 
+/// One contribution seen by a pilot pass.
+struct PilotArrival {
+    double time;   ///< recorded time (camera or world, as the film records)
+    float energy;  ///< mean of its radiance over the colour channels
+};
+
 struct BinWeight {
     int bin;
     float weight;  ///< fraction of the contribution that lands in `bin`
@@ -42,9 +48,9 @@ public:
     /// film calls pilot_pixel() once for every pixel the pilot reached (concurrently for
     /// different pixels) and then end_pilot() once.
     virtual uint32_t pilot_samples() const { return 0; }
-    /// The recorded times of all contributions of the pilot samples in `pixel` (unordered;
-    /// the filter may reorder them).
-    virtual void pilot_pixel(uint64_t /*pixel*/, std::vector<double>& /*times*/) {}
+    /// The contributions of the pilot samples in `pixel`: recorded time and energy (mean over
+    /// the colour channels), unordered; the filter may reorder them.
+    virtual void pilot_pixel(uint64_t /*pixel*/, std::vector<PilotArrival>& /*arrivals*/) {}
     virtual void end_pilot() {}
 };
 
@@ -77,8 +83,8 @@ Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t 
 }
 
 /// Film block for a temporal filter's pilot pass: keeps, for every pixel of its tile, the
-/// recorded times of the contributions of the samples that fall in the pixel, and hands
-/// them to the filter in deliver() (call it from the film's merge()).
+/// arrivals (time, energy) of the contributions of the samples that fall in the pixel, and
+/// hands them to the filter in deliver() (call it from the film's merge()).
 class PilotBlock final : public FilmBlock {
 public:
     PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time);
@@ -88,7 +94,7 @@ public:
 private:
     int x0_, y0_, w_, h_, film_width_;
     bool world_time_;
-    mutable std::vector<std::vector<double>> times_;  // [h_][w_]
+    mutable std::vector<std::vector<PilotArrival>> arrivals_;  // [h_][w_]
 };
 
 }  // namespace femto

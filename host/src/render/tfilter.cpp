@@ -25,26 +25,27 @@ PilotBlock::PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_
       h_(h),
       film_width_(film_width),
       world_time_(world_time),
-      times_(size_t(w) * size_t(h)) {}
+      arrivals_(size_t(w) * size_t(h)) {}
 
 void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
     // The pixel that holds the sample (no reconstruction filter: the pilot only measures how
     // arrivals spread in time).
     const int x = int(std::floor(pos.x)), y = int(std::floor(pos.y));
     if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) return;
-    auto& times = times_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
+    auto& arrivals = arrivals_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
     for (const Contribution& c : sample.items())
         if (c.radiance.is_finite() && std::isfinite(c.path_length))
-            times.push_back(recorded_time(c.path_length, sample.sensor_distance(), world_time_));
+            arrivals.push_back({recorded_time(c.path_length, sample.sensor_distance(), world_time_),
+                                std::max(0.f, (c.radiance.r + c.radiance.g + c.radiance.b) / 3.f)});
 }
 
 void PilotBlock::deliver(TemporalFilter& filter) const {
     for (int y = 0; y < h_; ++y)
         for (int x = 0; x < w_; ++x) {
-            auto& times = times_[size_t(y) * size_t(w_) + size_t(x)];
+            auto& arrivals = arrivals_[size_t(y) * size_t(w_) + size_t(x)];
             filter.pilot_pixel(uint64_t(y0_ + y) * uint64_t(film_width_) + uint64_t(x0_ + x),
-                               times);
-            std::vector<double>().swap(times);
+                               arrivals);
+            std::vector<PilotArrival>().swap(arrivals);
         }
 }
 

@@ -11,16 +11,17 @@
 // Iterations are counted per pixel sample, not per render pass, so the result does not depend
 // on how the renderer groups samples into passes or threads.
 //
-// T_1 is `bandwidth` when given. Otherwise it adapts to where arrivals are dense (ch. 5.7
-// uses 40 nearest neighbours): a pilot pass of `pilot_spp` samples per pixel (independent
-// random streams, not part of the image) records each pixel's arrival times, and a
+// T_1 is `bandwidth` when given. Otherwise it adapts to where light arrives (ch. 5.7 uses 40
+// nearest neighbours): a pilot pass of `pilot_spp` samples per pixel (independent random
+// streams, not part of the image) records each pixel's arrivals (time, energy), and a
 // contribution at time t gets T_1 = the distance from t to its k-th nearest pilot arrival in
-// its pixel (`k_neighbors`). A sharp direct-light peak thus keeps a narrow kernel while the
-// sparse indirect tail is smoothed widely; each kernel is still normalised, so energy is
-// kept (a "sample-point" adaptive estimate). T_1 is clamped to [half a bin, 1/8 of the
-// window]. Memory is bounded: a pixel keeps at most 128 evenly spaced order statistics of its
-// arrivals, with k scaled by the same factor. Pixels with fewer than two pilot arrivals use
-// the median bandwidth of the others.
+// its pixel (`k_neighbors`), neighbours counted by energy: the pixel keeps 128 quantiles of
+// its energy-weighted arrival times, and k of n arrivals becomes k * 128 / n quantiles. A
+// bright peak thus keeps a narrow kernel even when few samples carry it (a directly seen lamp),
+// while the dim indirect tail is smoothed widely (counting arrivals instead smeared such
+// peaks: bench/README.md). Each kernel is still normalised, so energy is kept (a
+// "sample-point" adaptive estimate). T_1 is clamped to [half a bin, 1/8 of the window].
+// Pixels with fewer than two pilot arrivals use the median bandwidth of the others.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -163,14 +164,30 @@ public:
 
     uint32_t pilot_samples() const override { return fixed_bandwidth_ > 0 ? 0 : pilot_spp_; }
 
-    void pilot_pixel(uint64_t pixel, std::vector<double>& times) override {
-        if (pixel >= pilot_.size() || times.size() < 2) return;
-        std::sort(times.begin(), times.end());
-        const size_t n = times.size(), m = std::min(n, kMaxArrivals);
+    void pilot_pixel(uint64_t pixel, std::vector<PilotArrival>& arrivals) override {
+        if (pixel >= pilot_.size() || arrivals.size() < 2) return;
+        std::sort(arrivals.begin(), arrivals.end(),
+                  [](const PilotArrival& a, const PilotArrival& b) { return a.time < b.time; });
+        const size_t n = arrivals.size(), m = std::min(n, kMaxArrivals);
+        double total = 0;
+        for (const PilotArrival& a : arrivals) total += double(a.energy);
         PixelPilot& pp = pilot_[size_t(pixel)];
-        float* a = &arrivals_[size_t(pixel) * kMaxArrivals];
-        for (size_t i = 0; i < m; ++i)  // evenly spaced order statistics
-            a[i] = float(times[m == n ? i : (i * (n - 1)) / (m - 1)]);
+        float* kept = &arrivals_[size_t(pixel) * kMaxArrivals];
+        if (total > 0) {
+            // m quantiles of the energy-weighted arrival times: where the pixel's energy
+            // arrives, not merely where its samples do (a bright, sparse peak stays sharp).
+            double below = 0;
+            size_t i = 0;
+            for (size_t q = 0; q < m; ++q) {
+                const double level = (double(q) + 0.5) / double(m) * total;
+                while (i + 1 < n && below + double(arrivals[i].energy) < level)
+                    below += double(arrivals[i++].energy);
+                kept[q] = float(arrivals[i].time);
+            }
+        } else {
+            for (size_t q = 0; q < m; ++q)  // evenly spaced order statistics
+                kept[q] = float(arrivals[m == n ? q : (q * (n - 1)) / (m - 1)].time);
+        }
         pp.count = uint32_t(m);
         // k of n neighbours, scaled to the m kept; at least 1 and at most m - 1.
         pp.k = uint32_t(std::clamp<size_t>(
