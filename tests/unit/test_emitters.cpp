@@ -67,8 +67,10 @@ TEST(EmitterSchema, ParametersAreDocumented) {
         {"spot", {"intensity", "cutoff_angle", "beam_width", "to_world"}},
         {"collimated", {"radius", "irradiance", "power", "to_world"}},
     };
-    // Every emitter also takes the pulse parameters (design section 4), listed last.
-    const std::vector<std::string> pulse = {"pulse", "pulse_width", "pulse_sigma", "time_offset"};
+    // Every emitter also takes the pulse parameters (design section 4) and the medium it sits
+    // in, listed last.
+    const std::vector<std::string> pulse = {"pulse", "pulse_width", "pulse_sigma", "time_offset",
+                                            "medium"};
     for (auto [type, names] : expected) {
         names.insert(names.end(), pulse.begin(), pulse.end());
         const femto::PluginDescriptor& d = femto::find_plugin(PluginKind::Emitter, type);

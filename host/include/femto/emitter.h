@@ -59,6 +59,9 @@ public:
     /// The emission profile in time (the `pulse`, `pulse_width`, `pulse_sigma` and
     /// `time_offset` parameters every emitter takes).
     const PulseProfile& pulse() const { return pulse_; }
+    /// The medium the emitter sits in (a nested <medium> or <ref>), or nullptr (vacuum); for
+    /// area emitters, their shape's media apply instead.
+    const Medium* medium() const { return medium_.get(); }
 
 protected:
     /// Reads the pulse parameters; list FEMTO_PULSE_PARAMS in the plugin's schema.
@@ -66,14 +69,19 @@ protected:
 
     const Shape* shape_ = nullptr;
     PulseProfile pulse_;
+    std::shared_ptr<class Medium> medium_;
 };
 
-/// The pulse parameters, to append to every emitter's FEMTO_PLUGIN schema list.
-#define FEMTO_PULSE_PARAMS                                                                       \
-    {"pulse", "string", "delta", "emission profile in time: delta, box or gaussian"},            \
-        {"pulse_width", "float", "", "box pulse length (optical path length, scene units)"},     \
-        {"pulse_sigma", "float", "", "gaussian pulse deviation (optical path length)"}, {        \
-        "time_offset", "float", "0", "emission start (delta/box) or mean (gaussian), same units" \
+/// The pulse and medium parameters (read by the Emitter base class), to append to every
+/// emitter's FEMTO_PLUGIN schema list.
+#define FEMTO_PULSE_PARAMS                                                                   \
+    {"pulse", "string", "delta", "emission profile in time: delta, box or gaussian"},        \
+        {"pulse_width", "float", "", "box pulse length (optical path length, scene units)"}, \
+        {"pulse_sigma", "float", "", "gaussian pulse deviation (optical path length)"},      \
+        {"time_offset", "float", "0",                                                        \
+         "emission start (delta/box) or mean (gaussian), same units"},                       \
+    {                                                                                        \
+        "medium", "medium", "", "medium the emitter sits in (nested <medium> or <ref>)"      \
     }
 
 }  // namespace femto

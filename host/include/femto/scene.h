@@ -35,8 +35,9 @@ public:
     Scene(const Scene&) = delete;
     Scene& operator=(const Scene&) = delete;
 
-    /// Closest hit along `ray` within [tmin, tmax]; surfaces with a pure `null` material and
-    /// no emitter are invisible.
+    /// Closest hit along `ray` within [tmin, tmax]; surfaces with a pure `null` material, no
+    /// emitter and no media are invisible (a null surface that bounds a medium is hit, so
+    /// that paths can track the medium they travel in).
     bool intersect(const Ray& ray, Hit& hit) const;
     /// True when anything blocks `ray` within [tmin, tmax]; `null` surfaces never block.
     bool occluded(const Ray& ray) const;
@@ -59,6 +60,9 @@ public:
     /// Earliest emission time of any emitter (PulseProfile::earliest), for cutting paths
     /// that can no longer reach a film's time window.
     double earliest_emission() const { return earliest_emission_; }
+    /// True when a shape bounds a medium or the sensor or an emitter sits in one: integrators
+    /// then track media along paths (volumetric path tracing).
+    bool has_media() const { return has_media_; }
 
 private:
     struct Accel;
@@ -70,6 +74,7 @@ private:
     std::vector<const Emitter*> emitter_list_;
     Bounds3 bounds_;
     double earliest_emission_ = 0.0;
+    bool has_media_ = false;
 };
 
 }  // namespace femto

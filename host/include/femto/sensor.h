@@ -12,6 +12,8 @@
 
 namespace femto {
 
+class Medium;
+
 class Sensor : public Object {
 public:
     PluginKind kind() const override { return PluginKind::Sensor; }
@@ -23,6 +25,8 @@ public:
     Film& film() const { return *film_; }
     Sampler& sampler() const { return *sampler_; }
     const Transform& to_world() const { return to_world_; }
+    /// The medium the sensor sits in (a nested <medium> or <ref>), or nullptr (vacuum).
+    const Medium* medium() const { return medium_.get(); }
 
 protected:
     /// Reads `to_world` and the film and sampler children.
@@ -31,6 +35,7 @@ protected:
     Transform to_world_;
     std::shared_ptr<Film> film_;
     std::shared_ptr<Sampler> sampler_;
+    std::shared_ptr<Medium> medium_;
 };
 
 }  // namespace femto

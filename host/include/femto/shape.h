@@ -18,6 +18,7 @@ namespace femto {
 
 class Bsdf;
 class Emitter;
+class Medium;
 class Shape;
 
 /// A ray-surface intersection, everything an integrator needs at a path vertex.
@@ -67,6 +68,12 @@ public:
     bool flip_normals() const { return flip_normals_; }
 
     const Bsdf* bsdf() const { return bsdf_.get(); }
+    /// Media on either side of the surface (`interior`: the side the normal points away
+    /// from; nullptr = vacuum). A shape that names neither leaves the medium unchanged when a
+    /// path crosses it.
+    const Medium* interior() const { return interior_.get(); }
+    const Medium* exterior() const { return exterior_.get(); }
+    bool has_media() const { return interior_ || exterior_; }
     const Emitter* emitter() const { return emitter_.get(); }
     std::shared_ptr<Emitter> emitter_ptr() const { return emitter_; }
     float surface_area() const { return area_; }
@@ -83,7 +90,8 @@ public:
 
 protected:
     /// Reads the parameters common to all shapes (`flip_normals`, the bsdf and emitter
-    /// children). A shape without a bsdf gets a diffuse one, as in Mitsuba.
+    /// children, the `interior` / `exterior` media). A shape without a bsdf gets a diffuse
+    /// one, as in Mitsuba.
     explicit Shape(const Properties& props);
     /// Sets the geometry; call exactly once from the plugin's constructor. Throws a located
     /// SceneError for empty or non-finite geometry.
@@ -102,6 +110,7 @@ private:
     float area_ = 0.f;
     std::shared_ptr<Bsdf> bsdf_;
     std::shared_ptr<Emitter> emitter_;
+    std::shared_ptr<Medium> interior_, exterior_;
 };
 
 /// Moves a mesh read in object space to world space (what the obj and ply shapes share):
@@ -119,5 +128,11 @@ void mesh_to_world(TriangleMesh& mesh, const std::vector<uint32_t>& position_ids
 
 /// Reads a `to_world` transform, rejecting degenerate (singular) ones with a located error.
 Transform read_to_world(const Properties& props);
+
+/// The medium parameters every shape takes, to append to a shape plugin's FEMTO_PLUGIN schema.
+#define FEMTO_SHAPE_MEDIUM_PARAMS                                                                \
+    {"interior", "medium", "", "medium inside the shape (nested or <ref name=\"interior\">)"}, { \
+        "exterior", "medium", "", "medium outside the shape"                                     \
+    }
 
 }  // namespace femto

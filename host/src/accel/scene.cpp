@@ -12,6 +12,7 @@
 
 #include "femto/bsdf.h"
 #include "femto/integrator.h"
+#include "femto/medium.h"
 
 namespace femto {
 
@@ -68,6 +69,9 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
             emitters_.push_back(e);
         }
     for (const auto& e : emitters_) emitter_list_.push_back(e.get());
+    has_media_ = sensor_->medium() != nullptr;
+    for (const auto& s : shapes_) has_media_ = has_media_ || s->has_media();
+    for (const Emitter* e : emitter_list_) has_media_ = has_media_ || e->medium() != nullptr;
     if (!emitter_list_.empty()) {
         earliest_emission_ = emitter_list_[0]->pulse().earliest();
         for (const Emitter* e : emitter_list_)
@@ -82,7 +86,8 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
     for (size_t i = 0; i < shapes_.size(); ++i) {
         const Shape& shape = *shapes_[i];
         const bool null_surface = shape.bsdf() && shape.bsdf()->is_null();
-        if (null_surface && !shape.emitter()) continue;  // invisible: nothing to see or block
+        if (null_surface && !shape.emitter() && !shape.has_media())
+            continue;  // invisible: nothing to see, block or enter
         RTCGeometry geom;
         if (shape.is_sphere()) {
             geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);

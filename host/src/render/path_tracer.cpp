@@ -1,9 +1,11 @@
 #include "femto/path_tracer.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "femto/bsdf.h"
 #include "femto/emitter.h"
+#include "femto/medium.h"
 #include "femto/sensor.h"
 
 namespace femto {
@@ -12,6 +14,76 @@ namespace {
 inline float power_heuristic(float a, float b) {
     const float a2 = a * a, b2 = b * b;
     return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.f;
+}
+
+// The medium a path travels in after crossing `shape` in world direction d: a shape that
+// bounds no medium leaves it unchanged; otherwise the side d goes to decides (the geometric
+// normal points to the exterior).
+inline const Medium* medium_after(const Hit& hit, const Vec3& d, const Medium* current) {
+    const Shape& shape = *hit.shape;
+    if (!shape.has_media()) return current;
+    return dot(d, hit.ng) < 0 ? shape.interior() : shape.exterior();
+}
+
+// A shadow connection through media: transmittance and optical length (eta-weighted) from
+// ray.o to ray.o + ray.d * ray.tmax, passing null surfaces (media boundaries) and changing
+// media there; zero transmittance when an opaque surface blocks it. `index` is the
+// refractive index outside media (as the path tracks it).
+struct Connection {
+    Color transmittance;
+    double optical_length = 0.0;
+};
+Connection connect_through_media(const Scene& scene, Ray ray, const Medium* medium, double index,
+                                 Sampler& sampler) {
+    Connection c{Color(1.f), 0.0};
+    for (int crossings = 0; crossings < 256; ++crossings) {
+        Hit hit;
+        const bool found = scene.intersect(ray, hit);
+        const double segment = found ? double(hit.t) : double(ray.tmax);
+        if (medium) {
+            c.transmittance *= medium->transmittance(ray, segment, sampler);
+            c.optical_length += segment * medium->eta();
+        } else {
+            c.optical_length += segment * index;
+        }
+        if (!found) return c;
+        if (!hit.shape->bsdf()->is_null() || c.transmittance.is_black()) return {Color(0.f), 0.0};
+        medium = medium_after(hit, ray.d, medium);
+        const float left = ray.tmax - hit.t;
+        ray = hit.spawn(ray.d);
+        ray.tmax = left;
+    }
+    return {Color(0.f), 0.0};  // pathological nesting: treat as blocked
+}
+
+// Steady distance sampling in a medium (mean free path): an exponential with rate lambda =
+// the mean of sigma_t's channels (homogeneous) or the majorant (heterogeneous; weighted by
+// ratio-tracked transmittance). Returns the weight and sets `scattered`/`distance`.
+struct DistanceSample {
+    bool scattered = false;
+    double distance = 0.0;
+    Color weight{1.f, 1.f, 1.f};
+};
+DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
+                               Sampler& sampler) {
+    DistanceSample ds;
+    const Color st = medium.sigma_t(ray.o);
+    const double lambda =
+        medium.homogeneous() ? (double(st.r) + st.g + st.b) / 3.0 : double(medium.majorant());
+    if (!(lambda > 0.0)) return ds;  // nothing to interact with
+    const double r = -std::log1p(-double(sampler.next_1d())) / lambda;
+    if (r < tmax) {
+        ds.scattered = true;
+        ds.distance = r;
+        const Vec3 p = ray.o + ray.d * float(r);
+        const double pdf = lambda * std::exp(-lambda * r);
+        ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / pdf);
+    } else if (std::isfinite(tmax)) {
+        ds.weight = medium.transmittance(ray, tmax, sampler) * float(std::exp(lambda * tmax));
+    } else {
+        ds.weight = Color(0.f);  // an infinite medium with no surface ahead absorbs it all
+    }
+    return ds;
 }
 
 inline bool is_diagonal(const ColorMatrix& m) {
@@ -25,6 +97,7 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
     if (opt.max_depth == 0) return;
     // A path whose time is past this can no longer reach the film (ch. 5.6.1).
     const double max_length = scene.sensor().film().max_path_length() - scene.earliest_emission();
+    const bool media = scene.has_media();
     Ray ray = camera_ray;
     Color throughput(1.f);
     // Camera-side weight = mix * diag(throughput); mix stays the identity (and unused) until
@@ -35,16 +108,65 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
         return mixing ? mix * (throughput * c) : throughput * c;
     };
     double path_length = 0.0;  // optical length travelled so far, plus scattering delays
-    double index = 1.0;        // refractive index where the ray travels (light is slower by it)
+    double index = 1.0;        // refractive index outside media (tracked through dielectrics)
+    const Medium* medium = scene.sensor().medium();  // where the ray travels (null: none)
+    auto speed_factor = [&] { return medium ? medium->eta() : index; };
     float prev_pdf = 1.f;
     bool prev_delta = true;
     Vec3 prev_p = ray.o;
+    // Emission time of a sampled emitter's light.
+    auto emission_time = [&](const Emitter& em) {
+        return em.pulse().is_delta() ? em.pulse().offset : em.pulse().sample(sampler.next_1d());
+    };
     for (int64_t depth = 1;;) {
         Hit hit;
-        if (!scene.intersect(ray, hit)) break;
+        const bool found = scene.intersect(ray, hit);
+
+        // In a medium the path may scatter before reaching the surface.
+        if (medium) {
+            const DistanceSample ds =
+                sample_distance(*medium, ray, found ? double(hit.t) : kInfinity, sampler);
+            throughput *= ds.weight;
+            if (ds.scattered) {
+                if (out.sensor_distance() < 0)
+                    out.set_sensor_distance(path_length + ds.distance * medium->eta());
+                path_length += ds.distance * medium->eta();
+                if (path_length > max_length || throughput.is_black()) break;
+                if (opt.max_depth >= 0 && depth >= opt.max_depth) break;
+                const Vec3 p = ray.o + ray.d * float(ds.distance), wi = -ray.d;
+                const PhaseFunction& phase = medium->phase();
+                // Next-event estimation from the medium vertex.
+                const float u_sel = sampler.next_1d();
+                const EmitterSample es = scene.sample_emitter(p, u_sel, sampler.next_2d());
+                if (es.pdf > 0 && !es.weight.is_black()) {
+                    const float f = phase.eval(wi, es.wi);
+                    if (f > 0) {
+                        const Connection c = connect_through_media(
+                            scene, Ray{p, es.wi, 0.f, es.distance * (1.f - 1e-4f)}, medium, index,
+                            sampler);
+                        if (!c.transmittance.is_black()) {
+                            const float w = es.delta ? 1.f : power_heuristic(es.pdf, f);
+                            out.add(weighted(es.weight * c.transmittance * (f * w)),
+                                    path_length + c.optical_length + emission_time(*es.emitter));
+                        }
+                    }
+                }
+                const Vec3 wo = phase.sample(wi, sampler.next_2d());
+                prev_pdf = phase.eval(wi, wo);
+                prev_delta = false;
+                prev_p = p;
+                ray = Ray{p, wo, 0.f, kInfinity};
+                ++depth;
+                continue;
+            }
+            if (!found || throughput.is_black()) break;
+        } else if (!found) {
+            break;
+        }
+
         if (depth == 1 && out.sensor_distance() < 0)
-            out.set_sensor_distance(path_length + hit.t * index);
-        path_length += double(hit.t) * index;
+            out.set_sensor_distance(path_length + hit.t * speed_factor());
+        path_length += double(hit.t) * speed_factor();
         if (path_length > max_length) break;
 
         if (const Emitter* em = hit.shape->emitter()) {
@@ -52,14 +174,12 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
             if (!Le.is_black() && !(depth == 1 && opt.hide_emitters)) {
                 float w = 1.f;
                 if (!prev_delta) w = power_heuristic(prev_pdf, scene.pdf_emitter(*em, prev_p, hit));
-                const double t_emit = em->pulse().is_delta()
-                                          ? em->pulse().offset
-                                          : em->pulse().sample(sampler.next_1d());
-                out.add(weighted(Le * w), path_length + t_emit);
+                out.add(weighted(Le * w), path_length + emission_time(*em));
             }
         }
         const Bsdf& bsdf = *hit.shape->bsdf();
         if (bsdf.is_null()) {  // index-matched pass-through: not a scattering event
+            if (media) medium = medium_after(hit, ray.d, medium);
             ray = hit.spawn(ray.d);
             continue;
         }
@@ -88,14 +208,20 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
             if (es.pdf > 0 && !es.weight.is_black()) {
                 const Vec3 wo = hit.to_local(es.wi);
                 const Color f = bsdf.eval(hit, hit.wi, wo);
-                if (!f.is_black() && !scene.occluded(hit.spawn_to(es.p))) {
-                    const float w =
-                        es.delta ? 1.f : power_heuristic(es.pdf, bsdf.pdf(hit, hit.wi, wo));
-                    const PulseProfile& pulse = es.emitter->pulse();
-                    const double t_emit =
-                        pulse.is_delta() ? pulse.offset : pulse.sample(sampler.next_1d());
-                    out.add(weighted(f * es.weight * w),
-                            path_length + double(es.distance) + t_emit);
+                if (!f.is_black()) {
+                    // Without media: an occlusion test, and light covers es.distance in vacuum.
+                    Connection c{Color(1.f), double(es.distance)};
+                    if (media)
+                        c = connect_through_media(scene, hit.spawn_to(es.p),
+                                                  medium_after(hit, es.wi, medium), index, sampler);
+                    else if (scene.occluded(hit.spawn_to(es.p)))
+                        c.transmittance = Color(0.f);
+                    if (!c.transmittance.is_black()) {
+                        const float w =
+                            es.delta ? 1.f : power_heuristic(es.pdf, bsdf.pdf(hit, hit.wi, wo));
+                        out.add(weighted(f * es.weight * c.transmittance * w),
+                                path_length + c.optical_length + emission_time(*es.emitter));
+                    }
                 }
             }
         }
@@ -111,7 +237,9 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
         prev_delta = (bs.sampled_lobe & kBsdfDelta) != 0;
         prev_pdf = bs.pdf;
         prev_p = hit.p;
-        ray = hit.spawn(hit.to_world(bs.wo));
+        const Vec3 wo_world = hit.to_world(bs.wo);
+        if (media) medium = medium_after(hit, wo_world, medium);
+        ray = hit.spawn(wo_world);
 
         if (opt.rr_depth > 0 && depth >= opt.rr_depth) {
             const float q = std::min(

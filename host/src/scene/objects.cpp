@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "femto/film.h"
+#include "femto/medium.h"
 #include "femto/sampler.h"
 #include "femto/sensor.h"
 #include "femto/shape.h"
@@ -34,6 +35,9 @@ Sensor::Sensor(const Properties& props) {
         samplers.empty()
             ? detail::create_default(PluginKind::Sampler, "independent", props.location())
             : samplers[0]);
+    auto media = props.objects(PluginKind::Medium);
+    if (media.size() > 1) props.fail("medium", "a sensor sits in at most one <medium>");
+    if (!media.empty()) medium_ = std::static_pointer_cast<Medium>(media[0]);
 }
 
 Sampler::Sampler(const Properties& props) {

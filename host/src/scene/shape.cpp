@@ -6,6 +6,7 @@
 
 #include "femto/bsdf.h"
 #include "femto/emitter.h"
+#include "femto/medium.h"
 #include "femto/warp.h"
 #include "scene/loader.h"
 
@@ -26,6 +27,13 @@ Shape::Shape(const Properties& props) : location_(props.location()) {
     bsdf_ = bsdfs.empty() ? std::static_pointer_cast<Bsdf>(detail::create_default(
                                 PluginKind::Bsdf, "diffuse", props.location()))
                           : std::static_pointer_cast<Bsdf>(bsdfs[0]);
+    interior_ = std::static_pointer_cast<Medium>(props.get_object("interior", PluginKind::Medium));
+    exterior_ = std::static_pointer_cast<Medium>(props.get_object("exterior", PluginKind::Medium));
+    for (const ObjectPtr& m : props.objects(PluginKind::Medium))
+        if (m != interior_ && m != exterior_)
+            throw SceneError(props.location(),
+                             "a <medium> inside a shape must be named \"interior\" or "
+                             "\"exterior\" (e.g. <ref name=\"interior\" id=\"fog\"/>)");
     auto emitters = props.objects(PluginKind::Emitter);
     if (emitters.size() > 1) props.fail("emitter", "a shape takes at most one <emitter>");
     if (!emitters.empty()) {

@@ -35,6 +35,7 @@ constexpr size_t kMaxSceneFileBytes = size_t(1) << 30;
 const std::map<std::string, std::string> kIrregularNames = {
     {"intIOR", "int_ior"},   {"extIOR", "ext_ior"},   {"toUV", "to_uv"},
     {"fovAxis", "fov_axis"}, {"rrDepth", "rr_depth"}, {"uvScale", "uv_scale"},
+    {"densityMultiplier", "scale"},  // media: 0.x's densityMultiplier is Mitsuba 3's scale
 };
 struct TypeRename {
     const char* tag;

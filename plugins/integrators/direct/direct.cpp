@@ -2,8 +2,10 @@
 // `direct`): `emitter_samples` light samples and `bsdf_samples` BSDF samples per camera ray,
 // combined with the power heuristic.
 #include "femto/bsdf.h"
+#include "femto/error.h"
 #include "femto/integrator.h"
 #include "femto/plugin.h"
+#include "femto/scene.h"
 
 namespace {
 
@@ -20,6 +22,13 @@ public:
         if (bsdf_samples_ < 0) props.fail("bsdf_samples", "bsdf_samples must be >= 0");
         if (emitter_samples_ + bsdf_samples_ == 0)
             props.fail("emitter_samples", "emitter_samples and bsdf_samples cannot both be 0");
+    }
+
+    void preprocess(const Scene& scene) override {
+        if (scene.has_media())
+            throw SceneError(
+                "the direct integrator does not render participating media; use path or "
+                "transient_path for a scene with <medium>");
     }
 
     // Power heuristic for n_a samples of density a against n_b samples of density b.

@@ -40,4 +40,5 @@ FEMTO_PLUGIN(Orthographic, femto::PluginKind::Sensor, "orthographic",
               {"near_clip", "float", "0.01", "near clipping distance"},
               {"far_clip", "float", "10000", "far clipping distance"},
               {"film", "film", "hdrfilm", "the film (nested)"},
-              {"sampler", "sampler", "independent", "the sampler (nested)"}})
+              {"sampler", "sampler", "independent", "the sampler (nested)"},
+              {"medium", "medium", "", "medium the sensor sits in (nested <medium> or <ref>)"}})

@@ -84,4 +84,5 @@ FEMTO_PLUGIN(Perspective, femto::PluginKind::Sensor, "perspective",
               {"near_clip", "float", "0.01", "near clipping distance"},
               {"far_clip", "float", "10000", "far clipping distance"},
               {"film", "film", "hdrfilm", "the film (nested)"},
-              {"sampler", "sampler", "independent", "the sampler (nested)"}})
+              {"sampler", "sampler", "independent", "the sampler (nested)"},
+              {"medium", "medium", "", "medium the sensor sits in (nested <medium> or <ref>)"}})

@@ -77,4 +77,5 @@ FEMTO_PLUGIN(femto::DiskShape, femto::PluginKind::Shape, "disk",
              {{"to_world", "transform", "identity", "object-to-world transform"},
               {"flip_normals", "boolean", "false", "make the back side (-z) the outside"},
               {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"}})
+              {"emitter", "emitter", "", "area emitter attached to the surface"},
+              FEMTO_SHAPE_MEDIUM_PARAMS})

@@ -188,4 +188,5 @@ FEMTO_PLUGIN(femto::ObjShape, femto::PluginKind::Shape, "obj",
               {"to_world", "transform", "identity", "object-to-world transform"},
               {"flip_normals", "boolean", "false", "make the inside the outside"},
               {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"}})
+              {"emitter", "emitter", "", "area emitter attached to the surface"},
+              FEMTO_SHAPE_MEDIUM_PARAMS})

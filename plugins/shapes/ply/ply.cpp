@@ -536,4 +536,5 @@ FEMTO_PLUGIN(femto::PlyShape, femto::PluginKind::Shape, "ply",
               {"to_world", "transform", "identity", "object-to-world transform"},
               {"flip_normals", "boolean", "false", "make the inside the outside"},
               {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"}})
+              {"emitter", "emitter", "", "area emitter attached to the surface"},
+              FEMTO_SHAPE_MEDIUM_PARAMS})

@@ -74,4 +74,5 @@ FEMTO_PLUGIN(femto::SphereShape, femto::PluginKind::Shape, "sphere",
                "object-to-world transform: translation, rotation and uniform scale only"},
               {"flip_normals", "boolean", "false", "make the inside the outside"},
               {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"}})
+              {"emitter", "emitter", "", "area emitter attached to the surface"},
+              FEMTO_SHAPE_MEDIUM_PARAMS})

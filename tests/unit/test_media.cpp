@@ -1,0 +1,280 @@
+// Participating media in the path tracer against closed forms (issue 5, §3):
+//  - the ballistic term of a point pulse in an infinite homogeneous medium, I e^(-sigma_t r)
+//    / r^2 at t = eta r, seen on a small Lambertian detector;
+//  - the exact single-scattering term along a camera ray (eq. 5.11 with one medium vertex),
+//    for an isotropic and a forward-scattering (HG) phase function;
+//  - a medium of index eta delays the ballistic arrival by (eta - 1) * length, in an infinite
+//    medium and in a slab bounded by null surfaces (which also checks the transmittance of
+//    both the camera path and the shadow connection through the slab's boundaries);
+//  - bad medium parameters.
+//
+// Expected values. With a point light of intensity I at x_l, a camera ray x(s) = o + s d and
+// max_depth = 2 (a camera segment and one connection), the radiance reaching the camera at
+// time t is
+//     L(t) = integral ds sigma_s p(d . w_l) I e^(-sigma_t (s + r(s))) / r(s)^2
+//                        delta(t - eta (s + r(s)))          (r(s) = |x_l - x(s)|, w_l its
+//                        direction)
+// so a bin [t0, t1) holds the integral of the integrand over the s whose time falls in it;
+// the test integrates it with the midpoint rule on 4e5 steps (relative error < 1e-6 here).
+// A Lambertian detector of albedo rho at distance r from the light, lit at normal incidence,
+// adds rho / pi * I e^(-sigma_t r) / r^2 times the camera segment's transmittance, at
+// t = eta (camera distance + r).
+//
+// Tolerances: each bin is compared within 4 standard errors of its estimate, the standard error
+// taken from the film's variance AOV (the variance of each pixel-bin mean over samples), plus
+// 1e-4 relative for the quadrature. The ballistic amplitude is a binomial mean (the camera
+// segment passes or scatters), its SE is from the same AOV.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cube_util.h"
+#include "femto/error.h"
+#include "femto/host.h"
+#include "scene_util.h"
+
+using namespace femto;
+using femto::test::Cube;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct V3 {
+    double x, y, z;
+};
+
+struct Fog {
+    double sigma_a = 0.1, sigma_s = 0.5, eta = 1.0, g = 0.0;
+    double sigma_t() const { return sigma_a + sigma_s; }
+    std::string xml() const {
+        std::ostringstream s;
+        s << "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_a\" value=\"" << sigma_a
+          << "\"/><float name=\"sigma_s\" value=\"" << sigma_s << "\"/><float name=\"eta\" value=\""
+          << eta << "\"/>";
+        if (g != 0) s << "<phase type=\"hg\"><float name=\"g\" value=\"" << g << "\"/></phase>";
+        s << "</medium>";
+        return s.str();
+    }
+    double phase(double cos_theta) const {  // cos_theta between propagation directions
+        if (g == 0) return 1.0 / (4 * kPi);
+        const double denom = 1 + g * g - 2 * g * cos_theta;
+        return (1 - g * g) / (4 * kPi * denom * std::sqrt(denom));
+    }
+};
+
+// An orthographic 1x1-pixel camera (footprint 0.002 wide) at `origin` looking at `target`,
+// inside the fog (or not), with a transient film of `bins` bins from `start`.
+std::string camera(const std::string& origin, const std::string& target, const std::string& up,
+                   bool in_fog, double start, double width, int bins, int spp) {
+    std::ostringstream s;
+    s << "<integrator type=\"transient_path\"><integer name=\"max_depth\" value=\"2\"/>"
+         "</integrator><sensor type=\"orthographic\"><float name=\"near_clip\" value=\"0\"/>"
+         "<transform name=\"to_world\"><scale x=\"0.001\" y=\"0.001\"/><lookat origin=\""
+      << origin << "\" target=\"" << target << "\" up=\"" << up << "\"/></transform>"
+      << (in_fog ? "<ref id=\"fog\"/>" : "")
+      << "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" << spp
+      << "\"/></sampler><film type=\"transient\"><integer name=\"width\" value=\"1\"/>"
+         "<integer name=\"height\" value=\"1\"/><float name=\"start\" value=\""
+      << start << "\"/><float name=\"bin_width\" value=\"" << width
+      << "\"/><integer name=\"bins\" value=\"" << bins
+      << "\"/><string name=\"aovs\" value=\"variance\"/><rfilter type=\"box\"/></film></sensor>";
+    return s.str();
+}
+
+std::string point_light(const std::string& position, double intensity) {
+    std::ostringstream s;
+    s << "<emitter type=\"point\"><point name=\"position\" value=\"" << position
+      << "\"/><float name=\"intensity\" value=\"" << intensity << "\"/></emitter>";
+    return s.str();
+}
+
+// Single scattering along the ray o + s d, s in [s0, s1), binned by time (see the header).
+std::vector<double> single_scattering(const Fog& fog, const V3& o, const V3& d, const V3& light,
+                                      double intensity, double s0, double s1, double start,
+                                      double width, int bins) {
+    std::vector<double> out(size_t(bins), 0.0);
+    constexpr int kSteps = 400000;
+    const double h = (s1 - s0) / kSteps;
+    for (int i = 0; i < kSteps; ++i) {
+        const double s = s0 + (i + 0.5) * h;
+        const V3 x{o.x + s * d.x, o.y + s * d.y, o.z + s * d.z};
+        const V3 to{light.x - x.x, light.y - x.y, light.z - x.z};
+        const double r = std::sqrt(to.x * to.x + to.y * to.y + to.z * to.z);
+        // Light travels along -to/r toward x, then along -d toward the camera.
+        const double cos_theta = (to.x * d.x + to.y * d.y + to.z * d.z) / r;
+        const double value = fog.sigma_s * fog.phase(cos_theta) * intensity *
+                             std::exp(-fog.sigma_t() * (s + r)) / (r * r);
+        const double t = fog.eta * (s + r);
+        const int b = int(std::floor((t - start) / width));
+        if (b >= 0 && b < bins) out[size_t(b)] += value * h;
+    }
+    return out;
+}
+
+// Compares every bin (channel 0; the media are grey) with `expected` within 4 SE + 1e-4
+// relative; returns the number of bins that carry signal.
+int expect_bins(const Cube& cube, const Cube& variance, const std::vector<double>& expected) {
+    int signal = 0, bad = 0;
+    for (int t = 0; t < cube.T; ++t) {
+        const double got = cube.at(0, 0, t, 0), se = std::sqrt(double(variance.at(0, 0, t, 0)));
+        const double want = expected[size_t(t)];
+        if (want > 0) ++signal;
+        if (std::abs(got - want) > 4 * se + 1e-4 * std::abs(want) + 1e-12 && ++bad <= 10)
+            ADD_FAILURE() << "bin " << t << ": rendered " << got << " +- " << se << ", expected "
+                          << want;
+    }
+    EXPECT_EQ(bad, 0);
+    return signal;
+}
+
+void check_single_scattering(const Fog& fog) {
+    // Camera at the origin looking along +x; the light 1 unit off the ray, at (2, 1, 0).
+    const double start = 2.2, width = 0.05;
+    const int bins = 80;
+    const std::string xml = "<scene version=\"3.0.0\">" + fog.xml() +
+                            camera("0,0,0", "1,0,0", "0,0,1", true, start, width, bins, 20000) +
+                            point_light("2,1,0", 3.0) + "</scene>";
+    auto scene = load_scene_string(xml);
+    const auto [cube, variance] = femto::test::render_cube_and_variance(*scene, 5, "single");
+    ASSERT_EQ(cube.T, bins);
+    // Times past the window: s + r(s) grows with s, so s < start + bins * width suffices.
+    const auto expected = single_scattering(fog, {0, 0, 0}, {1, 0, 0}, {2, 1, 0}, 3.0, 0.0,
+                                            (start + bins * width) / fog.eta, start, width, bins);
+    EXPECT_GT(expect_bins(cube, variance, expected), 60);
+}
+
+TEST(Media, SingleScatteringMatchesTheClosedFormIsotropic) { check_single_scattering(Fog{}); }
+
+TEST(Media, SingleScatteringMatchesTheClosedFormForwardHG) {
+    Fog fog;
+    fog.g = 0.7;
+    check_single_scattering(fog);
+}
+
+// A Lambertian disk at z = 0 (albedo rho) under a point light at (0, 0, 2), seen from 0.05
+// above, all in an infinite medium: the ballistic term arrives at eta * 2.05 with amplitude
+// rho / pi * I e^(-sigma_t 2) / 4 times the camera segment's e^(-sigma_t 0.05); single
+// scattering in the camera's 0.05 gap arrives earlier, at eta (1.95 + 2s) for s in [0, 0.05).
+void check_ballistic(double eta) {
+    Fog fog;
+    fog.eta = eta;
+    const double rho = 0.5, intensity = 4.0, start = 1.0, width = 0.02;
+    const int bins = 120;
+    const std::string xml =
+        "<scene version=\"3.0.0\">" + fog.xml() +
+        camera("0,0,0.05", "0,0,0", "0,1,0", true, start, width, bins, 4000) +
+        "<shape type=\"disk\"><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.5\"/>"
+        "</bsdf></shape>" +
+        point_light("0,0,2", intensity) + "</scene>";
+    auto scene = load_scene_string(xml);
+    const auto [cube, variance] = femto::test::render_cube_and_variance(*scene, 9, "ballistic");
+    std::vector<double> expected = single_scattering(fog, {0, 0, 0.05}, {0, 0, -1}, {0, 0, 2},
+                                                     intensity, 0.0, 0.05, start, width, bins);
+    const double arrival = eta * 2.05;
+    const int bin = int(std::floor((arrival - start) / width));
+    ASSERT_GT(std::abs((arrival - start) / width - bin - 0.5), 0.0);  // inside, not at an edge
+    const double ballistic = rho / kPi * intensity * std::exp(-fog.sigma_t() * 2.0) / 4.0 *
+                             std::exp(-fog.sigma_t() * 0.05);
+    expected[size_t(bin)] += ballistic;
+    expect_bins(cube, variance, expected);
+    // The ballistic bin is where the energy is (the gap's scattering is < 1 % of it).
+    EXPECT_NEAR(cube.at(0, 0, bin, 0), ballistic, 0.02 * ballistic);
+}
+
+TEST(Media, BallisticTermOfAPointPulseInAnInfiniteMedium) { check_ballistic(1.0); }
+
+TEST(Media, IndexOfRefractionDelaysTheBallisticArrival) {
+    // eta = 1.33: the arrival moves from 2.05 to 1.33 * 2.05, i.e. by (eta - 1) * 2.05.
+    check_ballistic(1.33);
+}
+
+TEST(Media, SlabBehindNullBoundariesAttenuatesAndDelays) {
+    // A fog slab z in [1, 2] (a cube with a null material, interior = fog) between an
+    // orthographic camera at z = 3 and a diffuse plane at z = 0 lit by a point light at
+    // (0, 0.5, 4). Camera path and light connection each cross 1 unit of fog: the ballistic
+    // light arrives at 3 + |(0, 0.5, 4)| + 2 (eta - 1) with amplitude
+    // rho / pi * I cos / r^2 * e^(-2 sigma_t); scattering inside the slab arrives earlier.
+    Fog fog;
+    fog.eta = 1.5;
+    const double rho = 0.5, intensity = 10.0, start = 6.0, width = 0.02;
+    const int bins = 150;
+    const std::string xml =
+        "<scene version=\"3.0.0\">" + fog.xml() +
+        camera("0,0,3", "0,0,0", "0,1,0", false, start, width, bins, 2000) +
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/></transform>"
+        "<bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.5\"/></bsdf></shape>"
+        "<shape type=\"cube\"><transform name=\"to_world\"><scale x=\"5\" y=\"5\" z=\"0.5\"/>"
+        "<translate z=\"1.5\"/></transform><bsdf type=\"null\"/><ref name=\"interior\" "
+        "id=\"fog\"/></shape>" +
+        point_light("0,0.5,4", intensity) + "</scene>";
+    auto scene = load_scene_string(xml);
+    const auto [cube, variance] = femto::test::render_cube_and_variance(*scene, 3, "slab");
+    const double r = std::sqrt(0.25 + 16.0), cos_l = 4.0 / r;
+    // Inside the slab the light path's length is 1 / cos_l (it crosses 1 unit of height).
+    const double in_slab_light = 1.0 / cos_l;
+    const double arrival = 3.0 + r + (fog.eta - 1) * (1.0 + in_slab_light);
+    const double ballistic =
+        rho / kPi * intensity * cos_l / (r * r) * std::exp(-fog.sigma_t() * (1.0 + in_slab_light));
+    const int bin = int(std::floor((arrival - start) / width));
+    double late = 0;  // nothing can arrive after the ballistic light with max_depth 2
+    for (int t = bin + 1; t < cube.T; ++t) late += cube.at(0, 0, t, 0);
+    EXPECT_EQ(late, 0.0);
+    const double se = std::sqrt(double(variance.at(0, 0, bin, 0)));
+    EXPECT_NEAR(cube.at(0, 0, bin, 0), ballistic, 4 * se + 1e-5 * ballistic)
+        << "arrival " << arrival << " in bin " << bin;
+    EXPECT_GT(ballistic, 0.0);
+    // Earlier bins hold the slab's single scattering (times 3 - z + |x_l - x| + ...).
+    double early = 0;
+    for (int t = 0; t < bin; ++t) early += cube.at(0, 0, t, 0);
+    EXPECT_GT(early, 0.0);
+}
+
+TEST(Media, DirectIntegratorRefusesMedia) {
+    auto scene = load_scene_string(
+        "<scene version=\"3.0.0\"><integrator type=\"direct\"/><medium type=\"homogeneous\" "
+        "id=\"fog\"/><sensor type=\"perspective\"><ref id=\"fog\"/><film type=\"hdrfilm\">"
+        "<integer name=\"width\" value=\"4\"/><integer name=\"height\" value=\"4\"/></film>"
+        "</sensor><emitter type=\"point\"/></scene>");
+    try {
+        render(*scene, RenderOptions{});
+        ADD_FAILURE() << "expected a SceneError";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("participating media"), std::string::npos);
+    }
+}
+
+TEST(Media, RejectsBadParameters) {
+    const std::string body = "<emitter type=\"point\"/>";
+    EXPECT_NE(test::load_error(
+                  test::scene_xml("<medium type=\"homogeneous\"><float name=\"sigma_a\" "
+                                  "value=\"1\"/><float name=\"sigma_t\" value=\"1\"/></medium>" +
+                                  body))
+                  .find("not both"),
+              std::string::npos);
+    EXPECT_NE(test::load_error(test::scene_xml("<medium type=\"homogeneous\"><float name=\"eta\" "
+                                               "value=\"0.5\"/></medium>" +
+                                               body))
+                  .find("eta"),
+              std::string::npos);
+    EXPECT_NE(test::load_error(test::scene_xml("<medium type=\"homogeneous\"><float "
+                                               "name=\"sigma_s\" value=\"-1\"/></medium>" +
+                                               body))
+                  .find("sigma_s"),
+              std::string::npos);
+    EXPECT_NE(test::load_error(test::scene_xml("<medium type=\"homogeneous\"><rgb name=\"albedo\" "
+                                               "value=\"1.5\"/></medium>" +
+                                               body))
+                  .find("albedo"),
+              std::string::npos);
+    EXPECT_NE(test::load_error(test::scene_xml("<medium type=\"homogeneous\" id=\"m\"/><shape "
+                                               "type=\"rectangle\"><ref id=\"m\"/></shape>"))
+                  .find("interior"),
+              std::string::npos);
+}
+
+}  // namespace
