@@ -77,23 +77,10 @@ inline Cube read_npy(const std::string& path) {
     return cube;
 }
 
-inline Cube render_cube(Scene& scene, uint64_t seed, const std::string& name) {
-    RenderOptions opt;
-    opt.seed = seed;
-    const RenderStats stats = render(scene, opt);
-    RenderInfo info = make_render_info(scene, opt, stats);
-    info.write_npy = true;
-    const auto dir = femto::test::temp_dir("transient-" + name);
-    scene.sensor().film().write((dir / name).string(), info);
-    Cube cube = read_npy((dir / (name + ".npy")).string());
-    std::filesystem::remove_all(dir);
-    return cube;
-}
-
-/// Renders with `seed` and reads back the cube and its variance AOV (the scene's film needs
-/// aovs="variance"): the variance of each pixel-bin estimate.
-inline std::pair<Cube, Cube> render_cube_and_variance(Scene& scene, uint64_t seed,
-                                                      const std::string& name) {
+/// Renders with `seed`, writes the outputs with --npy and reads back OUTBASE + suffix + ".npy"
+/// for every suffix ("" is the cube, "_variance" the variance AOV, ...).
+inline std::vector<Cube> render_cubes(Scene& scene, uint64_t seed, const std::string& name,
+                                      const std::vector<std::string>& suffixes) {
     RenderOptions opt;
     opt.seed = seed;
     const RenderStats stats = render(scene, opt);
@@ -101,10 +88,23 @@ inline std::pair<Cube, Cube> render_cube_and_variance(Scene& scene, uint64_t see
     info.write_npy = true;
     const auto dir = femto::test::temp_dir("cube-" + name);
     scene.sensor().film().write((dir / name).string(), info);
-    std::pair<Cube, Cube> out{read_npy((dir / (name + ".npy")).string()),
-                              read_npy((dir / (name + "_variance.npy")).string())};
+    std::vector<Cube> out;
+    for (const std::string& suffix : suffixes)
+        out.push_back(read_npy((dir / (name + suffix + ".npy")).string()));
     std::filesystem::remove_all(dir);
     return out;
+}
+
+inline Cube render_cube(Scene& scene, uint64_t seed, const std::string& name) {
+    return render_cubes(scene, seed, name, {""})[0];
+}
+
+/// The cube and its variance AOV (the scene's film needs aovs="variance"): the variance of
+/// each pixel-bin estimate.
+inline std::pair<Cube, Cube> render_cube_and_variance(Scene& scene, uint64_t seed,
+                                                      const std::string& name) {
+    std::vector<Cube> c = render_cubes(scene, seed, name, {"", "_variance"});
+    return {std::move(c[0]), std::move(c[1])};
 }
 
 }  // namespace femto::test
