@@ -40,6 +40,10 @@ public:
     virtual void splat(const TimeGrid& grid, uint64_t pixel, uint32_t sample_index, double t,
                        std::vector<BinWeight>& out) const = 0;
 
+    /// True when splat() puts a contribution wholly into the bin holding t (a histogram):
+    /// films may then bin directly, without a call per contribution.
+    virtual bool is_histogram() const { return false; }
+
     /// Largest distance in time from t that splat() may reach; 0 for a histogram. Films let
     /// paths run this much past the end of the window.
     virtual double max_radius() const { return 0.0; }
@@ -66,6 +70,14 @@ template <typename Add>
 Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t pixel,
                    const ContributionList& sample, bool world_time, std::vector<BinWeight>& scratch,
                    Add&& add) {
+    if (filter.is_histogram()) {
+        for (const Contribution& c : sample.items()) {
+            const int bin =
+                grid.bin_of(recorded_time(c.path_length, sample.sensor_distance(), world_time));
+            if (bin >= 0) add(bin, c.radiance);
+        }
+        return Color(0.f);
+    }
     const bool spreads = filter.max_radius() > 0;
     Color spill(0.f);
     for (const Contribution& c : sample.items()) {

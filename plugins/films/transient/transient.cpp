@@ -74,6 +74,9 @@ public:
     mutable bool clean_ = true;  // all sums merged (and zeroed) since the last put
     std::vector<BinWeight> scratch_;
     std::vector<std::pair<int, Color>> sample_bins_;  // one sample's value per bin
+    // Film pixel of each block pixel, or SIZE_MAX outside the film: merge looks it up instead
+    // of dividing twice per touched entry (merge is a hot loop of cube films).
+    std::vector<size_t> dst_of_local_;
     uint64_t invalid_ = 0;
 };
 
@@ -164,18 +167,11 @@ public:
         BlockStorage& st = *block.st_;
         invalid_ += block.invalid_;
         const size_t bins = size_t(grid_.bins);
-        // Film pixel of a block pixel, or SIZE_MAX outside the film.
-        auto film_pixel = [&](size_t local) {
-            const int x = block.x0_ + int(local % size_t(block.w_)),
-                      y = block.y0_ + int(local / size_t(block.w_));
-            return x < 0 || x >= width_ || y < 0 || y >= height_
-                       ? SIZE_MAX
-                       : size_t(y) * size_t(width_) + size_t(x);
-        };
         const size_t block_pixels = size_t(block.w_) * size_t(block.h_);
+        const std::vector<size_t>& dst_of = block.dst_of_local_;
         for (const uint32_t flat : st.touched) {
-            const size_t local = flat % block_pixels, bin = flat / block_pixels;
-            const size_t dst = film_pixel(local);
+            const size_t bin = flat / block_pixels, local = flat - bin * block_pixels;
+            const size_t dst = dst_of[local];
             if (dst != SIZE_MAX) {
                 for (int c = 0; c < 3; ++c)
                     cube_[(dst * bins + bin) * 3 + c] += st.cube[size_t(flat) * 3 + c];
@@ -191,11 +187,10 @@ public:
             st.touched_bits[flat >> 6] = 0;  // whole words: every bit in them is in `touched`
         }
         st.touched.clear();
-        const size_t pixels = size_t(block.w_) * size_t(block.h_);
-        for (size_t local = 0; local < pixels; ++local) {
+        for (size_t local = 0; local < block_pixels; ++local) {
             PixelWeights& s = st.weights[local];
             if (s.weight == 0) continue;
-            const size_t dst = film_pixel(local);
+            const size_t dst = dst_of[local];
             if (dst != SIZE_MAX) {
                 PixelWeights& d = weights_[dst];
                 d.weight += s.weight;
@@ -327,7 +322,17 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h, in
       h_(h + 2 * border),
       bins_(film.grid_.bins),
       pixels_(size_t(w_) * size_t(h_)),
-      st_(film.acquire_storage(pixels_)) {}
+      st_(film.acquire_storage(pixels_)),
+      dst_of_local_(pixels_) {
+    for (int by = 0; by < h_; ++by)
+        for (int bx = 0; bx < w_; ++bx) {
+            const int x = x0_ + bx, y = y0_ + by;
+            dst_of_local_[size_t(by) * size_t(w_) + size_t(bx)] =
+                x < 0 || x >= film.width() || y < 0 || y >= film.height()
+                    ? SIZE_MAX
+                    : size_t(y) * size_t(film.width()) + size_t(x);
+        }
+}
 
 CubeBlock::~CubeBlock() {
     if (!clean_) {  // never merged (an exception): restore the all-zero invariant

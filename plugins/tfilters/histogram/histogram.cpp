@@ -12,6 +12,8 @@ class Histogram final : public TemporalFilter {
 public:
     explicit Histogram(const Properties&) {}
 
+    bool is_histogram() const override { return true; }
+
     void splat(const TimeGrid& grid, uint64_t, uint32_t, double t,
                std::vector<BinWeight>& out) const override {
         const int bin = grid.bin_of(t);
