@@ -35,6 +35,9 @@
 #include "cube_util.h"
 #include "femto/error.h"
 #include "femto/host.h"
+#include "femto/medium.h"
+#include "femto/random.h"
+#include "femto/time_sampling.h"
 #include "scene_util.h"
 
 using namespace femto;
@@ -70,10 +73,12 @@ struct Fog {
 // An orthographic 1x1-pixel camera (footprint 0.002 wide) at `origin` looking at `target`,
 // inside the fog (or not), with a transient film of `bins` bins from `start`.
 std::string camera(const std::string& origin, const std::string& target, const std::string& up,
-                   bool in_fog, double start, double width, int bins, int spp) {
+                   bool in_fog, double start, double width, int bins, int spp,
+                   const std::string& strategies = "") {
     std::ostringstream s;
     s << "<integrator type=\"transient_path\"><integer name=\"max_depth\" value=\"2\"/>"
-         "</integrator><sensor type=\"orthographic\"><float name=\"near_clip\" value=\"0\"/>"
+      << strategies
+      << "</integrator><sensor type=\"orthographic\"><float name=\"near_clip\" value=\"0\"/>"
          "<transform name=\"to_world\"><scale x=\"0.001\" y=\"0.001\"/><lookat origin=\""
       << origin << "\" target=\"" << target << "\" up=\"" << up << "\"/></transform>"
       << (in_fog ? "<ref id=\"fog\"/>" : "")
@@ -132,13 +137,14 @@ int expect_bins(const Cube& cube, const Cube& variance, const std::vector<double
     return signal;
 }
 
-void check_single_scattering(const Fog& fog) {
+void check_single_scattering(const Fog& fog, const std::string& strategies = "") {
     // Camera at the origin looking along +x; the light 1 unit off the ray, at (2, 1, 0).
     const double start = 2.2, width = 0.05;
     const int bins = 80;
-    const std::string xml = "<scene version=\"3.0.0\">" + fog.xml() +
-                            camera("0,0,0", "1,0,0", "0,0,1", true, start, width, bins, 20000) +
-                            point_light("2,1,0", 3.0) + "</scene>";
+    const std::string xml =
+        "<scene version=\"3.0.0\">" + fog.xml() +
+        camera("0,0,0", "1,0,0", "0,0,1", true, start, width, bins, 20000, strategies) +
+        point_light("2,1,0", 3.0) + "</scene>";
     auto scene = load_scene_string(xml);
     const auto [cube, variance] = femto::test::render_cube_and_variance(*scene, 5, "single");
     ASSERT_EQ(cube.T, bins);
@@ -154,6 +160,18 @@ TEST(Media, SingleScatteringMatchesTheClosedFormForwardHG) {
     Fog fog;
     fog.g = 0.7;
     check_single_scattering(fog);
+}
+
+// Time-uniform distance sampling (ch. 5.6.1) changes where vertices fall, not the expected
+// value: the same closed form holds with the `exponential` strategy, alone and mixed with
+// mean-free-path sampling by MIS.
+TEST(Media, SingleScatteringWithExponentialDistanceSampling) {
+    check_single_scattering(Fog{},
+                            "<distance type=\"exponential\"><float name=\"mean_vertices\" "
+                            "value=\"2\"/></distance>");
+    check_single_scattering(Fog{},
+                            "<distance type=\"exponential\"/><boolean name=\"mis\" "
+                            "value=\"true\"/>");
 }
 
 // A Lambertian disk at z = 0 (albedo rho) under a point light at (0, 0, 2), seen from 0.05
@@ -232,6 +250,110 @@ TEST(Media, SlabBehindNullBoundariesAttenuatesAndDelays) {
     double early = 0;
     for (int t = 0; t < bin; ++t) early += cube.at(0, 0, t, 0);
     EXPECT_GT(early, 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Distance strategies on their own
+
+TEST(DistanceSampling, ExponentialSamplesMatchTheirPdf) {
+    // Chi-square of 200000 samples in 40 equal-probability bins of the claimed exponential
+    // (bins from the closed-form CDF; the last bin is the tail), for several rates; and the
+    // pdf integrates to 1 (midpoint rule on [0, 40 / lambda], error < 1e-6).
+    for (double lambda : {0.1, 1.0, 7.5}) {
+        SCOPED_TRACE(lambda);
+        double integral = 0;
+        const double h = 40.0 / lambda / 400000;
+        for (int i = 0; i < 400000; ++i)
+            integral += DistanceSampler::pdf(lambda, (i + 0.5) * h) * h;
+        EXPECT_NEAR(integral, 1.0, 1e-6);
+        constexpr int kBins = 40, kSamples = 200000;
+        std::vector<int> count(kBins, 0);
+        Pcg32 rng(uint64_t(lambda * 1000), 3);
+        for (int i = 0; i < kSamples; ++i) {
+            const double r = DistanceSampler::sample(lambda, rng.next_double());
+            const double cdf = 1 - DistanceSampler::survival(lambda, r);
+            ++count[std::min(kBins - 1, int(cdf * kBins))];
+        }
+        double chi2 = 0;
+        const double expected = double(kSamples) / kBins;
+        for (int c : count) chi2 += (c - expected) * (c - expected) / expected;
+        // 39 degrees of freedom: P(chi2 > 80) < 1e-4.
+        EXPECT_LT(chi2, 80.0);
+    }
+}
+
+// Fig. 5.7 (left) as a test: the times of a subpath's vertices, t_i = eta (r_1 + ... + r_i),
+// are uniform in time under exponential distance sampling (appendix 5.C.1: their summed
+// density is lambda / eta for any lambda), and the `exponential` strategy's rate gives
+// mean_vertices vertices before the window's end. A uniform distance pdf (the thesis'
+// counterexample) is not uniform in time.
+TEST(DistanceSampling, ExponentialVertexTimesAreUniform) {
+    Properties fog_props("homogeneous", {});
+    fog_props.set_float("eta", 1.33);
+    auto fog = std::static_pointer_cast<Medium>(
+        create_object(PluginKind::Medium, "homogeneous", fog_props));
+    Properties props("exponential", {});
+    props.set_float("mean_vertices", 4.0);
+    auto strategy = std::static_pointer_cast<DistanceSampler>(
+        create_object(PluginKind::Distance, "exponential", props));
+    const DistanceContext ctx{20.0};  // window [0, 20)
+    const double lambda = strategy->rate(*fog, ctx);
+    EXPECT_NEAR(lambda, 4.0 / 20.0 * 1.33, 1e-12);
+    constexpr int kPaths = 50000, kBins = 20;
+    auto histogram = [&](auto&& sample_distance, double& mean_count) {
+        std::vector<int> count(kBins, 0);
+        Pcg32 rng(17, 5);
+        long total = 0;
+        for (int p = 0; p < kPaths; ++p) {
+            double t = 0;
+            while (true) {
+                t += 1.33 * sample_distance(rng.next_double());
+                if (t >= ctx.window_end) break;
+                ++count[int(t / ctx.window_end * kBins)];
+                ++total;
+            }
+        }
+        mean_count = double(total) / kPaths;
+        double chi2 = 0;
+        const double expected = double(total) / kBins;
+        for (int c : count) chi2 += (c - expected) * (c - expected) / expected;
+        return chi2;  // 19 degrees of freedom: P(chi2 > 45) < 1e-3, P(chi2 > 200) ~ 0
+    };
+    double mean_exponential = 0, mean_uniform = 0;
+    const double chi2_exponential =
+        histogram([&](double u) { return DistanceSampler::sample(lambda, u); }, mean_exponential);
+    EXPECT_LT(chi2_exponential, 45.0);
+    // The number of vertices in the window is Poisson with mean lambda * t_e / eta = 4.
+    EXPECT_NEAR(mean_exponential, 4.0, 4 * std::sqrt(4.0 / kPaths));
+    const double chi2_uniform =
+        histogram([&](double u) { return u * 2.0 / lambda; }, mean_uniform);  // same mean distance
+    EXPECT_GT(chi2_uniform, 200.0);
+}
+
+TEST(DistanceSampling, BadParameters) {
+    EXPECT_NE(test::load_error(test::scene_xml("<integrator type=\"transient_path\"><distance "
+                                               "type=\"exponential\"><float name=\"lambda\" "
+                                               "value=\"-1\"/></distance></integrator><emitter "
+                                               "type=\"point\"/>"))
+                  .find("lambda"),
+              std::string::npos);
+    EXPECT_NE(
+        test::load_error(test::scene_xml("<integrator type=\"transient_path\"><distance "
+                                         "type=\"exponential\"><float name=\"lambda\" value=\"1\"/>"
+                                         "<float name=\"mean_vertices\" value=\"2\"/></distance>"
+                                         "</integrator><emitter type=\"point\"/>"))
+            .find("not both"),
+        std::string::npos);
+    // mean_vertices needs a time window: a steady film has none.
+    auto scene = load_scene_string(test::scene_xml(
+        "<integrator type=\"transient_path\"><integer name=\"max_depth\" value=\"2\"/>"
+        "<distance type=\"exponential\"/></integrator><emitter type=\"point\"/>"));
+    try {
+        render(*scene, RenderOptions{});
+        ADD_FAILURE() << "expected a SceneError";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("mean_vertices"), std::string::npos);
+    }
 }
 
 TEST(Media, DirectIntegratorRefusesMedia) {

@@ -14,6 +14,11 @@ struct PathTracerOptions {
     int64_t max_depth = -1;  ///< longest path in segments (1 = emitters seen directly); -1 = none
     int64_t rr_depth = 5;    ///< depth at which Russian roulette starts; 0 = never
     bool hide_emitters = false;  ///< drop emission seen directly by the camera
+    /// Distance sampling in media (ch. 5.6.1); nullptr = mean free path.
+    const class DistanceSampler* distance = nullptr;
+    /// Combine `distance` with mean-free-path sampling by multiple importance sampling (a
+    /// one-sample balance-heuristic mixture of the two exponentials).
+    bool distance_mis = false;
 };
 
 /// Traces one camera path with next-event estimation and MIS (power heuristic). Every

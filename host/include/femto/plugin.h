@@ -19,7 +19,7 @@
 namespace femto {
 
 /// Bumped whenever a public header changes in a way that breaks compiled plugins.
-inline constexpr uint32_t kPluginAbiVersion = 4;
+inline constexpr uint32_t kPluginAbiVersion = 5;
 
 /// One documented parameter. `type` is free text for the docs ("float", "color|texture",
 /// "transform", "bsdf" for a child object, ...). A name "*" in the schema accepts any entry

@@ -7,6 +7,7 @@
 #include "femto/emitter.h"
 #include "femto/medium.h"
 #include "femto/sensor.h"
+#include "femto/time_sampling.h"
 
 namespace femto {
 
@@ -56,30 +57,53 @@ Connection connect_through_media(const Scene& scene, Ray ray, const Medium* medi
     return {Color(0.f), 0.0};  // pathological nesting: treat as blocked
 }
 
-// Steady distance sampling in a medium (mean free path): an exponential with rate lambda =
-// the mean of sigma_t's channels (homogeneous) or the majorant (heterogeneous; weighted by
-// ratio-tracked transmittance). Returns the weight and sets `scattered`/`distance`.
+// Distance sampling in a medium (ch. 5.6.1): an exponential at the mean-free-path rate (the
+// mean of sigma_t's channels, or the majorant of a heterogeneous medium), at a time-sampling
+// strategy's rate, or a half-half mixture of both (one-sample MIS, balance heuristic). The
+// weight is transmittance * sigma_s / pdf at a vertex, transmittance / P(pass) at a surface,
+// so the estimator is unbiased for any rate (ratio-tracked transmittance when heterogeneous).
 struct DistanceSample {
     bool scattered = false;
     double distance = 0.0;
     Color weight{1.f, 1.f, 1.f};
 };
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
+                               const PathTracerOptions& opt, const DistanceContext& ctx,
                                Sampler& sampler) {
     DistanceSample ds;
-    const Color st = medium.sigma_t(ray.o);
-    const double lambda =
-        medium.homogeneous() ? (double(st.r) + st.g + st.b) / 3.0 : double(medium.majorant());
-    if (!(lambda > 0.0)) return ds;  // nothing to interact with
-    const double r = -std::log1p(-double(sampler.next_1d())) / lambda;
+    double steady;
+    if (medium.homogeneous()) {
+        const Color st = medium.sigma_t(ray.o);
+        steady = (double(st.r) + st.g + st.b) / 3.0;
+    } else {
+        steady = double(medium.majorant());
+    }
+    const double strategy = opt.distance ? opt.distance->rate(medium, ctx) : steady;
+    const bool mix = opt.distance_mis && opt.distance && strategy != steady;
+    double u = double(sampler.next_1d());
+    double rate = strategy;
+    if (mix) {  // pick one of the two exponentials with probability 1/2, reusing u
+        rate = u < 0.5 ? steady : strategy;
+        u = u < 0.5 ? 2 * u : 2 * u - 1;
+    }
+    auto pdf = [&](double r) {
+        return mix ? 0.5 * (DistanceSampler::pdf(steady, r) + DistanceSampler::pdf(strategy, r))
+                   : DistanceSampler::pdf(rate, r);
+    };
+    auto survival = [&](double d) {
+        return mix ? 0.5 * (DistanceSampler::survival(steady, d) +
+                            DistanceSampler::survival(strategy, d))
+                   : DistanceSampler::survival(rate, d);
+    };
+    const double r =
+        rate > 0.0 ? DistanceSampler::sample(rate, std::min(u, 1.0 - 1e-12)) : kInfinity;
     if (r < tmax) {
         ds.scattered = true;
         ds.distance = r;
         const Vec3 p = ray.o + ray.d * float(r);
-        const double pdf = lambda * std::exp(-lambda * r);
-        ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / pdf);
+        ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / pdf(r));
     } else if (std::isfinite(tmax)) {
-        ds.weight = medium.transmittance(ray, tmax, sampler) * float(std::exp(lambda * tmax));
+        ds.weight = medium.transmittance(ray, tmax, sampler) * float(1.0 / survival(tmax));
     } else {
         ds.weight = Color(0.f);  // an infinite medium with no surface ahead absorbs it all
     }
@@ -98,6 +122,7 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
     // A path whose time is past this can no longer reach the film (ch. 5.6.1).
     const double max_length = scene.sensor().film().max_path_length() - scene.earliest_emission();
     const bool media = scene.has_media();
+    const DistanceContext distance_ctx{scene.sensor().film().max_path_length()};
     Ray ray = camera_ray;
     Color throughput(1.f);
     // Camera-side weight = mix * diag(throughput); mix stays the identity (and unused) until
@@ -124,8 +149,8 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
 
         // In a medium the path may scatter before reaching the surface.
         if (medium) {
-            const DistanceSample ds =
-                sample_distance(*medium, ray, found ? double(hit.t) : kInfinity, sampler);
+            const DistanceSample ds = sample_distance(
+                *medium, ray, found ? double(hit.t) : kInfinity, opt, distance_ctx, sampler);
             throughput *= ds.weight;
             if (ds.scattered) {
                 if (out.sensor_distance() < 0)

@@ -3,12 +3,17 @@
 // BSDF-sampled emitter hits arrive at different times). No Russian roulette: a path ends when
 // its time passes the film's end or at max_depth (ch. 5.6.1). Every vertex's contributions
 // reach the film in the same pass (path reuse in time, ch. 5.4.1).
+//
+// In participating media a nested <distance> strategy chooses how far paths travel between
+// medium vertices (ch. 5.6.1: `mean_free_path`, the default, or the time-uniform
+// `exponential`); `mis` combines it with mean-free-path sampling.
 #include <cmath>
 
 #include "femto/integrator.h"
 #include "femto/path_tracer.h"
 #include "femto/plugin.h"
 #include "femto/sensor.h"
+#include "femto/time_sampling.h"
 
 namespace {
 
@@ -22,6 +27,13 @@ public:
         options_.hide_emitters = props.get_bool("hide_emitters", false);
         if (options_.max_depth < -1)
             props.fail("max_depth", "max_depth must be -1 (unbounded) or >= 0");
+        auto distances = props.objects(PluginKind::Distance);
+        if (distances.size() > 1) props.fail("distance", "give at most one <distance> strategy");
+        if (!distances.empty()) {
+            distance_ = std::static_pointer_cast<DistanceSampler>(distances[0]);
+            options_.distance = distance_.get();
+        }
+        options_.distance_mis = props.get_bool("mis", false);
     }
 
     void preprocess(const Scene& scene) override {
@@ -29,6 +41,7 @@ public:
             throw SceneError(
                 "transient_path with max_depth=-1 needs a film with a finite time window "
                 "(a transient or streak film); set max_depth for steady films");
+        if (distance_) distance_->prepare({scene.sensor().film().max_path_length()});
     }
 
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
@@ -38,6 +51,7 @@ public:
 
 private:
     PathTracerOptions options_;
+    std::shared_ptr<DistanceSampler> distance_;
 };
 
 }  // namespace
@@ -46,4 +60,8 @@ FEMTO_PLUGIN(TransientPath, femto::PluginKind::Integrator, "transient_path",
              "Transient path tracer: NEE + MIS, each contribution at its own time, no roulette",
              {{"max_depth", "integer", "-1",
                "longest path in segments; -1 = until the film's time window ends"},
-              {"hide_emitters", "boolean", "false", "hide directly visible emitters"}})
+              {"hide_emitters", "boolean", "false", "hide directly visible emitters"},
+              {"distance", "distance", "mean_free_path",
+               "distance sampling in media (nested <distance>): mean_free_path or exponential"},
+              {"mis", "boolean", "false",
+               "combine the <distance> strategy with mean-free-path sampling by MIS"}})
