@@ -174,29 +174,33 @@ TEST(Media, SingleScatteringWithExponentialDistanceSampling) {
                             "value=\"true\"/>");
 }
 
-// A Lambertian disk at z = 0 (albedo rho) under a point light at (0, 0, 2), seen from 0.05
-// above, all in an infinite medium: the ballistic term arrives at eta * 2.05 with amplitude
-// rho / pi * I e^(-sigma_t 2) / 4 times the camera segment's e^(-sigma_t 0.05); single
-// scattering in the camera's 0.05 gap arrives earlier, at eta (1.95 + 2s) for s in [0, 0.05).
-void check_ballistic(double eta) {
+// A Lambertian disk at z = 0 (albedo rho) under a point light at (0, 0, h), seen from 0.05
+// above, all in an infinite medium: the ballistic term arrives at eta (h + 0.05) with
+// amplitude rho / pi * I e^(-sigma_t h) / h^2 times the camera segment's e^(-sigma_t 0.05);
+// single scattering in the camera's 0.05 gap arrives earlier, at eta (h - 0.05 + 2s) for s in
+// [0, 0.05). Light heights are chosen so that the arrival lies mid-bin.
+void check_ballistic(double eta, double h) {
     Fog fog;
     fog.eta = eta;
-    const double rho = 0.5, intensity = 4.0, start = 1.0, width = 0.02;
-    const int bins = 120;
+    const double rho = 0.5, intensity = 4.0, start = 0.5, width = 0.02;
+    const int bins = 200;
+    std::ostringstream light;
+    light << "0,0," << h;
     const std::string xml =
         "<scene version=\"3.0.0\">" + fog.xml() +
         camera("0,0,0.05", "0,0,0", "0,1,0", true, start, width, bins, 4000) +
         "<shape type=\"disk\"><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.5\"/>"
         "</bsdf></shape>" +
-        point_light("0,0,2", intensity) + "</scene>";
+        point_light(light.str(), intensity) + "</scene>";
     auto scene = load_scene_string(xml);
     const auto [cube, variance] = femto::test::render_cube_and_variance(*scene, 9, "ballistic");
-    std::vector<double> expected = single_scattering(fog, {0, 0, 0.05}, {0, 0, -1}, {0, 0, 2},
+    std::vector<double> expected = single_scattering(fog, {0, 0, 0.05}, {0, 0, -1}, {0, 0, h},
                                                      intensity, 0.0, 0.05, start, width, bins);
-    const double arrival = eta * 2.05;
+    const double arrival = eta * (h + 0.05);
     const int bin = int(std::floor((arrival - start) / width));
-    ASSERT_GT(std::abs((arrival - start) / width - bin - 0.5), 0.0);  // inside, not at an edge
-    const double ballistic = rho / kPi * intensity * std::exp(-fog.sigma_t() * 2.0) / 4.0 *
+    const double in_bin = (arrival - start) / width - bin;
+    ASSERT_TRUE(in_bin > 0.1 && in_bin < 0.9) << "arrival " << arrival << " near a bin edge";
+    const double ballistic = rho / kPi * intensity * std::exp(-fog.sigma_t() * h) / (h * h) *
                              std::exp(-fog.sigma_t() * 0.05);
     expected[size_t(bin)] += ballistic;
     expect_bins(cube, variance, expected);
@@ -204,11 +208,16 @@ void check_ballistic(double eta) {
     EXPECT_NEAR(cube.at(0, 0, bin, 0), ballistic, 0.02 * ballistic);
 }
 
-TEST(Media, BallisticTermOfAPointPulseInAnInfiniteMedium) { check_ballistic(1.0); }
+TEST(Media, BallisticTermOfAPointPulseInAnInfiniteMedium) {
+    for (double h : {1.0, 2.0, 3.3}) {  // r = 1, 2, 3.3: e^(-sigma_t r) / r^2 over a range
+        SCOPED_TRACE(h);
+        check_ballistic(1.0, h);
+    }
+}
 
 TEST(Media, IndexOfRefractionDelaysTheBallisticArrival) {
     // eta = 1.33: the arrival moves from 2.05 to 1.33 * 2.05, i.e. by (eta - 1) * 2.05.
-    check_ballistic(1.33);
+    check_ballistic(1.33, 2.0);
 }
 
 TEST(Media, SlabBehindNullBoundariesAttenuatesAndDelays) {
