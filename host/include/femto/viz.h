@@ -20,6 +20,10 @@
 
 namespace femto::io {
 
+/// The femto:* header attributes every output carries: version, integrator, scene, seed,
+/// samples (reached and requested), render time and whether the render was interrupted.
+Attributes render_attributes(const RenderInfo& info);
+
 /// The femto:* header attributes of a time-resolved output (render info, the time grid in
 /// scene units and, when length_unit is known, picoseconds; camera or world time; the
 /// temporal filter's type). Films append their own (e.g. femto:row) after these.

@@ -20,6 +20,7 @@
 #include "femto/color.h"
 #include "femto/error.h"
 #include "io/atomic_file.h"
+#include "io/display.h"
 
 namespace fs = std::filesystem;
 namespace OCIO = OCIO_NAMESPACE;
@@ -45,6 +46,24 @@ void commit_file(const std::string& tmp, const std::string& path) {
     }
 }
 
+OCIO::ConstCPUProcessorRcPtr display_processor() {
+    static std::once_flag once;
+    static OCIO::ConstCPUProcessorRcPtr processor;
+    static std::string error;
+    std::call_once(once, [] {
+        try {
+            auto config = OCIO::Config::CreateFromFile(ocio_config_path().c_str());
+            processor = config->getProcessor("linear", "sRGB")->getDefaultCPUProcessor();
+        } catch (const std::exception& e) {
+            error = e.what();
+        }
+    });
+    if (!processor)
+        throw std::runtime_error(
+            fmt::format("OpenColorIO config {}: {}", ocio_config_path(), error));
+    return processor;
+}
+
 }  // namespace detail
 
 using detail::temp_path_for;
@@ -65,24 +84,6 @@ std::string exe_relative_config() {
         }
     }
     return {};
-}
-
-OCIO::ConstCPUProcessorRcPtr display_processor() {
-    static std::once_flag once;
-    static OCIO::ConstCPUProcessorRcPtr processor;
-    static std::string error;
-    std::call_once(once, [] {
-        try {
-            auto config = OCIO::Config::CreateFromFile(ocio_config_path().c_str());
-            processor = config->getProcessor("linear", "sRGB")->getDefaultCPUProcessor();
-        } catch (const std::exception& e) {
-            error = e.what();
-        }
-    });
-    if (!processor)
-        throw std::runtime_error(
-            fmt::format("OpenColorIO config {}: {}", ocio_config_path(), error));
-    return processor;
 }
 
 }  // namespace
@@ -131,7 +132,7 @@ void write_png_preview(const std::string& path, int width, int height, const flo
     const float scale = std::exp2(exposure);
     for (float& v : buf) v = std::isfinite(v) ? std::max(0.f, v * scale) : 0.f;
     OCIO::PackedImageDesc desc(buf.data(), width, height, 3);
-    display_processor()->apply(desc);
+    detail::display_processor()->apply(desc);
     std::vector<unsigned char> bytes(3 * n);
     for (size_t i = 0; i < bytes.size(); ++i)
         bytes[i] = static_cast<unsigned char>(std::lround(std::clamp(buf[i], 0.f, 1.f) * 255.f));

@@ -17,15 +17,15 @@
 
 #include "femto/error.h"
 #include "io/atomic_file.h"
+#include "io/display.h"
 
 namespace fs = std::filesystem;
 namespace OCIO = OCIO_NAMESPACE;
 
 namespace femto::io {
 
-Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info, bool world_time,
-                                    const std::string& tfilter) {
-    Attributes attrs = {
+Attributes render_attributes(const RenderInfo& info) {
+    return {
         {"femto:version", info.femto_version},
         {"femto:integrator", info.integrator},
         {"femto:scene", info.scene_file},
@@ -34,6 +34,13 @@ Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info
         {"femto:samples_requested", std::to_string(info.samples_requested)},
         {"femto:render_seconds", fmt::format("{:.3f}", info.render_seconds)},
         {"femto:interrupted", info.interrupted ? "true" : "false"},
+    };
+}
+
+Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info, bool world_time,
+                                    const std::string& tfilter) {
+    Attributes attrs = render_attributes(info);
+    const Attributes time = {
         {"femto:start", fmt::format("{:.17g}", grid.start)},
         {"femto:bin_width", fmt::format("{:.17g}", grid.bin_width)},
         {"femto:bins", std::to_string(grid.bins)},
@@ -42,6 +49,7 @@ Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info
         {"femto:time", world_time ? "world" : "camera"},
         {"femto:tfilter", tfilter},
     };
+    attrs.insert(attrs.end(), time.begin(), time.end());
     if (grid.metres_per_unit() > 0) {
         attrs.push_back(
             {"femto:start_ps", fmt::format("{:.17g}", grid.to_picoseconds(grid.start))});
@@ -65,24 +73,6 @@ void commit(const std::string& tmp, const std::string& path) { io::detail::commi
     std::error_code ec;
     fs::remove(tmp, ec);
     throw SceneError(fmt::format("cannot write \"{}\": {}", path, err));
-}
-
-OCIO::ConstCPUProcessorRcPtr display_processor() {
-    static std::once_flag once;
-    static OCIO::ConstCPUProcessorRcPtr processor;
-    static std::string error;
-    std::call_once(once, [] {
-        try {
-            auto config = OCIO::Config::CreateFromFile(io::ocio_config_path().c_str());
-            processor = config->getProcessor("linear", "sRGB")->getDefaultCPUProcessor();
-        } catch (const std::exception& e) {
-            error = e.what();
-        }
-    });
-    if (!processor)
-        throw std::runtime_error(
-            fmt::format("OpenColorIO config {}: {}", io::ocio_config_path(), error));
-    return processor;
 }
 
 const float* px(const io::Cube& c, int x, int y, int t) {
@@ -279,7 +269,7 @@ std::vector<float> tone_map(const float* rgb, size_t pixels, float reference, fl
     } else {
         for (float& v : out) v = std::min(1.f, v);
         OCIO::PackedImageDesc desc(out.data(), long(pixels), 1, 3);
-        display_processor()->apply(desc);
+        io::detail::display_processor()->apply(desc);
         for (float& v : out) v = std::clamp(v, 0.f, 1.f);
     }
     return out;

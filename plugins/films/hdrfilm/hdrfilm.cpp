@@ -10,6 +10,7 @@
 #include "femto/log.h"
 #include "femto/plugin.h"
 #include "femto/properties.h"
+#include "femto/viz.h"
 
 namespace {
 
@@ -119,16 +120,7 @@ public:
             log_warning(fmt::format("{} samples with NaN or infinite radiance were discarded",
                                     invalid_.load()));
         const std::vector<float> rgb = steady_image();
-        const io::Attributes attrs = {
-            {"femto:version", info.femto_version},
-            {"femto:integrator", info.integrator},
-            {"femto:scene", info.scene_file},
-            {"femto:seed", std::to_string(info.seed)},
-            {"femto:samples", std::to_string(info.samples_per_pixel)},
-            {"femto:samples_requested", std::to_string(info.samples_requested)},
-            {"femto:render_seconds", fmt::format("{:.3f}", info.render_seconds)},
-            {"femto:interrupted", info.interrupted ? "true" : "false"},
-        };
+        const io::Attributes attrs = io::render_attributes(info);
         const std::string exr = out_base + ".exr", png = out_base + ".png";
         io::write_exr_rgb(exr, width_, height_, rgb.data(), attrs);
         io::write_png_preview(png, width_, height_, rgb.data(), exposure_);
