@@ -34,6 +34,15 @@ public:
     /// this context (e.g. a rate derived from a time window the film does not have).
     virtual void prepare(const DistanceContext& /*ctx*/) const {}
 
+    /// The steady (mean-free-path) rate in `medium`: the mean of sigma_t's channels when it
+    /// is homogeneous, the majorant otherwise (the path weight then carries the ratio-tracked
+    /// transmittance).
+    static double mean_free_path_rate(const Medium& medium) {
+        if (!medium.homogeneous()) return double(medium.majorant());
+        const Color st = medium.sigma_t(Vec3(0.f));
+        return (double(st.r) + double(st.g) + double(st.b)) / 3.0;
+    }
+
     /// Samples a distance from one uniform u in [0, 1): -ln(1 - u) / lambda.
     static double sample(double lambda, double u) { return -std::log1p(-u) / lambda; }
     /// Density of a sampled distance r.

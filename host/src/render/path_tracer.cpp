@@ -71,13 +71,7 @@ DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax
                                const PathTracerOptions& opt, const DistanceContext& ctx,
                                Sampler& sampler) {
     DistanceSample ds;
-    double steady;
-    if (medium.homogeneous()) {
-        const Color st = medium.sigma_t(ray.o);
-        steady = (double(st.r) + st.g + st.b) / 3.0;
-    } else {
-        steady = double(medium.majorant());
-    }
+    const double steady = DistanceSampler::mean_free_path_rate(medium);
     const double strategy = opt.distance ? opt.distance->rate(medium, ctx) : steady;
     const bool mix = opt.distance_mis && opt.distance && strategy != steady;
     double u = double(sampler.next_1d());
@@ -120,9 +114,9 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
                 const PathTracerOptions& opt) {
     if (opt.max_depth == 0) return;
     // A path whose time is past this can no longer reach the film (ch. 5.6.1).
-    const double max_length = scene.sensor().film().max_path_length() - scene.earliest_emission();
-    const bool media = scene.has_media();
     const DistanceContext distance_ctx{scene.sensor().film().max_path_length()};
+    const double max_length = distance_ctx.window_end - scene.earliest_emission();
+    const bool media = scene.has_media();
     Ray ray = camera_ray;
     Color throughput(1.f);
     // Camera-side weight = mix * diag(throughput); mix stays the identity (and unused) until

@@ -14,9 +14,7 @@ public:
     explicit MeanFreePath(const Properties&) {}
 
     double rate(const Medium& medium, const DistanceContext&) const override {
-        if (!medium.homogeneous()) return double(medium.majorant());
-        const Color st = medium.sigma_t(Vec3(0.f));
-        return (double(st.r) + double(st.g) + double(st.b)) / 3.0;
+        return mean_free_path_rate(medium);
     }
 };
 
