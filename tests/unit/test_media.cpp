@@ -174,6 +174,25 @@ TEST(Media, SingleScatteringWithExponentialDistanceSampling) {
                             "value=\"true\"/>");
 }
 
+// The connection strategies (ch. 5.6.2) place the vertex that connects to the light
+// themselves: line-to-point and equiangular alone, and shared with the distance strategy's
+// vertices by MIS, give the same closed form; so do all time strategies together.
+TEST(Media, SingleScatteringWithConnectionStrategies) {
+    for (const char* connection : {"line_to_point", "equiangular"})
+        for (const char* mis : {"false", "true"}) {
+            SCOPED_TRACE(std::string(connection) + " mis=" + mis);
+            check_single_scattering(Fog{}, std::string("<connection type=\"") + connection +
+                                               "\"/><boolean name=\"mis\" value=\"" + mis +
+                                               "\"/>");
+        }
+    Fog forward;
+    forward.g = 0.7;
+    check_single_scattering(forward,
+                            "<distance type=\"exponential\"/><connection "
+                            "type=\"line_to_point\"/><angular type=\"time\"/><boolean "
+                            "name=\"mis\" value=\"true\"/>");
+}
+
 // A Lambertian disk at z = 0 (albedo rho) under a point light at (0, 0, h), seen from 0.05
 // above, all in an infinite medium: the ballistic term arrives at eta (h + 0.05) with
 // amplitude rho / pi * I e^(-sigma_t h) / h^2 times the camera segment's e^(-sigma_t 0.05);

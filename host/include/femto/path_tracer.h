@@ -16,12 +16,23 @@ struct PathTracerOptions {
     bool hide_emitters = false;  ///< drop emission seen directly by the camera
     /// Distance sampling in media (ch. 5.6.1); nullptr = mean free path.
     const class DistanceSampler* distance = nullptr;
-    /// Combine `distance` with mean-free-path sampling by multiple importance sampling (a
-    /// one-sample balance-heuristic mixture of the two exponentials).
-    bool distance_mis = false;
+    /// Connection strategy in media (ch. 5.6.2); nullptr = deterministic shadow rays only.
+    /// A strategy that places vertices adds, on every ray segment through a medium, an extra
+    /// vertex connected to a light; it takes over the light connections of the distance
+    /// strategy's vertices on that segment (or shares them by MIS, see `mis`).
+    const class ConnectionSampler* connection = nullptr;
+    /// Angular sampling at medium vertices (ch. 5.6.3); nullptr = the phase function.
+    const class AngularSampler* angular = nullptr;
+    /// Combine each time strategy with its steady counterpart by multiple importance sampling
+    /// (balance heuristic): `distance` with mean-free-path sampling and `angular` with the
+    /// phase function as half-half mixtures, and `connection` vertices with the distance
+    /// strategy's shadow rays.
+    bool mis = false;
 };
 
-/// Traces one camera path with next-event estimation and MIS (power heuristic). Every
+/// Traces one camera path with next-event estimation and MIS (power heuristic; at medium
+/// vertices with a time angular strategy, light sampling alone, since that strategy's
+/// direction density depends on the next distance). Every
 /// contribution is reported with its time: the optical path length travelled (each segment
 /// times the refractive index it crosses, tracked through dielectric transmissions), plus the
 /// emitter's sampled emission time and any scattering delays (eq. 5.11-5.16). Paths stop

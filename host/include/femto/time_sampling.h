@@ -1,5 +1,9 @@
 // femto public API: time-sampling strategies for participating media (thesis ch. 5.6), nested
-// in an integrator: <distance> (how far a path travels before its next medium vertex).
+// in an integrator: <distance> (how far a path travels before its next medium vertex),
+// <connection> (where on a ray segment an extra vertex connects to a light) and <angular>
+// (which direction a path leaves a medium vertex in). Each strategy is sample + pdf, so any
+// integrator (path tracing today, bidirectional methods later) can call it and weigh it
+// against its steady counterpart by multiple importance sampling.
 //
 // A distance strategy samples the exponential p(r) = lambda e^(-lambda r) along a ray in a
 // medium; strategies differ in the rate lambda. Mean-free-path sampling uses the medium's
@@ -13,6 +17,7 @@
 
 #include <cmath>
 
+#include "femto/math.h"
 #include "femto/medium.h"
 #include "femto/object.h"
 
@@ -49,6 +54,70 @@ public:
     static double pdf(double lambda, double r) { return lambda * std::exp(-lambda * r); }
     /// Probability that the sampled distance exceeds d (the path reaches the next surface).
     static double survival(double lambda, double d) { return std::exp(-lambda * d); }
+};
+
+
+/// A ray segment in a medium on which a connection strategy places a vertex, and the point
+/// (usually on a light) that vertex will connect to (ch. 5.6.2, Fig. 5.6 middle).
+struct ConnectionQuery {
+    Vec3 origin;       ///< where the segment starts (the previous path vertex)
+    Vec3 direction;    ///< unit direction of the segment
+    double length = 0; ///< the vertex must lie in [0, length); may be +infinity
+    Vec3 target;       ///< the point the new vertex connects to
+};
+
+class ConnectionSampler : public Object {
+public:
+    PluginKind kind() const override { return PluginKind::Connection; }
+
+    /// False for `deterministic`: no extra vertex; the integrator casts its ordinary shadow
+    /// rays from the vertices the distance strategy places.
+    virtual bool places_vertex() const { return true; }
+    /// A distance along the segment in [0, q.length) from one uniform u in [0, 1), or a
+    /// negative value when the segment holds no vertex worth placing.
+    virtual double sample(const ConnectionQuery& q, double u) const = 0;
+    /// Density (per unit length) of sample() returning r.
+    virtual double pdf(const ConnectionQuery& q, double r) const = 0;
+
+    /// Equiangular sampling (Kulla & Fajardo 2012): density proportional to 1 / |x(r) -
+    /// target|^2, the steady-state reference. Works for an infinite segment too.
+    static double equiangular_sample(const ConnectionQuery& q, double u);
+    static double equiangular_pdf(const ConnectionQuery& q, double r);
+    /// Line-to-point sampling (eq. 5.24-5.25, appendix 5.C.2): the length r + |x(r) - target|
+    /// of the two-segment connection is uniform over its range on the segment, so in a medium
+    /// of index eta the connection's time is uniform. Needs a finite length.
+    static double line_to_point_sample(const ConnectionQuery& q, double u);
+    static double line_to_point_pdf(const ConnectionQuery& q, double r);
+};
+
+/// A medium vertex choosing its outgoing direction (ch. 5.6.3, Fig. 5.6 right).
+struct AngularQuery {
+    Vec3 position;                        ///< the vertex
+    Vec3 wi;                              ///< unit direction back along the incoming path
+    const PhaseFunction* phase = nullptr; ///< the medium's phase function
+    /// Distance to the next vertex, drawn by the distance strategy before the direction
+    /// (infinite when the path will not scatter again in this medium).
+    double distance = kInfinity;
+    bool has_target = false;              ///< false when no finite target exists (no light)
+    Vec3 target;                          ///< the point the path aims to reach (a light)
+};
+
+class AngularSampler : public Object {
+public:
+    PluginKind kind() const override { return PluginKind::Angular; }
+
+    /// True for `phase` (steady state): nothing to combine by MIS.
+    virtual bool steady() const { return false; }
+    /// A unit direction from two uniforms.
+    virtual Vec3 sample(const AngularQuery& q, Vec2 u) const = 0;
+    /// Solid-angle density of sample() returning wo.
+    virtual double pdf(const AngularQuery& q, const Vec3& wo) const = 0;
+
+    /// Time angular sampling (eq. 5.26-5.27, appendix 5.C.3): with r = q.distance and L the
+    /// distance to the target, the length r + |x + r wo - target| is uniform over [r + |L - r|,
+    /// r + L + r]. Falls back to the phase function when there is no usable target.
+    static Vec3 time_sample(const AngularQuery& q, Vec2 u);
+    static double time_pdf(const AngularQuery& q, const Vec3& wo);
 };
 
 }  // namespace femto

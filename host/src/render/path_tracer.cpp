@@ -57,51 +57,80 @@ Connection connect_through_media(const Scene& scene, Ray ray, const Medium* medi
     return {Color(0.f), 0.0};  // pathological nesting: treat as blocked
 }
 
-// Distance sampling in a medium (ch. 5.6.1): an exponential at the mean-free-path rate (the
-// mean of sigma_t's channels, or the majorant of a heterogeneous medium), at a time-sampling
-// strategy's rate, or a half-half mixture of both (one-sample MIS, balance heuristic). The
-// weight is transmittance * sigma_s / pdf at a vertex, transmittance / P(pass) at a surface,
-// so the estimator is unbiased for any rate (ratio-tracked transmittance when heterogeneous).
+// The distance strategy in one medium (ch. 5.6.1): an exponential at the mean-free-path
+// rate (the mean of sigma_t's channels, or the majorant of a heterogeneous medium), at a
+// time-sampling strategy's rate, or a half-half mixture of both (one-sample MIS, balance
+// heuristic). The rate does not depend on the direction, so a distance may be drawn before
+// the direction it will be travelled in (time angular sampling needs that).
+struct DistanceMixture {
+    double steady = 0, strategy = 0;
+    bool mix = false;
+    DistanceMixture(const Medium& medium, const PathTracerOptions& opt,
+                    const DistanceContext& ctx)
+        : steady(DistanceSampler::mean_free_path_rate(medium)),
+          strategy(opt.distance ? opt.distance->rate(medium, ctx) : steady),
+          mix(opt.mis && opt.distance && strategy != steady) {}
+    double sample(double u) const {
+        double rate = strategy;
+        if (mix) {  // pick one of the two exponentials with probability 1/2, reusing u
+            rate = u < 0.5 ? steady : strategy;
+            u = u < 0.5 ? 2 * u : 2 * u - 1;
+        }
+        return rate > 0.0 ? DistanceSampler::sample(rate, std::min(u, 1.0 - 1e-12)) : kInfinity;
+    }
+    double pdf(double r) const {
+        return mix ? 0.5 * (DistanceSampler::pdf(steady, r) + DistanceSampler::pdf(strategy, r))
+                   : DistanceSampler::pdf(strategy, r);
+    }
+    double survival(double d) const {
+        return mix ? 0.5 * (DistanceSampler::survival(steady, d) +
+                            DistanceSampler::survival(strategy, d))
+                   : DistanceSampler::survival(strategy, d);
+    }
+};
+
+// A distance drawn from u along a ray: a medium vertex before tmax, or the surface at tmax.
+// The weight is transmittance * sigma_s / pdf at a vertex, transmittance / P(pass) at a
+// surface, so the estimator is unbiased for any rate (ratio-tracked transmittance when
+// heterogeneous).
 struct DistanceSample {
     bool scattered = false;
     double distance = 0.0;
+    double pdf = 0.0;  // of the vertex, when scattered
     Color weight{1.f, 1.f, 1.f};
 };
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
-                               const PathTracerOptions& opt, const DistanceContext& ctx,
-                               Sampler& sampler) {
+                               const DistanceMixture& strategy, double u, Sampler& sampler) {
     DistanceSample ds;
-    const double steady = DistanceSampler::mean_free_path_rate(medium);
-    const double strategy = opt.distance ? opt.distance->rate(medium, ctx) : steady;
-    const bool mix = opt.distance_mis && opt.distance && strategy != steady;
-    double u = double(sampler.next_1d());
-    double rate = strategy;
-    if (mix) {  // pick one of the two exponentials with probability 1/2, reusing u
-        rate = u < 0.5 ? steady : strategy;
-        u = u < 0.5 ? 2 * u : 2 * u - 1;
-    }
-    auto pdf = [&](double r) {
-        return mix ? 0.5 * (DistanceSampler::pdf(steady, r) + DistanceSampler::pdf(strategy, r))
-                   : DistanceSampler::pdf(rate, r);
-    };
-    auto survival = [&](double d) {
-        return mix ? 0.5 * (DistanceSampler::survival(steady, d) +
-                            DistanceSampler::survival(strategy, d))
-                   : DistanceSampler::survival(rate, d);
-    };
-    const double r =
-        rate > 0.0 ? DistanceSampler::sample(rate, std::min(u, 1.0 - 1e-12)) : kInfinity;
+    const double r = strategy.sample(u);
     if (r < tmax) {
         ds.scattered = true;
         ds.distance = r;
+        ds.pdf = strategy.pdf(r);
         const Vec3 p = ray.o + ray.d * float(r);
-        ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / pdf(r));
+        ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / ds.pdf);
     } else if (std::isfinite(tmax)) {
-        ds.weight = medium.transmittance(ray, tmax, sampler) * float(1.0 / survival(tmax));
+        ds.weight = medium.transmittance(ray, tmax, sampler) * float(1.0 / strategy.survival(tmax));
     } else {
         ds.weight = Color(0.f);  // an infinite medium with no surface ahead absorbs it all
     }
     return ds;
+}
+
+// How far along a segment (origin o, unit direction d, in a medium of index eta) a vertex can
+// lie and still connect to `target` within `left` of optical length: the connection covers
+// eta * r in this medium, then at least |x(r) - target| (no medium is faster than vacuum).
+// eta r + |x(r) - target| grows with r; its root is the smaller root of
+// (eta^2 - 1) r^2 - 2 (eta left - b) r + (left^2 - |l|^2) = 0, written without cancellation.
+double connection_reach(const Vec3& o, const Vec3& d, const Vec3& target, double eta,
+                        double left) {
+    if (!std::isfinite(left)) return kInfinity;
+    const double lx = double(target.x) - o.x, ly = double(target.y) - o.y,
+                 lz = double(target.z) - o.z;
+    const double l2 = lx * lx + ly * ly + lz * lz, b = lx * d.x + ly * d.y + lz * d.z;
+    if (!(l2 < left * left)) return 0.0;
+    const double a = eta * eta - 1, half_b = eta * left - b, c = left * left - l2;
+    return c / (half_b + std::sqrt(std::max(half_b * half_b - a * c, 0.0)));
 }
 
 inline bool is_diagonal(const ColorMatrix& m) {
@@ -137,41 +166,120 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
     auto emission_time = [&](const Emitter& em) {
         return em.pulse().is_delta() ? em.pulse().offset : em.pulse().sample(sampler.next_1d());
     };
+    // Time-sampling strategies in media (ch. 5.6).
+    const bool connecting = media && opt.connection && opt.connection->places_vertex();
+    const bool steady_angular = !opt.angular || opt.angular->steady();
+    // The connection and angular strategies aim at a light point: the latest one sampled
+    // for next-event estimation (any point chosen before a segment's distances are drawn
+    // keeps them unbiased).
+    bool has_target = false;
+    Vec3 target;
+    auto set_target = [&](const EmitterSample& es) {
+        if (es.pdf > 0 && std::isfinite(es.distance)) {
+            target = es.p;
+            has_target = true;
+        }
+    };
+    double next_u = -1.0;   // the next distance's uniform, when drawn ahead (angular=time)
+    float hit_share = 1.f;  // share of direct light that emitter hits from prev_p carry
+    // Next-event estimation from a medium point x (the path arrives along -wi, `scale` on top
+    // of the throughput, optical length `time` so far): one light sample and its shadow
+    // connection through media, weighted by `share` and by MIS against phase sampling unless
+    // `light_only`. Returns the light sample.
+    auto medium_nee = [&](const Vec3& x, const Vec3& wi, const Color& scale, double time,
+                          bool light_only, float share) {
+        const float u_sel = sampler.next_1d();
+        const EmitterSample es = scene.sample_emitter(x, u_sel, sampler.next_2d());
+        if (!(es.pdf > 0) || es.weight.is_black() || !(share > 0)) return es;
+        const float f = medium->phase().eval(wi, es.wi);
+        if (!(f > 0)) return es;
+        const Connection c = connect_through_media(
+            scene, Ray{x, es.wi, 0.f, es.distance * (1.f - 1e-4f)}, medium, index, sampler);
+        if (c.transmittance.is_black()) return es;
+        const float w = es.delta || light_only ? 1.f : power_heuristic(es.pdf, f);
+        out.add(weighted(scale * es.weight * c.transmittance * (f * w * share)),
+                time + c.optical_length + emission_time(*es.emitter));
+        return es;
+    };
     for (int64_t depth = 1;;) {
         Hit hit;
         const bool found = scene.intersect(ray, hit);
 
         // In a medium the path may scatter before reaching the surface.
         if (medium) {
-            const DistanceSample ds = sample_distance(
-                *medium, ray, found ? double(hit.t) : kInfinity, opt, distance_ctx, sampler);
+            const DistanceMixture strategy(*medium, opt, distance_ctx);
+            const double u = next_u >= 0 ? next_u : double(sampler.next_1d());
+            next_u = -1.0;
+            const double tmax = found ? double(hit.t) : kInfinity;
+            const bool may_scatter = !(opt.max_depth >= 0 && depth >= opt.max_depth);
+
+            // Connection strategy (ch. 5.6.2): an extra vertex on this segment, connected to a
+            // light; it takes the segment's light connections over, or shares them by MIS.
+            ConnectionQuery cq;
+            bool connects = false;
+            if (connecting && may_scatter) {
+                if (!has_target) set_target(scene.sample_emitter(ray.o, sampler.next_1d(),
+                                                                 sampler.next_2d()));
+                if (has_target) {
+                    const double reach = connection_reach(ray.o, ray.d, target, medium->eta(),
+                                                          max_length - path_length);
+                    cq = ConnectionQuery{ray.o, ray.d, std::min(tmax, reach), target};
+                    connects = cq.length > 0;
+                }
+                const double r = connects ? opt.connection->sample(cq, sampler.next_1d()) : -1.0;
+                const double pc = r >= 0 ? opt.connection->pdf(cq, r) : 0.0;
+                if (pc > 0) {
+                    const float share = opt.mis ? float(pc / (pc + strategy.pdf(r))) : 1.f;
+                    const Vec3 x = ray.o + ray.d * float(r);
+                    const Color w = medium->transmittance(ray, r, sampler) * medium->sigma_s(x) *
+                                    float(1.0 / pc);
+                    medium_nee(x, -ray.d, w, path_length + r * medium->eta(), true, share);
+                }
+            }
+
+            const DistanceSample ds = sample_distance(*medium, ray, tmax, strategy, u, sampler);
             throughput *= ds.weight;
             if (ds.scattered) {
                 if (out.sensor_distance() < 0)
                     out.set_sensor_distance(path_length + ds.distance * medium->eta());
                 path_length += ds.distance * medium->eta();
                 if (path_length > max_length || throughput.is_black()) break;
-                if (opt.max_depth >= 0 && depth >= opt.max_depth) break;
+                if (!may_scatter) break;
                 const Vec3 p = ray.o + ray.d * float(ds.distance), wi = -ray.d;
                 const PhaseFunction& phase = medium->phase();
-                // Next-event estimation from the medium vertex.
-                const float u_sel = sampler.next_1d();
-                const EmitterSample es = scene.sample_emitter(p, u_sel, sampler.next_2d());
-                if (es.pdf > 0 && !es.weight.is_black()) {
-                    const float f = phase.eval(wi, es.wi);
-                    if (f > 0) {
-                        const Connection c = connect_through_media(
-                            scene, Ray{p, es.wi, 0.f, es.distance * (1.f - 1e-4f)}, medium, index,
-                            sampler);
-                        if (!c.transmittance.is_black()) {
-                            const float w = es.delta ? 1.f : power_heuristic(es.pdf, f);
-                            out.add(weighted(es.weight * c.transmittance * (f * w)),
-                                    path_length + c.optical_length + emission_time(*es.emitter));
-                        }
-                    }
+                // This vertex's share of the segment's direct light (the rest is the
+                // connection vertex's).
+                float share = 1.f;
+                if (connects) {
+                    const double pc = opt.connection->pdf(cq, ds.distance);
+                    share = opt.mis ? float(ds.pdf / (ds.pdf + pc)) : (pc > 0 ? 0.f : 1.f);
                 }
-                const Vec3 wo = phase.sample(wi, sampler.next_2d());
-                prev_pdf = phase.eval(wi, wo);
+                // Time angular sampling needs the next distance before the direction.
+                double next_distance = kInfinity;
+                if (!steady_angular) {
+                    next_u = double(sampler.next_1d());
+                    next_distance = strategy.sample(next_u);
+                }
+                set_target(medium_nee(p, wi, Color(1.f), path_length, !steady_angular, share));
+                Vec3 wo;
+                if (steady_angular) {
+                    wo = phase.sample(wi, sampler.next_2d());
+                    prev_pdf = phase.eval(wi, wo);
+                    hit_share = share;
+                } else {
+                    const AngularQuery aq{p, wi, &phase, next_distance, has_target, target};
+                    const Vec2 u_dir = sampler.next_2d();
+                    const bool use_phase = opt.mis && sampler.next_1d() < 0.5f;
+                    wo = use_phase ? phase.sample(wi, u_dir) : opt.angular->sample(aq, u_dir);
+                    const double f = double(phase.eval(wi, wo)), q = opt.angular->pdf(aq, wo);
+                    const double density = opt.mis ? 0.5 * (f + q) : q;
+                    if (!(density > 0) || !std::isfinite(density)) break;
+                    throughput *= float(f / density);
+                    prev_pdf = float(density);
+                    // Its direction density depends on the next distance, which an emitter
+                    // hit would condition on: light sampling alone covers direct light here.
+                    hit_share = 0.f;
+                }
                 prev_delta = false;
                 prev_p = p;
                 ray = Ray{p, wo, 0.f, kInfinity};
@@ -192,7 +300,8 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
             const Color Le = em->eval(hit, -ray.d);
             if (!Le.is_black() && !(depth == 1 && opt.hide_emitters)) {
                 float w = 1.f;
-                if (!prev_delta) w = power_heuristic(prev_pdf, scene.pdf_emitter(*em, prev_p, hit));
+                if (!prev_delta)
+                    w = hit_share * power_heuristic(prev_pdf, scene.pdf_emitter(*em, prev_p, hit));
                 out.add(weighted(Le * w), path_length + emission_time(*em));
             }
         }
@@ -243,6 +352,7 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
                     }
                 }
             }
+            set_target(es);
         }
 
         const float u_lobe = sampler.next_1d();
@@ -255,6 +365,7 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
             index *= double(bs.eta);
         prev_delta = (bs.sampled_lobe & kBsdfDelta) != 0;
         prev_pdf = bs.pdf;
+        hit_share = 1.f;
         prev_p = hit.p;
         const Vec3 wo_world = hit.to_world(bs.wo);
         if (media) medium = medium_after(hit, wo_world, medium);

@@ -4,9 +4,14 @@
 // its time passes the film's end or at max_depth (ch. 5.6.1). Every vertex's contributions
 // reach the film in the same pass (path reuse in time, ch. 5.4.1).
 //
-// In participating media a nested <distance> strategy chooses how far paths travel between
-// medium vertices (ch. 5.6.1: `mean_free_path`, the default, or the time-uniform
-// `exponential`); `mis` combines it with mean-free-path sampling.
+// In participating media three nested strategies (ch. 5.6) decide when samples land:
+// <distance> how far paths travel between medium vertices (`mean_free_path`, the default, or
+// the time-uniform `exponential`), <connection> whether an extra medium vertex carries each
+// segment's light connection (`deterministic`, the default, `line_to_point` or
+// `equiangular`), and <angular> the direction out of a medium vertex (`phase`, the default,
+// or `time`). `mis` combines each with its steady counterpart.
+#include <fmt/format.h>
+
 #include <cmath>
 
 #include "femto/integrator.h"
@@ -27,13 +32,13 @@ public:
         options_.hide_emitters = props.get_bool("hide_emitters", false);
         if (options_.max_depth < -1)
             props.fail("max_depth", "max_depth must be -1 (unbounded) or >= 0");
-        auto distances = props.objects(PluginKind::Distance);
-        if (distances.size() > 1) props.fail("distance", "give at most one <distance> strategy");
-        if (!distances.empty()) {
-            distance_ = std::static_pointer_cast<DistanceSampler>(distances[0]);
-            options_.distance = distance_.get();
-        }
-        options_.distance_mis = props.get_bool("mis", false);
+        distance_ = strategy<DistanceSampler>(props, PluginKind::Distance, "distance");
+        connection_ = strategy<ConnectionSampler>(props, PluginKind::Connection, "connection");
+        angular_ = strategy<AngularSampler>(props, PluginKind::Angular, "angular");
+        options_.distance = distance_.get();
+        options_.connection = connection_.get();
+        options_.angular = angular_.get();
+        options_.mis = props.get_bool("mis", false);
     }
 
     void preprocess(const Scene& scene) override {
@@ -50,8 +55,18 @@ public:
     }
 
 private:
+    // The nested strategy of `kind`, or null when none is given (the steady default).
+    template <class T>
+    static std::shared_ptr<T> strategy(const Properties& props, PluginKind kind, const char* tag) {
+        auto objects = props.objects(kind);
+        if (objects.size() > 1) props.fail(tag, fmt::format("give at most one <{}> strategy", tag));
+        return objects.empty() ? nullptr : std::static_pointer_cast<T>(objects[0]);
+    }
+
     PathTracerOptions options_;
     std::shared_ptr<DistanceSampler> distance_;
+    std::shared_ptr<ConnectionSampler> connection_;
+    std::shared_ptr<AngularSampler> angular_;
 };
 
 }  // namespace
@@ -63,5 +78,10 @@ FEMTO_PLUGIN(TransientPath, femto::PluginKind::Integrator, "transient_path",
               {"hide_emitters", "boolean", "false", "hide directly visible emitters"},
               {"distance", "distance", "mean_free_path",
                "distance sampling in media (nested <distance>): mean_free_path or exponential"},
+              {"connection", "connection", "deterministic",
+               "light connections in media (nested <connection>): deterministic, "
+               "line_to_point or equiangular"},
+              {"angular", "angular", "phase",
+               "directions at medium vertices (nested <angular>): phase or time"},
               {"mis", "boolean", "false",
-               "combine the <distance> strategy with mean-free-path sampling by MIS"}})
+               "combine each time strategy with its steady counterpart by MIS"}})
