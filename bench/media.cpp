@@ -149,7 +149,7 @@ Rendered render(const std::string& xml, const Options& o, const Medium& m, const
     lo.defines = {{"res", std::to_string(o.res)},
                   {"spp", std::to_string(spp)},
                   {"bins", "80"},
-                  {"bin_width", "0.2"},
+                  {"bin_width", "0.1"},
                   {"sigma_s", fmt::format("{}", m.sigma_s)},
                   {"sigma_a", "0.1"},
                   {"g", fmt::format("{}", m.g)},
@@ -329,7 +329,7 @@ void run(Csv& csv, const std::string& part, const Medium& m, const std::vector<S
                     "{},{},{},{},{},{},{},{},{},{},{:.6f},{:.6f},{:.6g},{:.6g},{:.6g},{:.3f}\n",
                     part, m.sigma_s, m.g, s.name, s.distance, s.connection, s.angular, s.mis, spp,
                     seed, x.wall, x.render_seconds, mt.cube, mt.frame, mt.pixel, load1());
-                if (seed == 0) write_frames(csv, part, m, s, spp, x, ref, mt, 0.2);
+                if (seed == 0) write_frames(csv, part, m, s, spp, x, ref, mt, 0.1);
                 csv.error.flush();
             }
     csv.frames.flush();
@@ -351,7 +351,7 @@ int main(int argc, char** argv) try {
         meta << "date: " << now_utc() << "\ncpu: " << cpu_model() << " (" << sysconf(_SC_NPROCESSORS_ONLN)
              << " cores)\nbuild: " << FEMTO_BENCH_BUILD << "\nload before: " << read_loadavg()
              << "\nscene: scenes/fog-object, " << o.res << "x" << o.res
-             << " pixels, 80 bins of 0.2 (window [0, 16)), sigma_a 0.1, histogram\nreference: "
+             << " pixels, 80 bins of 0.1 (window [0, 8)), sigma_a 0.1, histogram\nreference: "
              << o.ref_spp << " spp of " << kReference.distance << " + " << kReference.connection
              << " + " << kReference.angular << " angular, mis\n";
     }
