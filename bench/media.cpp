@@ -107,16 +107,26 @@ Options parse(int argc, char** argv) {
             return argv[++i];
         };
         if (a == "-h" || a == "--help") usage(0);
-        if (a == "--out") o.out_dir = next();
-        else if (a == "--parts") o.parts = split(next(), ',');
-        else if (a == "--budgets") o.budgets = int_list(next());
-        else if (a == "--combo-budgets") o.combo_budgets = int_list(next());
-        else if (a == "--seeds") o.seeds = std::stoi(next());
-        else if (a == "--combo-seeds") o.combo_seeds = std::stoi(next());
-        else if (a == "--res") o.res = std::stoi(next());
-        else if (a == "--ref-spp") o.ref_spp = std::stoi(next());
-        else if (a == "--threads") o.threads = std::stoi(next());
-        else throw std::invalid_argument("unknown option '" + a + "' (see --help)");
+        if (a == "--out")
+            o.out_dir = next();
+        else if (a == "--parts")
+            o.parts = split(next(), ',');
+        else if (a == "--budgets")
+            o.budgets = int_list(next());
+        else if (a == "--combo-budgets")
+            o.combo_budgets = int_list(next());
+        else if (a == "--seeds")
+            o.seeds = std::stoi(next());
+        else if (a == "--combo-seeds")
+            o.combo_seeds = std::stoi(next());
+        else if (a == "--res")
+            o.res = std::stoi(next());
+        else if (a == "--ref-spp")
+            o.ref_spp = std::stoi(next());
+        else if (a == "--threads")
+            o.threads = std::stoi(next());
+        else
+            throw std::invalid_argument("unknown option '" + a + "' (see --help)");
     }
     return o;
 }
@@ -169,8 +179,8 @@ Rendered render(const std::string& xml, const Options& o, const Medium& m, const
     r.render_seconds = st.seconds;
     // Read back through the film's writer (untimed): the cube, its variance and count AOVs.
     static int counter = 0;
-    const fs::path tmp = fs::temp_directory_path() / fmt::format("femto_bench_media_{}_{}",
-                                                                  getpid(), counter++);
+    const fs::path tmp =
+        fs::temp_directory_path() / fmt::format("femto_bench_media_{}_{}", getpid(), counter++);
     fs::create_directories(tmp);
     femto::RenderInfo info = femto::make_render_info(*scene, ro, st);
     info.write_npy = true;
@@ -198,10 +208,9 @@ struct Reference {
 
 Reference reference(const std::string& xml, const Options& o, const Medium& m, bool single) {
     Reference ref;
-    const std::string base =
-        fmt::format("{}/ref_media_{}_s{}_g{}_r{}_n{}_{:08x}", o.out_dir, single ? "single" : "ms",
-                    m.sigma_s, m.g, o.res, o.ref_spp,
-                    uint32_t(std::hash<std::string>{}(xml) & 0xffffffffu));
+    const std::string base = fmt::format("{}/ref_media_{}_s{}_g{}_r{}_n{}_{:08x}", o.out_dir,
+                                         single ? "single" : "ms", m.sigma_s, m.g, o.res, o.ref_spp,
+                                         uint32_t(std::hash<std::string>{}(xml)&0xffffffffu));
     if (fs::exists(base + "_mean.npy") && fs::exists(base + "_var.npy")) {
         std::vector<size_t> s;
         ref.r.cube = femto::io::read_npy(base + "_mean.npy", ref.r.shape);
@@ -211,8 +220,8 @@ Reference reference(const std::string& xml, const Options& o, const Medium& m, b
         ref.r = render(xml, o, m, kReference, o.ref_spp, 900000001ull);
         femto::io::write_npy(base + "_mean.npy", ref.r.shape, ref.r.cube.data());
         femto::io::write_npy(base + "_var.npy", ref.r.shape, ref.r.variance.data());
-        fmt::print("  reference: {} spp in {:.1f} s, cached as {}_*.npy\n", o.ref_spp,
-                   ref.r.wall, base);
+        fmt::print("  reference: {} spp in {:.1f} s, cached as {}_*.npy\n", o.ref_spp, ref.r.wall,
+                   base);
     }
     ref.H = ref.r.shape[0];
     ref.W = ref.r.shape[1];
@@ -310,8 +319,9 @@ void write_frames(Csv& csv, const std::string& part, const Medium& m, const Stra
     }
 }
 
-void run(Csv& csv, const std::string& part, const Medium& m, const std::vector<Strategy>& strategies,
-         const std::vector<int>& budgets, int seeds, const Options& o, bool single) {
+void run(Csv& csv, const std::string& part, const Medium& m,
+         const std::vector<Strategy>& strategies, const std::vector<int>& budgets, int seeds,
+         const Options& o, bool single) {
     const std::string xml = scene_text(single);
     fmt::print("{} sigma_s={} g={}\n", part, m.sigma_s, m.g);
     const Reference ref = reference(xml, o, m, single);
@@ -348,9 +358,10 @@ int main(int argc, char** argv) try {
     csv.frames << "part,sigma_s,g,strategy,spp,frame,t,frame_relmse,pixel,pixel_ref,samples\n";
     {
         std::ofstream meta(o.out_dir + "/media_meta.txt");
-        meta << "date: " << now_utc() << "\ncpu: " << cpu_model() << " (" << sysconf(_SC_NPROCESSORS_ONLN)
-             << " cores)\nbuild: " << FEMTO_BENCH_BUILD << "\nload before: " << read_loadavg()
-             << "\nscene: scenes/fog-object, " << o.res << "x" << o.res
+        meta << "date: " << now_utc() << "\ncpu: " << cpu_model() << " ("
+             << sysconf(_SC_NPROCESSORS_ONLN) << " cores)\nbuild: " << FEMTO_BENCH_BUILD
+             << "\nload before: " << read_loadavg() << "\nscene: scenes/fog-object, " << o.res
+             << "x" << o.res
              << " pixels, 80 bins of 0.1 (window [0, 8)), sigma_a 0.1, histogram\nreference: "
              << o.ref_spp << " spp of " << kReference.distance << " + " << kReference.connection
              << " + " << kReference.angular << " angular, mis\n";
@@ -379,8 +390,8 @@ int main(int argc, char** argv) try {
                         if (std::string(d) == "mean_free_path" &&
                             std::string(c) == "deterministic" && std::string(a) == "phase" && mis)
                             continue;
-                        all.push_back({fmt::format("{}/{}/{}{}", d, c, a, mis ? "/mis" : ""), d,
-                                       c, a, mis});
+                        all.push_back(
+                            {fmt::format("{}/{}/{}{}", d, c, a, mis ? "/mis" : ""), d, c, a, mis});
                     }
         run(csv, "combos", {0.9, 0.0}, all, o.combo_budgets, o.combo_seeds, o, false);
     }

@@ -182,8 +182,7 @@ TEST(Media, SingleScatteringWithConnectionStrategies) {
         for (const char* mis : {"false", "true"}) {
             SCOPED_TRACE(std::string(connection) + " mis=" + mis);
             check_single_scattering(Fog{}, std::string("<connection type=\"") + connection +
-                                               "\"/><boolean name=\"mis\" value=\"" + mis +
-                                               "\"/>");
+                                               "\"/><boolean name=\"mis\" value=\"" + mis + "\"/>");
         }
     Fog forward;
     forward.g = 0.7;

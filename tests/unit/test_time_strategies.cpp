@@ -112,9 +112,7 @@ TEST(ConnectionSampling, LineToPointSamplesMatchTheirPdf) {
     check_connection_chi2("line_to_point");  // on the infinite segment: equiangular
 }
 
-TEST(ConnectionSampling, EquiangularSamplesMatchTheirPdf) {
-    check_connection_chi2("equiangular");
-}
+TEST(ConnectionSampling, EquiangularSamplesMatchTheirPdf) { check_connection_chi2("equiangular"); }
 
 TEST(ConnectionSampling, DeterministicPlacesNoVertex) {
     auto strategy = make_connection("deterministic");
@@ -229,8 +227,7 @@ TEST(AngularSampling, TimeAngularPathTimesAreUniform) {
             Pcg32 rng(3, 9);
             for (int i = 0; i < kSamples; ++i) {
                 const Vec3 w = s.sample(q, Vec2(rng.next_float(), rng.next_float()));
-                const double t =
-                    c.r + double(length(q.position + w * float(c.r) - q.target));
+                const double t = c.r + double(length(q.position + w * float(c.r) - q.target));
                 ++count[std::clamp(int((t - t0) / (t1 - t0) * kBins), 0, kBins - 1)];
             }
             double chi2 = 0;
@@ -238,7 +235,7 @@ TEST(AngularSampling, TimeAngularPathTimesAreUniform) {
             for (int n : count) chi2 += (n - expected) * (n - expected) / expected;
             return chi2;
         };
-        EXPECT_LT(chi2_of(*time), 45.0);   // 19 dof: P(chi2 > 45) < 1e-3
+        EXPECT_LT(chi2_of(*time), 45.0);     // 19 dof: P(chi2 > 45) < 1e-3
         EXPECT_GT(chi2_of(*phase), 1000.0);  // isotropic: the length's density grows linearly
     }
 }
@@ -300,8 +297,8 @@ struct Combination {
                "<distance type=\"" +
                distance + "\">" +
                (distance == "exponential" ? "<float name=\"lambda\" value=\"0.6\"/>" : "") +
-               "</distance><connection type=\"" + connection + "\"/><angular type=\"" +
-               angular + "\"/><boolean name=\"mis\" value=\"" + (mis ? "true" : "false") +
+               "</distance><connection type=\"" + connection + "\"/><angular type=\"" + angular +
+               "\"/><boolean name=\"mis\" value=\"" + (mis ? "true" : "false") +
                "\"/></integrator>";
     }
 };

@@ -56,14 +56,13 @@ public:
     static double survival(double lambda, double d) { return std::exp(-lambda * d); }
 };
 
-
 /// A ray segment in a medium on which a connection strategy places a vertex, and the point
 /// (usually on a light) that vertex will connect to (ch. 5.6.2, Fig. 5.6 middle).
 struct ConnectionQuery {
-    Vec3 origin;       ///< where the segment starts (the previous path vertex)
-    Vec3 direction;    ///< unit direction of the segment
-    double length = 0; ///< the vertex must lie in [0, length); may be +infinity
-    Vec3 target;       ///< the point the new vertex connects to
+    Vec3 origin;        ///< where the segment starts (the previous path vertex)
+    Vec3 direction;     ///< unit direction of the segment
+    double length = 0;  ///< the vertex must lie in [0, length); may be +infinity
+    Vec3 target;        ///< the point the new vertex connects to
 };
 
 class ConnectionSampler : public Object {
@@ -92,14 +91,14 @@ public:
 
 /// A medium vertex choosing its outgoing direction (ch. 5.6.3, Fig. 5.6 right).
 struct AngularQuery {
-    Vec3 position;                        ///< the vertex
-    Vec3 wi;                              ///< unit direction back along the incoming path
-    const PhaseFunction* phase = nullptr; ///< the medium's phase function
+    Vec3 position;                         ///< the vertex
+    Vec3 wi;                               ///< unit direction back along the incoming path
+    const PhaseFunction* phase = nullptr;  ///< the medium's phase function
     /// Distance to the next vertex, drawn by the distance strategy before the direction
     /// (infinite when the path will not scatter again in this medium).
     double distance = kInfinity;
-    bool has_target = false;              ///< false when no finite target exists (no light)
-    Vec3 target;                          ///< the point the path aims to reach (a light)
+    bool has_target = false;  ///< false when no finite target exists (no light)
+    Vec3 target;              ///< the point the path aims to reach (a light)
 };
 
 class AngularSampler : public Object {

@@ -65,8 +65,7 @@ Connection connect_through_media(const Scene& scene, Ray ray, const Medium* medi
 struct DistanceMixture {
     double steady = 0, strategy = 0;
     bool mix = false;
-    DistanceMixture(const Medium& medium, const PathTracerOptions& opt,
-                    const DistanceContext& ctx)
+    DistanceMixture(const Medium& medium, const PathTracerOptions& opt, const DistanceContext& ctx)
         : steady(DistanceSampler::mean_free_path_rate(medium)),
           strategy(opt.distance ? opt.distance->rate(medium, ctx) : steady),
           mix(opt.mis && opt.distance && strategy != steady) {}
@@ -122,8 +121,7 @@ DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax
 // eta * r in this medium, then at least |x(r) - target| (no medium is faster than vacuum).
 // eta r + |x(r) - target| grows with r; its root is the smaller root of
 // (eta^2 - 1) r^2 - 2 (eta left - b) r + (left^2 - |l|^2) = 0, written without cancellation.
-double connection_reach(const Vec3& o, const Vec3& d, const Vec3& target, double eta,
-                        double left) {
+double connection_reach(const Vec3& o, const Vec3& d, const Vec3& target, double eta, double left) {
     if (!std::isfinite(left)) return kInfinity;
     const double lx = double(target.x) - o.x, ly = double(target.y) - o.y,
                  lz = double(target.z) - o.z;
@@ -218,8 +216,8 @@ void trace_path(const Scene& scene, Sampler& sampler, const Ray& camera_ray, Con
             ConnectionQuery cq;
             bool connects = false;
             if (connecting && may_scatter) {
-                if (!has_target) set_target(scene.sample_emitter(ray.o, sampler.next_1d(),
-                                                                 sampler.next_2d()));
+                if (!has_target)
+                    set_target(scene.sample_emitter(ray.o, sampler.next_1d(), sampler.next_2d()));
                 if (has_target) {
                     const double reach = connection_reach(ray.o, ray.d, target, medium->eta(),
                                                           max_length - path_length);

@@ -1,17 +1,16 @@
 // The connection and angular time-sampling routines of ch. 5.6.2-5.6.3 (and equiangular
 // sampling, their steady reference), shared by the strategy plugins and by later integrators.
 // Everything is in double: the inverse cdfs subtract nearly equal lengths.
+#include "femto/time_sampling.h"
+
 #include <algorithm>
 #include <cmath>
-
-#include "femto/time_sampling.h"
 
 namespace femto {
 
 namespace {
 
 constexpr double kPi64 = 3.14159265358979323846;
-
 
 struct D3 {
     double x, y, z;
@@ -84,7 +83,6 @@ double ConnectionSampler::line_to_point_pdf(const ConnectionQuery& q, double r) 
 
 namespace {
 
-
 // The usable geometry of a time angular query: r, the target's distance L and direction.
 struct AngularGeometry {
     bool usable = false;
@@ -128,8 +126,7 @@ double AngularSampler::time_pdf(const AngularQuery& q, const Vec3& wo) {
     if (!a.usable) return double(q.phase->eval(q.wi, wo));
     const double cos_theta = std::clamp(double(dot(wo, a.axis)), -1.0, 1.0);
     // s^2 = (r - L)^2 + 2 r L (1 - cos theta), again without cancellation.
-    const double s =
-        std::sqrt((a.r - a.L) * (a.r - a.L) + 2 * a.r * a.L * (1 - cos_theta));
+    const double s = std::sqrt((a.r - a.L) * (a.r - a.L) + 2 * a.r * a.L * (1 - cos_theta));
     const double m = std::min(a.r, a.L);
     return a.r * a.L / (4 * kPi64 * std::max(s, 1e-12 * m) * m);
 }

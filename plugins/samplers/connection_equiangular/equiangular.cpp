@@ -16,9 +16,7 @@ public:
     double sample(const ConnectionQuery& q, double u) const override {
         return equiangular_sample(q, u);
     }
-    double pdf(const ConnectionQuery& q, double r) const override {
-        return equiangular_pdf(q, r);
-    }
+    double pdf(const ConnectionQuery& q, double r) const override { return equiangular_pdf(q, r); }
 };
 
 }  // namespace
