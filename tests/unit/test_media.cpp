@@ -176,7 +176,10 @@ TEST(Media, SingleScatteringWithExponentialDistanceSampling) {
 
 // The connection strategies (ch. 5.6.2) place the vertex that connects to the light
 // themselves: line-to-point and equiangular alone, and shared with the distance strategy's
-// vertices by MIS, give the same closed form; so do all time strategies together.
+// vertices by MIS, give the same closed form, also in a medium of index 1.33 (the window
+// limit of the connection vertex and its time depend on eta), and with the exponential
+// distance strategy and forward scattering. (With max_depth 2 the angular strategy has no
+// effect here; test_time_strategies.cpp covers it with multiple scattering.)
 TEST(Media, SingleScatteringWithConnectionStrategies) {
     for (const char* connection : {"line_to_point", "equiangular"})
         for (const char* mis : {"false", "true"}) {
@@ -184,12 +187,17 @@ TEST(Media, SingleScatteringWithConnectionStrategies) {
             check_single_scattering(Fog{}, std::string("<connection type=\"") + connection +
                                                "\"/><boolean name=\"mis\" value=\"" + mis + "\"/>");
         }
+    Fog slow;
+    slow.eta = 1.33;
+    for (const char* connection : {"line_to_point", "equiangular"}) {
+        SCOPED_TRACE(std::string(connection) + " eta=1.33");
+        check_single_scattering(slow, std::string("<connection type=\"") + connection + "\"/>");
+    }
     Fog forward;
     forward.g = 0.7;
     check_single_scattering(forward,
                             "<distance type=\"exponential\"/><connection "
-                            "type=\"line_to_point\"/><angular type=\"time\"/><boolean "
-                            "name=\"mis\" value=\"true\"/>");
+                            "type=\"line_to_point\"/><boolean name=\"mis\" value=\"true\"/>");
 }
 
 // A Lambertian disk at z = 0 (albedo rho) under a point light at (0, 0, h), seen from 0.05

@@ -121,8 +121,12 @@ DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax
 // eta * r in this medium, then at least |x(r) - target| (no medium is faster than vacuum).
 // eta r + |x(r) - target| grows with r; its root is the smaller root of
 // (eta^2 - 1) r^2 - 2 (eta left - b) r + (left^2 - |l|^2) = 0, written without cancellation.
+// This only bounds where the connection strategy samples: the vertex's light sample may pick
+// another light point, but wherever the strategy's density is zero the distance strategy's
+// vertices keep the whole weight, so the estimate stays unbiased.
 double connection_reach(const Vec3& o, const Vec3& d, const Vec3& target, double eta, double left) {
     if (!std::isfinite(left)) return kInfinity;
+    if (!(left > 0)) return 0.0;
     const double lx = double(target.x) - o.x, ly = double(target.y) - o.y,
                  lz = double(target.z) - o.z;
     const double l2 = lx * lx + ly * ly + lz * lz, b = lx * d.x + ly * d.y + lz * d.z;

@@ -32,9 +32,10 @@ SegmentGeometry geometry(const ConnectionQuery& q) {
     return {l2, b, D};
 }
 
-// |x(r) - target| for x(r) = origin + r direction.
+// |x(r) - target| for x(r) = origin + r direction, as (r - b)^2 + (l.l - b^2): with the target
+// nearly on the line, l.l - b^2 is tiny and must not be lost against r^2 and l.l.
 double distance_to_target(const SegmentGeometry& g, double r) {
-    return std::sqrt(std::max(r * r - 2 * r * g.b + g.l2, 0.0));
+    return std::sqrt((r - g.b) * (r - g.b) + std::max(g.l2 - g.b * g.b, 0.0));
 }
 
 }  // namespace
@@ -44,6 +45,7 @@ double ConnectionSampler::equiangular_sample(const ConnectionQuery& q, double u)
     const SegmentGeometry g = geometry(q);
     const double theta_a = std::atan2(-g.b, g.D);
     const double theta_b = std::isfinite(q.length) ? std::atan2(q.length - g.b, g.D) : kPi64 / 2;
+    if (!(theta_b > theta_a)) return -1.0;  // a segment too short to resolve
     const double r = g.b + g.D * std::tan(theta_a + u * (theta_b - theta_a));
     return std::clamp(r, 0.0, std::nextafter(q.length, 0.0));
 }
@@ -53,6 +55,7 @@ double ConnectionSampler::equiangular_pdf(const ConnectionQuery& q, double r) {
     const SegmentGeometry g = geometry(q);
     const double theta_a = std::atan2(-g.b, g.D);
     const double theta_b = std::isfinite(q.length) ? std::atan2(q.length - g.b, g.D) : kPi64 / 2;
+    if (!(theta_b > theta_a)) return 0.0;
     const double h = r - g.b;
     return g.D / ((theta_b - theta_a) * (g.D * g.D + h * h));
 }
@@ -76,9 +79,13 @@ double ConnectionSampler::line_to_point_pdf(const ConnectionQuery& q, double r) 
     const SegmentGeometry g = geometry(q);
     const double t_a = std::sqrt(g.l2), t_b = q.length + distance_to_target(g, q.length);
     if (!(t_b > t_a * (1 + 1e-12))) return 0.0;
+    // T'(r) = 1 + (r - b) / s; before the target's foot (r < b) the two terms nearly cancel,
+    // so it is written there as D^2 / (s (s + b - r)) with D^2 = l.l - b^2.
     const double s = distance_to_target(g, r);
-    const double slope = s > 0 ? 1 + (r - g.b) / s : 2.0;
-    return std::max(slope, 0.0) / (t_b - t_a);
+    const double d2 = std::max(g.l2 - g.b * g.b, 0.0);
+    const double slope =
+        r >= g.b ? 1 + (r - g.b) / std::max(s, 1e-300) : d2 / std::max(s * (s + g.b - r), 1e-300);
+    return slope / (t_b - t_a);
 }
 
 namespace {
@@ -124,9 +131,12 @@ Vec3 AngularSampler::time_sample(const AngularQuery& q, Vec2 u) {
 double AngularSampler::time_pdf(const AngularQuery& q, const Vec3& wo) {
     const AngularGeometry a = angular_geometry(q);
     if (!a.usable) return double(q.phase->eval(q.wi, wo));
-    const double cos_theta = std::clamp(double(dot(wo, a.axis)), -1.0, 1.0);
-    // s^2 = (r - L)^2 + 2 r L (1 - cos theta), again without cancellation.
-    const double s = std::sqrt((a.r - a.L) * (a.r - a.L) + 2 * a.r * a.L * (1 - cos_theta));
+    // s^2 = (r - L)^2 + 2 r L (1 - cos theta), with 1 - cos theta = |wo - axis|^2 / 2 so that
+    // small angles (where the density peaks when r is close to L) keep their precision.
+    const double dx = double(wo.x) - a.axis.x, dy = double(wo.y) - a.axis.y,
+                 dz = double(wo.z) - a.axis.z;
+    const double one_minus_cos = std::min(0.5 * (dx * dx + dy * dy + dz * dz), 2.0);
+    const double s = std::sqrt((a.r - a.L) * (a.r - a.L) + 2 * a.r * a.L * one_minus_cos);
     const double m = std::min(a.r, a.L);
     return a.r * a.L / (4 * kPi64 * std::max(s, 1e-12 * m) * m);
 }
