@@ -82,13 +82,16 @@ def equal_error_spp(steady, err):
 
 
 media = sorted({(k[1], k[2]) for k in med if k[0] == "media"})
+bundles = sorted({k[3] for k in med if k[0] == "media"} - {"steady"})
 ratio_rows = []
 for s, g in media:
     for metric in METRICS[:2]:
         steady = curve("media", s, g, "steady", metric)
-        for n, e, w in curve("media", s, g, "time", metric):
+        for b in bundles:
+          for n, e, w in curve("media", s, g, b, metric):
             n_eq, w_eq, how = equal_error_spp(steady, e)
-            ratio_rows.append({"sigma_s": s, "g": g, "metric": metric, "time_spp": n,
+            ratio_rows.append({"strategy": b, "sigma_s": s, "g": g, "metric": metric,
+                               "time_spp": n,
                                "time_error": e, "time_wall_s": w, "steady_spp_equal_error": n_eq,
                                "sample_ratio": n_eq / n, "time_ratio": w_eq / w if w > 0 else "",
                                "how": how})
@@ -117,12 +120,13 @@ with open(os.path.join(RESULTS, "media_combos.csv"), "w", newline="") as f:
 # Tables.
 lines = []
 top = max((r["time_spp"] for r in ratio_rows), default=0)
-lines.append(f"Equal-error ratios of the time strategies (exponential + line_to_point + time, "
-             f"mis) over steady sampling at {top} spp: how many more samples (and how much more "
-             f"wall-clock time) steady sampling needs for the same median error.\n")
-lines.append("| sigma_s | g | frame error: samples | frame error: time | pixel (a): samples "
-             "| pixel (a): time |")
-lines.append("|---|---|---|---|---|---|")
+lines.append(f"Equal-error ratios over steady sampling at {top} spp: how many more samples (and "
+             f"how much more wall-clock time) steady sampling needs for the same median error. "
+             f"`time`: exponential + line_to_point + time angular, mis; `time_mfp`: the same "
+             f"with mean-free-path distances.\n")
+lines.append("| strategy | sigma_s | g | frame error: samples | frame error: time | pixel (a): "
+             "samples | pixel (a): time |")
+lines.append("|---|---|---|---|---|---|---|")
 
 
 def fmt_ratio(r):
@@ -133,13 +137,14 @@ def fmt_ratio(r):
     return (f"{r['sample_ratio']:.2f}{flag}", f"{t:.2f}{flag}" if t != "" else "n/a")
 
 
-for s, g in media:
-    cells = []
-    for metric in METRICS[:2]:
-        rr = [r for r in ratio_rows if r["sigma_s"] == s and r["g"] == g and
-              r["metric"] == metric and r["time_spp"] == top]
-        cells.extend(fmt_ratio(rr[0] if rr else None))
-    lines.append(f"| {s} | {g} | " + " | ".join(cells) + " |")
+for b in bundles:
+    for s, g in media:
+        cells = []
+        for metric in METRICS[:2]:
+            rr = [r for r in ratio_rows if r["strategy"] == b and r["sigma_s"] == s and
+                  r["g"] == g and r["metric"] == metric and r["time_spp"] == top]
+            cells.extend(fmt_ratio(rr[0] if rr else None))
+        lines.append(f"| {b} | {s} | {g} | " + " | ".join(cells) + " |")
 lines.append("\n(* extrapolated beyond the largest steady budget along slope -1.)\n")
 
 ctop = max((r["spp"] for r in combo_rows), default=0)
@@ -174,7 +179,8 @@ if media:
     for i, g in enumerate(gs):
         for j, s in enumerate(ss):
             ax = axes[i][j]
-            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red")):
+            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red"),
+                                     ("time_mfp", "tab:green")):
                 for metric, style in (("frame_relmse", "-"), ("pixel_relmse", "--")):
                     pts = [p for p in curve("media", s, g, strategy, metric) if p[1] > 0]
                     if pts:
@@ -207,7 +213,8 @@ if media:
             ax = axes[i][j]
             t, ref = series("media", s, g, "steady", spp, "pixel_ref")
             ax.plot(t, ref, color="black", lw=1.2, label="reference")
-            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red")):
+            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red"),
+                                     ("time_mfp", "tab:green")):
                 t, v = series("media", s, g, strategy, spp, "pixel")
                 ax.plot(t, v, color=colour, lw=0.8, label=f"{strategy}, {spp} spp")
             ax.set_yscale("symlog", linthresh=max(1e-6, max(ref, default=1) * 1e-3))
@@ -222,7 +229,8 @@ if media:
     for i, g in enumerate(gs):
         for j, s in enumerate(ss):
             ax = axes[i][j]
-            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red")):
+            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red"),
+                                     ("time_mfp", "tab:green")):
                 t, v = series("media", s, g, strategy, top_spp, "frame_relmse")
                 pts = [(a, b) for a, b in zip(t, v) if math.isfinite(b) and b > 0]
                 if pts:
