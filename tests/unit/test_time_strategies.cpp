@@ -458,3 +458,25 @@ TEST(TimeStrategies, EveryCombinationInHeterogeneousAndNestedMedia) {
     }
     std::filesystem::remove_all(dir);
 }
+
+// Misplaced or repeated strategies are scene errors naming the tag and its line.
+TEST(TimeStrategies, BadStrategiesAreLocatedSceneErrors) {
+    auto error_of = [](const std::string& strategies) {
+        return test::load_error(test::scene_xml("<integrator type=\"transient_path\">\n" +
+                                                strategies +
+                                                "\n</integrator><emitter type=\"point\"/>"));
+    };
+    const std::string twice =
+        error_of("<connection type=\"line_to_point\"/><connection type=\"equiangular\"/>");
+    EXPECT_NE(twice.find("at most one <connection>"), std::string::npos) << twice;
+    EXPECT_NE(twice.find(":3:"), std::string::npos) << twice;  // the integrator's line
+    const std::string two_angular = error_of("<angular type=\"time\"/><angular type=\"phase\"/>");
+    EXPECT_NE(two_angular.find("at most one <angular>"), std::string::npos) << two_angular;
+    // An angular plugin under <connection>, and a name that is no plugin at all.
+    const std::string wrong_kind = error_of("<connection type=\"time\"/>");
+    EXPECT_NE(wrong_kind.find("time"), std::string::npos) << wrong_kind;
+    EXPECT_NE(wrong_kind.find(":4:"), std::string::npos) << wrong_kind;
+    const std::string unknown = error_of("<angular type=\"uniform\"/>");
+    EXPECT_NE(unknown.find("uniform"), std::string::npos) << unknown;
+    EXPECT_NE(unknown.find(":4:"), std::string::npos) << unknown;
+}
