@@ -5,16 +5,9 @@
 # Takes ~3-6 minutes on the 2-core machine once built (the first build adds a few minutes).
 set -euo pipefail
 
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${FEMTO_BENCH_BUILD_DIR:-$root/build-bench}"
-results="$root/bench/results"
-mkdir -p "$results"
-
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 echo "load average before build: $(cat /proc/loadavg)"
-if [[ ! -f "$build/build.ninja" ]]; then
-    cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFEMTO_BENCH=ON -DFEMTO_TESTS=OFF
-fi
-ninja -C "$build"
+bench_build
 
 {
     echo "source: git $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)" \

@@ -7,29 +7,11 @@
 # 2-core machine once built, references included (cached afterwards as ref_*.npy, ~4 min).
 set -euo pipefail
 
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${FEMTO_BENCH_BUILD_DIR:-$root/build-bench}"
-results="$root/bench/results"
-mkdir -p "$results"
-
-if [[ ! -f "$build/build.ninja" ]]; then
-    cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFEMTO_BENCH=ON -DFEMTO_TESTS=OFF
-fi
-# A new plugin folder (plugins/<kind>/<type>/) is found at configure time: reconfigure when
-# the kernel filter is not part of the build yet.
-if ! grep -q "femto_plugin_kernel" "$build/build.ninja"; then
-    cmake "$build" >/dev/null
-fi
-ninja -C "$build" femto_bench_kernel
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+bench_build femto_bench_kernel
 
 log="$results/kernel_run.log"
-{
-    echo "source: git $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)" \
-        "($(git -C "$root" status --porcelain 2>/dev/null | wc -l) uncommitted changes)"
-    echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
-    echo "date: $(date -u '+%Y-%m-%d %H:%M:%S UTC')"
-    echo "load average before the benchmark: $(cat /proc/loadavg)"
-} | tee "$log"
+bench_log_header "$log"
 "$build/bin/femto_bench_kernel" --out "$results" "$@" 2>&1 | tee -a "$log"
 echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$log"
 

@@ -3,34 +3,16 @@
 # ch. 5.6 against steady sampling on scenes/fog-object: Fig. 5.8-5.10 and every strategy
 # combination against wall clock) and plots the results.
 #   bench/run_media.sh [femto_bench_media options...]     e.g. --seeds 5
-# Results: bench/results/media_*.{csv,txt,md,png}, media_run.log. About 20 minutes on the
-# 2-core machine once built, references included (cached afterwards as ref_media_*.npy).
+# Results: bench/results/media_*.{csv,txt,md,png}, media_run.log. About 13 minutes on the
+# 2-core machine once built; the first run adds ~5 minutes of references (then cached as
+# ref_media_*.npy).
 set -euo pipefail
 
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${FEMTO_BENCH_BUILD_DIR:-$root/build-bench}"
-results="$root/bench/results"
-mkdir -p "$results"
-
-if [[ ! -f "$build/build.ninja" ]]; then
-    cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFEMTO_BENCH=ON -DFEMTO_TESTS=OFF
-fi
-# A new plugin folder (plugins/<kind>/<type>/) is found at configure time: reconfigure when
-# the strategy plugins or the benchmark are not part of the build yet.
-if ! grep -q "femto_plugin_line_to_point" "$build/build.ninja" ||
-   ! grep -q "femto_bench_media" "$build/build.ninja"; then
-    cmake "$build" >/dev/null
-fi
-ninja -C "$build" femto_bench_media
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+bench_build femto_bench_media
 
 log="$results/media_run.log"
-{
-    echo "source: git $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)" \
-        "($(git -C "$root" status --porcelain 2>/dev/null | wc -l) uncommitted changes)"
-    echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
-    echo "date: $(date -u '+%Y-%m-%d %H:%M:%S UTC')"
-    echo "load average before the benchmark: $(cat /proc/loadavg)"
-} | tee "$log"
+bench_log_header "$log"
 "$build/bin/femto_bench_media" --out "$results" "$@" 2>&1 | tee -a "$log"
 echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$log"
 

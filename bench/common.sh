@@ -1,0 +1,32 @@
+# Shared by the bench/run*.sh scripts (sourced, after `set -euo pipefail`): where things are,
+# building one benchmark, and the header every run log starts with.
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${FEMTO_BENCH_BUILD_DIR:-$root/build-bench}"
+results="$root/bench/results"
+mkdir -p "$results"
+
+# Configures build-bench/ (Release, benchmarks on, tests off) and builds TARGET (default: all).
+# CMake finds plugin folders and benchmarks when it configures, so an existing build folder is
+# reconfigured too (a few seconds) to pick up new ones.
+bench_build() {
+    if [[ ! -f "$build/build.ninja" ]]; then
+        cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFEMTO_BENCH=ON \
+            -DFEMTO_TESTS=OFF
+    else
+        cmake "$build" >/dev/null
+    fi
+    ninja -C "$build" "$@"
+}
+
+# Writes the source revision, machine, date and load to LOG (and the terminal).
+bench_log_header() {
+    local log=$1
+    {
+        echo "source: git $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)" \
+            "($(git -C "$root" status --porcelain 2>/dev/null | wc -l) uncommitted changes)"
+        echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
+        echo "date: $(date -u '+%Y-%m-%d %H:%M:%S UTC')"
+        echo "load average before the benchmark: $(cat /proc/loadavg)"
+    } | tee "$log"
+}
