@@ -11,6 +11,7 @@
 #include "femto/math.h"
 #include "femto/object.h"
 #include "femto/shape.h"
+#include "femto/warp.h"
 
 namespace femto {
 
@@ -78,5 +79,22 @@ public:
     bool has_delta_only() const { return (flags() & kBsdfSmooth) == 0; }
     bool is_null() const { return flags() == kBsdfNull; }
 };
+
+/// Samples a Lambertian lobe of colour `albedo` (f = albedo / pi on the front side): a
+/// cosine-weighted direction, weight = albedo; invalid when wi is behind the surface.
+inline BsdfSample sample_lambertian(const Vec3& wi, Vec2 u, const Color& albedo) {
+    BsdfSample s;
+    if (wi.z <= 0.f) return s;
+    s.wo = warp::square_to_cosine_hemisphere(u);
+    s.pdf = warp::cosine_hemisphere_pdf(s.wo);
+    if (!(s.pdf > 0.f)) {
+        s.pdf = 0.f;
+        return s;
+    }
+    s.eta = 1.f;
+    s.sampled_lobe = kBsdfDiffuseReflection;
+    s.weight = albedo;  // (albedo cos / pi) / (cos / pi)
+    return s;
+}
 
 }  // namespace femto

@@ -22,18 +22,7 @@ public:
     uint32_t flags() const override { return kBsdfDiffuseReflection; }
 
     BsdfSample sample(const Hit& hit, const Vec3& wi, float /*u_lobe*/, Vec2 u) const override {
-        BsdfSample s;
-        if (wi.z <= 0.f) return s;
-        s.wo = warp::square_to_cosine_hemisphere(u);
-        s.pdf = warp::cosine_hemisphere_pdf(s.wo);
-        if (!(s.pdf > 0.f)) {
-            s.pdf = 0.f;
-            return s;
-        }
-        s.eta = 1.f;
-        s.sampled_lobe = kBsdfDiffuseReflection;
-        s.weight = reflectance_->eval(hit);  // (R/pi * cos) / (cos/pi)
-        return s;
+        return sample_lambertian(wi, u, reflectance_->eval(hit));
     }
 
     Color eval(const Hit& hit, const Vec3& wi, const Vec3& wo) const override {
