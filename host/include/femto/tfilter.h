@@ -109,4 +109,40 @@ private:
     mutable std::vector<std::vector<PilotArrival>> arrivals_;  // [h_][w_]
 };
 
+/// Base of films that record time (`transient`, `streak`): reads the time grid (`start`,
+/// `bin_width`, `bins`, or their `*_ps` forms), `world_time`, `exposure` and the nested
+/// <tfilter>, prepares the filter for the film's pixels, and runs the filter's pilot pass.
+/// A subclass makes its own blocks and merges them, after giving the pilot pass its turn:
+///     if (auto b = make_pilot_block(x0, y0, w, h)) return b;   // in make_block()
+///     if (merge_pilot(block)) return;                           // in merge()
+class TimeResolvedFilm : public Film {
+public:
+    uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
+    void begin_pilot() override { pilot_ = true; }
+    void end_pilot() override;
+    /// The grid's end plus the filter's reach in camera time; unbounded in world time (the
+    /// sensor segment is subtracted after the path ends, so the integrator cannot cut it).
+    double max_path_length() const override;
+
+    const TimeGrid& grid() const { return grid_; }
+    const TemporalFilter& tfilter() const { return *tfilter_; }
+    /// True when the film records world time (the sensor segment removed, eq. 4.1).
+    bool world_time() const { return world_time_; }
+
+protected:
+    explicit TimeResolvedFilm(const Properties& props);
+    /// During the pilot pass, the block that collects arrivals for the filter; else null.
+    std::unique_ptr<FilmBlock> make_pilot_block(int x0, int y0, int w, int h) const;
+    /// During the pilot pass, hands the block's arrivals to the filter and returns true.
+    bool merge_pilot(const FilmBlock& block);
+
+    TimeGrid grid_;
+    bool world_time_ = false;
+    float exposure_ = 0;  ///< preview exposure in stops (0: automatic)
+    std::shared_ptr<TemporalFilter> tfilter_;
+
+private:
+    bool pilot_ = false;  // between begin_pilot() and end_pilot()
+};
+
 }  // namespace femto

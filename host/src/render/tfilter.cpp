@@ -1,8 +1,10 @@
-// Shared parts of temporal reconstruction: reading a film's <tfilter> and the pilot pass.
+// Shared parts of temporal reconstruction: reading a film's <tfilter>, the pilot pass, and the
+// base of the time-resolved films.
 #include "femto/tfilter.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "femto/plugin.h"
 #include "femto/properties.h"
@@ -47,6 +49,35 @@ void PilotBlock::deliver(TemporalFilter& filter) const {
                                arrivals);
             std::vector<PilotArrival>().swap(arrivals);
         }
+}
+
+TimeResolvedFilm::TimeResolvedFilm(const Properties& props)
+    : Film(props), grid_(read_time_grid(props)) {
+    world_time_ = props.get_bool("world_time", false);
+    exposure_ = float(props.get_float("exposure", 0.0));
+    tfilter_ = read_temporal_filter(props);
+    tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
+}
+
+void TimeResolvedFilm::end_pilot() {
+    tfilter_->end_pilot();
+    pilot_ = false;
+}
+
+double TimeResolvedFilm::max_path_length() const {
+    return world_time_ ? std::numeric_limits<double>::infinity()
+                       : grid_.end() + tfilter_->max_radius();
+}
+
+std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, int w, int h) const {
+    if (!pilot_) return nullptr;
+    return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time_);
+}
+
+bool TimeResolvedFilm::merge_pilot(const FilmBlock& block) {
+    if (!pilot_) return false;
+    static_cast<const PilotBlock&>(block).deliver(*tfilter_);
+    return true;
 }
 
 }  // namespace femto

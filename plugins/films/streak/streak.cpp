@@ -95,15 +95,11 @@ std::vector<int> parse_rows(const Properties& props, int height) {
     return rows;
 }
 
-class StreakFilm final : public Film {
+class StreakFilm final : public TimeResolvedFilm {
 public:
-    explicit StreakFilm(const Properties& props) : Film(props), grid_(read_time_grid(props)) {
-        world_time_ = props.get_bool("world_time", false);
-        exposure_ = float(props.get_float("exposure", 0.0));
+    explicit StreakFilm(const Properties& props) : TimeResolvedFilm(props) {
         rows_ = parse_rows(props, height_);
         std::sort(rows_.begin(), rows_.end());
-        tfilter_ = read_temporal_filter(props);
-        tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
         const double bytes = double(rows_.size()) * width_ * grid_.bins * 3 * sizeof(float);
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the streak images would need {:.1f} GiB (limit 64 GiB)",
@@ -123,21 +119,12 @@ public:
     }
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
-        if (pilot_) return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time_);
+        if (auto pilot = make_pilot_block(x0, y0, w, h)) return pilot;
         return std::make_unique<StreakBlock>(*this, x0, y0, w, h, filter_border());
-    }
-    uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
-    void begin_pilot() override { pilot_ = true; }
-    void end_pilot() override {
-        tfilter_->end_pilot();
-        pilot_ = false;
     }
 
     void merge(const FilmBlock& b) override {
-        if (pilot_) {
-            static_cast<const PilotBlock&>(b).deliver(*tfilter_);
-            return;
-        }
+        if (merge_pilot(b)) return;
         const auto& block = static_cast<const StreakBlock&>(b);
         invalid_ += block.invalid_;
         const size_t T3 = size_t(grid_.bins) * 3;
@@ -160,11 +147,6 @@ public:
         }
     }
 
-    double max_path_length() const override {
-        // As the transient film: in world time the sensor segment is subtracted later.
-        return world_time_ ? std::numeric_limits<double>::infinity()
-                           : grid_.end() + tfilter_->max_radius();
-    }
     bool row_active(int y) const override {
         return y >= 0 && y < height_ && active_[size_t(y)] != 0;
     }
@@ -227,11 +209,6 @@ public:
         return files;
     }
 
-    TimeGrid grid_;
-    bool world_time_ = false;
-    bool pilot_ = false;  // between begin_pilot() and end_pilot()
-    float exposure_ = 0;
-    std::shared_ptr<TemporalFilter> tfilter_;
     std::vector<int> rows_;         // sorted
     std::vector<int> slot_of_row_;  // per image row: index into rows_, or -1
     std::vector<char> active_;      // per image row: samples there reach a recorded row
@@ -246,7 +223,7 @@ StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, i
       y0_(y0 - border),
       w_(w + 2 * border),
       h_(h + 2 * border),
-      bins_(film.grid_.bins),
+      bins_(film.grid().bins),
       slot_of_y_(size_t(h_), -1) {
     for (int r : film.rows_)
         if (r >= y0_ && r < y0_ + h_) {
@@ -278,7 +255,7 @@ void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
             }
             const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
             float* px = &data_[local * size_t(bins_) * 3];
-            splat_sample(*film_.tfilter_, film_.grid_, pixel, sample, film_.world_time_, scratch_,
+            splat_sample(film_.tfilter(), film_.grid(), pixel, sample, film_.world_time(), scratch_,
                          [&](int bin, const Color& v) {
                              float* dst = px + size_t(bin) * 3;
                              dst[0] += w * v.r;

@@ -80,11 +80,9 @@ public:
     uint64_t invalid_ = 0;
 };
 
-class TransientFilm final : public Film {
+class TransientFilm final : public TimeResolvedFilm {
 public:
-    explicit TransientFilm(const Properties& props) : Film(props), grid_(read_time_grid(props)) {
-        world_time_ = props.get_bool("world_time", false);
-        exposure_ = float(props.get_float("exposure", 0.0));
+    explicit TransientFilm(const Properties& props) : TimeResolvedFilm(props) {
         const std::string aovs = props.get_string("aovs", "");
         for (size_t pos = 0; pos < aovs.size();) {
             size_t end = aovs.find(',', pos);
@@ -100,9 +98,7 @@ public:
                 props.fail("aovs", fmt::format("unknown AOV \"{}\"; valid: count, variance", item));
             pos = end + 1;
         }
-        tfilter_ = read_temporal_filter(props);
         const size_t pixels = size_t(width_) * size_t(height_);
-        tfilter_->prepare(grid_, pixels);
         const double bytes = double(pixels) * grid_.bins * 3 * sizeof(float);
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the cube would need {:.1f} GiB (limit 64 GiB)",
@@ -122,14 +118,8 @@ public:
     }
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
-        if (pilot_) return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time_);
+        if (auto pilot = make_pilot_block(x0, y0, w, h)) return pilot;
         return std::make_unique<CubeBlock>(*this, x0, y0, w, h, filter_border());
-    }
-    uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
-    void begin_pilot() override { pilot_ = true; }
-    void end_pilot() override {
-        tfilter_->end_pilot();
-        pilot_ = false;
     }
 
     /// A zeroed storage for a block of `pixels` pixels, recycled when possible.
@@ -159,10 +149,7 @@ public:
     }
 
     void merge(const FilmBlock& b) override {
-        if (pilot_) {
-            static_cast<const PilotBlock&>(b).deliver(*tfilter_);
-            return;
-        }
+        if (merge_pilot(b)) return;
         const auto& block = static_cast<const CubeBlock&>(b);
         BlockStorage& st = *block.st_;
         invalid_ += block.invalid_;
@@ -202,13 +189,6 @@ public:
             s = PixelWeights();
         }
         block.clean_ = true;
-    }
-
-    double max_path_length() const override {
-        // In world time the sensor segment is subtracted later, so paths may run that much
-        // longer; the integrator cannot know it in advance, so do not cut them early.
-        return world_time_ ? std::numeric_limits<double>::infinity()
-                           : grid_.end() + tfilter_->max_radius();
     }
 
     std::vector<float> steady_image() const override {
@@ -302,11 +282,7 @@ public:
         return files;
     }
 
-    TimeGrid grid_;
-    bool world_time_ = false, count_enabled_ = false, variance_enabled_ = false;
-    bool pilot_ = false;  // between begin_pilot() and end_pilot()
-    float exposure_ = 0;
-    std::shared_ptr<TemporalFilter> tfilter_;
+    bool count_enabled_ = false, variance_enabled_ = false;
     std::vector<float> cube_, count_, sq_;
     mutable std::mutex pool_mutex_;
     mutable std::vector<std::unique_ptr<BlockStorage>> pool_;
@@ -320,7 +296,7 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h, in
       y0_(y0 - border),
       w_(w + 2 * border),
       h_(h + 2 * border),
-      bins_(film.grid_.bins),
+      bins_(film.grid().bins),
       pixels_(size_t(w_) * size_t(h_)),
       st_(film.acquire_storage(pixels_)),
       dst_of_local_(pixels_) {
@@ -356,7 +332,7 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
     clean_ = false;
     BlockStorage& st = *st_;
     const bool variance = !st.sq.empty(), count = !st.count.empty();
-    const TemporalFilter& tfilter = *film_.tfilter_;
+    const TemporalFilter& tfilter = film_.tfilter();
     for_each_filter_pixel(
         film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
             const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
@@ -373,7 +349,7 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                 // Variance needs this sample's value per bin (several contributions may share a
                 // bin), then w * v into the cube and w * v^2 into the second moment.
                 sample_bins_.clear();
-                spill = splat_sample(tfilter, film_.grid_, pixel, sample, film_.world_time_,
+                spill = splat_sample(tfilter, film_.grid(), pixel, sample, film_.world_time(),
                                      scratch_, [&](int bin, const Color& v) {
                                          sample_bins_.push_back({bin, v});
                                      });
@@ -393,7 +369,7 @@ void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
                     if (count) st.count[flat] += float(n);
                 }
             } else {
-                spill = splat_sample(tfilter, film_.grid_, pixel, sample, film_.world_time_,
+                spill = splat_sample(tfilter, film_.grid(), pixel, sample, film_.world_time(),
                                      scratch_, [&](int bin, const Color& v) {
                                          const size_t flat = touch(local, bin);
                                          float* dst = &st.cube[flat * 3];
