@@ -395,7 +395,8 @@ FEMTO_PLUGIN(
       "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
      {"aovs", "string", "",
       "comma-separated: \"count\" writes OUTBASE_count.npy (contributions per pixel and bin), "
-      "\"variance\" OUTBASE_variance.npy (variance of each pixel-bin estimate)"},
+      "\"variance\" OUTBASE_variance.npy (variance of each pixel-bin estimate, by the "
+      "formula for independent samples: it overstates the error of ldsampler renders)"},
      {"exposure", "float", "0", "exposure of the PNG preview, in stops"},
      {"rfilter", "rfilter", "gaussian", "spatial reconstruction filter (nested)"},
      {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}})
