@@ -19,23 +19,43 @@ D3 to_d3(const Vec3& v) { return {double(v.x), double(v.y), double(v.z)}; }
 double dot(const D3& a, const D3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 // The segment seen from its target: l = target - origin, b = l . direction (where the target
-// projects on the line), D = its distance from the line.
+// projects on the line), d2 = l.l - b^2 its squared distance from the line, and D that
+// distance kept a hair above zero (a target on the line makes equiangular's density a delta).
 struct SegmentGeometry {
-    double l2, b, D;
+    double l2, b, d2, D;
 };
 SegmentGeometry geometry(const ConnectionQuery& q) {
     const D3 o = to_d3(q.origin), c = to_d3(q.target), w = to_d3(q.direction);
     const D3 l{c.x - o.x, c.y - o.y, c.z - o.z};
-    const double l2 = dot(l, l), b = dot(l, w);
-    // A target on the line makes equiangular's density a delta; keep D a hair above zero.
-    const double D = std::max(std::sqrt(std::max(l2 - b * b, 0.0)), 1e-9 * (1.0 + std::sqrt(l2)));
-    return {l2, b, D};
+    const double l2 = dot(l, l), b = dot(l, w), d2 = std::max(l2 - b * b, 0.0);
+    return {l2, b, d2, std::max(std::sqrt(d2), 1e-9 * (1.0 + std::sqrt(l2)))};
 }
 
-// |x(r) - target| for x(r) = origin + r direction, as (r - b)^2 + (l.l - b^2): with the target
-// nearly on the line, l.l - b^2 is tiny and must not be lost against r^2 and l.l.
+// |x(r) - target| for x(r) = origin + r direction, as (r - b)^2 + d2: with the target nearly
+// on the line, d2 is tiny and must not be lost against r^2 and l.l.
 double distance_to_target(const SegmentGeometry& g, double r) {
-    return std::sqrt((r - g.b) * (r - g.b) + std::max(g.l2 - g.b * g.b, 0.0));
+    return std::sqrt((r - g.b) * (r - g.b) + g.d2);
+}
+
+// The range [t_a, t_b] of the length T(r) = r + |x(r) - target| over a finite segment;
+// empty (t_b <= t_a) when the target lies ahead on the line.
+struct LengthRange {
+    double t_a, t_b;
+    bool empty() const { return !(t_b > t_a * (1 + 1e-12)); }
+};
+LengthRange length_range(const ConnectionQuery& q, const SegmentGeometry& g) {
+    return {std::sqrt(g.l2), q.length + distance_to_target(g, q.length)};
+}
+
+// The angles, seen from the target's foot on the line, of the segment's start and end (pi / 2
+// for an infinite segment); empty when the segment is too short to resolve.
+struct AngleRange {
+    double theta_a, theta_b;
+    bool empty() const { return !(theta_b > theta_a); }
+};
+AngleRange angle_range(const ConnectionQuery& q, const SegmentGeometry& g) {
+    return {std::atan2(-g.b, g.D),
+            std::isfinite(q.length) ? std::atan2(q.length - g.b, g.D) : kPi64 / 2};
 }
 
 }  // namespace
@@ -43,21 +63,19 @@ double distance_to_target(const SegmentGeometry& g, double r) {
 double ConnectionSampler::equiangular_sample(const ConnectionQuery& q, double u) {
     if (!(q.length > 0)) return -1.0;
     const SegmentGeometry g = geometry(q);
-    const double theta_a = std::atan2(-g.b, g.D);
-    const double theta_b = std::isfinite(q.length) ? std::atan2(q.length - g.b, g.D) : kPi64 / 2;
-    if (!(theta_b > theta_a)) return -1.0;  // a segment too short to resolve
-    const double r = g.b + g.D * std::tan(theta_a + u * (theta_b - theta_a));
+    const AngleRange range = angle_range(q, g);
+    if (range.empty()) return -1.0;
+    const double r = g.b + g.D * std::tan(range.theta_a + u * (range.theta_b - range.theta_a));
     return std::clamp(r, 0.0, std::nextafter(q.length, 0.0));
 }
 
 double ConnectionSampler::equiangular_pdf(const ConnectionQuery& q, double r) {
     if (!(r >= 0 && r < q.length)) return 0.0;
     const SegmentGeometry g = geometry(q);
-    const double theta_a = std::atan2(-g.b, g.D);
-    const double theta_b = std::isfinite(q.length) ? std::atan2(q.length - g.b, g.D) : kPi64 / 2;
-    if (!(theta_b > theta_a)) return 0.0;
+    const AngleRange range = angle_range(q, g);
+    if (range.empty()) return 0.0;
     const double h = r - g.b;
-    return g.D / ((theta_b - theta_a) * (g.D * g.D + h * h));
+    return g.D / ((range.theta_b - range.theta_a) * (g.D * g.D + h * h));
 }
 
 // T(r) = r + s(r) grows from T(0) = |l| to T(length); sampling T uniformly and inverting
@@ -66,26 +84,25 @@ double ConnectionSampler::equiangular_pdf(const ConnectionQuery& q, double r) {
 double ConnectionSampler::line_to_point_sample(const ConnectionQuery& q, double u) {
     if (!(q.length > 0) || !std::isfinite(q.length)) return -1.0;
     const SegmentGeometry g = geometry(q);
-    const double t_a = std::sqrt(g.l2), t_b = q.length + distance_to_target(g, q.length);
-    if (!(t_b > t_a * (1 + 1e-12))) return -1.0;  // target ahead on the line: no time range
-    const double t = t_a + u * (t_b - t_a);
+    const LengthRange range = length_range(q, g);
+    if (range.empty()) return -1.0;  // target ahead on the line: no time range
+    const double t = range.t_a + u * (range.t_b - range.t_a);
     // T^2 - l.l = (T - |l|)(T + |l|) avoids cancelling when T is close to |l|.
-    const double r = (t - t_a) * (t + t_a) / (2 * (t - g.b));
+    const double r = (t - range.t_a) * (t + range.t_a) / (2 * (t - g.b));
     return std::clamp(r, 0.0, std::nextafter(q.length, 0.0));
 }
 
 double ConnectionSampler::line_to_point_pdf(const ConnectionQuery& q, double r) {
     if (!(r >= 0 && r < q.length) || !std::isfinite(q.length)) return 0.0;
     const SegmentGeometry g = geometry(q);
-    const double t_a = std::sqrt(g.l2), t_b = q.length + distance_to_target(g, q.length);
-    if (!(t_b > t_a * (1 + 1e-12))) return 0.0;
+    const LengthRange range = length_range(q, g);
+    if (range.empty()) return 0.0;
     // T'(r) = 1 + (r - b) / s; before the target's foot (r < b) the two terms nearly cancel,
-    // so it is written there as D^2 / (s (s + b - r)) with D^2 = l.l - b^2.
+    // so it is written there as d2 / (s (s + b - r)).
     const double s = distance_to_target(g, r);
-    const double d2 = std::max(g.l2 - g.b * g.b, 0.0);
     const double slope =
-        r >= g.b ? 1 + (r - g.b) / std::max(s, 1e-300) : d2 / std::max(s * (s + g.b - r), 1e-300);
-    return slope / (t_b - t_a);
+        r >= g.b ? 1 + (r - g.b) / std::max(s, 1e-300) : g.d2 / std::max(s * (s + g.b - r), 1e-300);
+    return slope / (range.t_b - range.t_a);
 }
 
 namespace {
