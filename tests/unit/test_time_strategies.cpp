@@ -10,9 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -24,6 +22,7 @@
 #include "femto/random.h"
 #include "femto/time_sampling.h"
 #include "scene_util.h"
+#include "vol_util.h"
 
 using namespace femto;
 using namespace femto_test;
@@ -417,23 +416,13 @@ std::string nested_media(const std::string& vol_path) {
            "id=\"water\"/><ref name=\"exterior\" id=\"fog\"/></shape>";
 }
 
+// A 4^3 grid over the box [-1, 1]^3 with densities 0.2-1.6 in a fixed scramble.
 void write_density_grid(const std::string& path) {
-    // Mitsuba's gridvolume .vol: "VOL", version 3, float32 encoding (1), resolution, one
-    // channel, bounding box, then x-fastest data.
-    std::string bytes = "VOL";
-    bytes.push_back(char(3));
-    auto put = [&](const void* p, size_t n) { bytes.append(static_cast<const char*>(p), n); };
-    const int32_t encoding = 1, res[3] = {4, 4, 4}, channels = 1;
-    const float bbox[6] = {-1, -1, -1, 1, 1, 1};
-    put(&encoding, 4);
-    put(res, 12);
-    put(&channels, 4);
-    put(bbox, 24);
-    for (int i = 0; i < 64; ++i) {
-        const float density = 0.2f + 1.4f * float((i * 37) % 64) / 63.f;
-        put(&density, 4);
-    }
-    std::ofstream(path, std::ios::binary) << bytes;
+    const auto grid = test::make_grid(4, 4, 4, Vec3(-1.f), Vec3(1.f), [](int x, int y, int z) {
+        const int i = (z * 4 + y) * 4 + x;
+        return 0.2 + 1.4 * double((i * 37) % 64) / 63.0;
+    });
+    test::write_bytes(path, grid.bytes());
 }
 
 }  // namespace
