@@ -6,7 +6,6 @@
 
 #include <sys/resource.h>
 #include <sys/time.h>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -91,6 +90,13 @@ inline std::vector<std::string> split(const std::string& s, char sep) {
     return out;
 }
 
+/// The integers of a comma-separated list ("16,64,256").
+inline std::vector<int> int_list(const std::string& s) {
+    std::vector<int> v;
+    for (const auto& x : split(s, ',')) v.push_back(std::stoi(x));
+    return v;
+}
+
 inline std::string read_text(const std::string& path) {
     std::ifstream f(path);
     if (!f) throw std::runtime_error("cannot read " + path);
@@ -108,8 +114,8 @@ inline std::string replace_once(std::string text, const std::string& from, const
 }
 
 /// Replaces from `begin` up to and including the next `end`.
-inline std::string replace_block(std::string text, const std::string& begin,
-                                 const std::string& end, const std::string& to) {
+inline std::string replace_block(std::string text, const std::string& begin, const std::string& end,
+                                 const std::string& to) {
     const size_t a = text.find(begin);
     if (a == std::string::npos) throw std::runtime_error("scene text lacks: " + begin);
     const size_t b = text.find(end, a);
@@ -156,15 +162,18 @@ inline double rel_mse_corrected(const std::vector<float>& x, const std::vector<f
 
 /// The film's normalised cube [H][W][T][3], through its own writer (OUTBASE.npy, written to a
 /// temporary folder). With `variance`, the film must have aovs="variance": OUTBASE_variance.npy
-/// (the variance of each pixel-bin estimate) is read into it. Needs libfemto_io.
+/// (the variance of each pixel-bin estimate) is read into it. With `count`, the film must have
+/// aovs="count": OUTBASE_count.npy (contributions per pixel and bin, [H][W][T]) is read into
+/// it. Needs libfemto_io.
 inline std::vector<float> film_cube(femto::Scene& scene, const femto::RenderOptions& ro,
                                     const femto::RenderStats& st, std::vector<size_t>& shape,
-                                    std::vector<float>* variance = nullptr) {
+                                    std::vector<float>* variance = nullptr,
+                                    std::vector<float>* count = nullptr) {
     namespace fs = std::filesystem;
     static int counter = 0;
-    const fs::path tmp = fs::temp_directory_path() /
-                         ("femto_bench_cube_" + std::to_string(getpid()) + "_" +
-                          std::to_string(counter++));
+    const fs::path tmp =
+        fs::temp_directory_path() /
+        ("femto_bench_cube_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
     fs::create_directories(tmp);
     femto::RenderInfo info = femto::make_render_info(scene, ro, st);
     info.write_npy = true;
@@ -174,6 +183,12 @@ inline std::vector<float> film_cube(femto::Scene& scene, const femto::RenderOpti
         std::vector<size_t> vshape;
         *variance = femto::io::read_npy((tmp / "cube_variance.npy").string(), vshape);
         if (vshape != shape) throw std::runtime_error("variance and cube shapes differ");
+    }
+    if (count) {
+        std::vector<size_t> cshape;
+        *count = femto::io::read_npy((tmp / "cube_count.npy").string(), cshape);
+        if (cshape.size() != 3 || !std::equal(cshape.begin(), cshape.end(), shape.begin()))
+            throw std::runtime_error("count and cube shapes differ");
     }
     fs::remove_all(tmp);
     return cube;

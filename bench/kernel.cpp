@@ -70,9 +70,9 @@ using Clock = std::chrono::steady_clock;
 // -- scenes and variants -----------------------------------------------------------------------
 
 struct SceneSpec {
-    std::string name;  // folder under scenes/
-    int res;           // film width = height
-    int ref_spp;       // total over the two reference halves
+    std::string name;                               // folder under scenes/
+    int res;                                        // film width = height
+    int ref_spp;                                    // total over the two reference halves
     std::vector<std::pair<double, double>> pixels;  // selected pixels, fractions of the image
     double bandwidth;  // T_1 of the fixed-bandwidth variant (scene units)
 };
@@ -187,10 +187,9 @@ Options parse(int argc, char** argv) {
         else if (a == "--sweep") {
             o.sweep = split(next(), ',');
             if (o.sweep == std::vector<std::string>{"none"}) o.sweep.clear();
-        } else if (a == "--budgets") {
-            o.budgets.clear();
-            for (const auto& b : split(next(), ',')) o.budgets.push_back(std::stoi(b));
-        } else if (a == "--seeds")
+        } else if (a == "--budgets")
+            o.budgets = int_list(next());
+        else if (a == "--seeds")
             o.seeds = std::stoi(next());
         else if (a == "--threads")
             o.threads = std::stoi(next());
@@ -217,7 +216,8 @@ struct SceneText {
     double start = 0, bin_width = 0;
     int bins = 0;
 
-    explicit SceneText(const std::string& scene_dir) : dir(scene_dir), file(scene_dir + "/scene.xml") {
+    explicit SceneText(const std::string& scene_dir)
+        : dir(scene_dir), file(scene_dir + "/scene.xml") {
         const auto r = doc.load_file(file.c_str());
         if (!r) throw std::runtime_error(file + ": " + r.description());
         pugi::xml_node film = doc.child("scene").child("sensor").child("film");
@@ -299,13 +299,13 @@ Rendered render(const std::string& xml, const std::string& base_dir, int res, in
 
 struct Reference {
     std::vector<float> mean, var_aov, var_split, var;  // var: the one used for corrections
-    std::vector<size_t> shape;                          // H, W, T, 3
+    std::vector<size_t> shape;                         // H, W, T, 3
     std::string var_kind;
     double seconds = 0;  // render time of both halves (0 when cached)
 };
 
 std::string hex_hash(const std::string& s) {
-    return fmt::format("{:08x}", uint32_t(std::hash<std::string>{}(s) & 0xffffffffu));
+    return fmt::format("{:08x}", uint32_t(std::hash<std::string>{}(s)&0xffffffffu));
 }
 
 Reference reference(const SceneSpec& spec, const SceneText& text, const Options& o) {
@@ -361,10 +361,10 @@ struct MetricSetup {
     size_t H = 0, W = 0, T = 0;
     std::vector<int> frames;      // frames with signal (the frame metric)
     std::vector<int> frames_all;  // every frame the reference resolves (frame_relmse_all)
-    std::vector<std::pair<int, int>> pixels;      // selected (x, y)
+    std::vector<std::pair<int, int>> pixels;  // selected (x, y)
     double sum_r2 = 0, sum_var = 0;
-    std::vector<double> frame_r2, frame_var;      // per frame
-    std::vector<double> pixel_r2, pixel_var;      // per selected pixel
+    std::vector<double> frame_r2, frame_var;  // per frame
+    std::vector<double> pixel_r2, pixel_var;  // per selected pixel
 };
 
 MetricSetup metric_setup(const Reference& ref, const SceneSpec& spec) {
@@ -469,7 +469,8 @@ void write_profiles(std::ostream& csv, const std::string& scene, const std::stri
             const double v = (double(x[i]) + x[i + 1] + x[i + 2]) / 3.0;
             // sd of the RGB mean, channels treated as independent (an upper bound would add
             // the covariances; this is for drawing the reference's band only).
-            const double sd = var ? std::sqrt((double((*var)[i]) + (*var)[i + 1] + (*var)[i + 2]) / 9.0) : 0.0;
+            const double sd =
+                var ? std::sqrt((double((*var)[i]) + (*var)[i + 1] + (*var)[i + 2]) / 9.0) : 0.0;
             csv << fmt::format("{},{},{},{},{},{},{},{:.6g},{:.4g}\n", scene, label, spp, seed, px,
                                py, t, v, sd);
         }
@@ -480,16 +481,17 @@ void write_profiles(std::ostream& csv, const std::string& scene, const std::stri
 
 void run_scene(const SceneSpec& spec, const Options& o, std::ostream& csv, std::ostream& prof,
                std::ostream& scenes_csv, std::ostream& meta,
-               std::map<std::tuple<std::string, std::string, int>, std::vector<std::vector<double>>>&
-                   summary) {
+               std::map<std::tuple<std::string, std::string, int>,
+                        std::vector<std::vector<double>>>& summary) {
     const std::string dir = o.source_dir + "/scenes/" + spec.name;
     const SceneText text(dir);
     const bool sweep = std::find(o.sweep.begin(), o.sweep.end(), spec.name) != o.sweep.end();
     const std::vector<Variant> variants = variants_for(spec, sweep);
-    fmt::print("== {}: {}x{}, {} bins of {} from {} ({} sampler), reference {} spp; {} variants, "
-               "load {}\n",
-               spec.name, spec.res, spec.res, text.bins, text.bin_width, text.start, text.sampler,
-               spec.ref_spp, variants.size(), read_loadavg());
+    fmt::print(
+        "== {}: {}x{}, {} bins of {} from {} ({} sampler), reference {} spp; {} variants, "
+        "load {}\n",
+        spec.name, spec.res, spec.res, text.bins, text.bin_width, text.start, text.sampler,
+        spec.ref_spp, variants.size(), read_loadavg());
     const Reference ref = reference(spec, text, o);
     const MetricSetup ms = metric_setup(ref, spec);
     double sum_aov = 0, sum_split = 0;
@@ -503,10 +505,11 @@ void run_scene(const SceneSpec& spec, const Options& o, std::ostream& csv, std::
         sum_aov / ms.sum_r2, sum_split / ms.sum_r2, ref.var_kind, ms.frames.size(), ms.T,
         ms.frames_all.size());
     std::string pixels;
-    for (const auto& [x, y] : ms.pixels) pixels += fmt::format("{}{}:{}", pixels.empty() ? "" : " ", x, y);
+    for (const auto& [x, y] : ms.pixels)
+        pixels += fmt::format("{}{}:{}", pixels.empty() ? "" : " ", x, y);
     scenes_csv << fmt::format(
-        "{},{},{},{},{},{},{},{},{:.2f},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{}\n", spec.name, spec.res,
-        text.bins, text.start, text.bin_width, text.sampler, spec.ref_spp, spec.bandwidth,
+        "{},{},{},{},{},{},{},{},{:.2f},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{}\n", spec.name,
+        spec.res, text.bins, text.start, text.bin_width, text.sampler, spec.ref_spp, spec.bandwidth,
         ref.seconds, ms.sum_r2, sum_aov / ms.sum_r2, sum_split / ms.sum_r2, ref.var_kind,
         ms.frames.size(), ms.frames.empty() ? -1 : ms.frames.front(),
         ms.frames.empty() ? -1 : ms.frames.back(), ms.frames_all.size(), pixels);
@@ -534,14 +537,16 @@ void run_scene(const SceneSpec& spec, const Options& o, std::ostream& csv, std::
                 const Rendered r = render(xmls[idx], dir, spec.res, spp, seed, o.threads, false);
                 const Metrics m = metrics(r.cube, ref, ms);
                 csv << fmt::format(
-                    "{},{},{},{},{},{},{},{},{},{},{:.5f},{:.5f},{:.5f},{:.2f},{:.6g},{:.6g},{:.6g},"
+                    "{},{},{},{},{},{},{},{},{},{},{:.5f},{:.5f},{:.5f},{:.2f},{:.6g},{:.6g},{:.6g}"
+                    ","
                     "{:.6g},{:.6g},{:.6g}\n",
                     spec.name, v.label, v.tfilter, v.alpha, v.k, v.pilot, v.bandwidth, spp, seed,
                     o.threads, r.wall, r.render_seconds, r.cpu, l1, m.cube_raw, m.cube, m.frame,
                     m.pixel, m.frame_all, m.frame_median);
                 csv.flush();
-                summary[{spec.name, v.label, spp}].push_back(
-                    {r.wall, m.cube_raw, m.cube, m.frame, m.pixel, r.cpu, m.frame_all, m.frame_median});
+                summary[{spec.name, v.label, spp}].push_back({r.wall, m.cube_raw, m.cube, m.frame,
+                                                              m.pixel, r.cpu, m.frame_all,
+                                                              m.frame_median});
                 if (si == 0 && (v.label == "histogram" || v.label == "kernel"))
                     write_profiles(prof, spec.name, v.label, spp, seed, r.cube, nullptr, ms);
             }
@@ -609,20 +614,23 @@ int main(int argc, char** argv) {
         scenes_csv << "scene,res,bins,start,bin_width,sampler,ref_spp,fixed_bandwidth,"
                       "ref_seconds,sum_r2,ref_noise_aov,ref_noise_split,ref_var_used,"
                       "signal_frames,first_signal_frame,last_signal_frame,resolved_frames,pixels\n";
-        std::map<std::tuple<std::string, std::string, int>, std::vector<std::vector<double>>> summary;
+        std::map<std::tuple<std::string, std::string, int>, std::vector<std::vector<double>>>
+            summary;
         const auto t0 = Clock::now();
         for (const auto& s : specs) run_scene(s, o, csv, prof, scenes_csv, meta, summary);
         std::ofstream sum(o.out_dir + "/kernel_error_summary.csv");
         sum << "scene,label,spp,runs,median_seconds,median_cube_relmse_raw,median_cube_relmse,"
-               "median_frame_relmse,median_pixel_relmse,median_cpu_seconds,median_frame_relmse_all,median_frame_relmse_median\n";
+               "median_frame_relmse,median_pixel_relmse,median_cpu_seconds,median_frame_relmse_all,"
+               "median_frame_relmse_median\n";
         for (const auto& [key, rows] : summary) {
             std::vector<std::vector<double>> cols(8);
             for (const auto& r : rows)
                 for (size_t c = 0; c < 8; ++c) cols[c].push_back(r[c]);
-            sum << fmt::format("{},{},{},{},{:.5f},{:.6g},{:.6g},{:.6g},{:.6g},{:.5f},{:.6g},{:.6g}\n",
-                               std::get<0>(key), std::get<1>(key), std::get<2>(key), rows.size(),
-                               median(cols[0]), median(cols[1]), median(cols[2]), median(cols[3]),
-                               median(cols[4]), median(cols[5]), median(cols[6]), median(cols[7]));
+            sum << fmt::format(
+                "{},{},{},{},{:.5f},{:.6g},{:.6g},{:.6g},{:.6g},{:.5f},{:.6g},{:.6g}\n",
+                std::get<0>(key), std::get<1>(key), std::get<2>(key), rows.size(), median(cols[0]),
+                median(cols[1]), median(cols[2]), median(cols[3]), median(cols[4]), median(cols[5]),
+                median(cols[6]), median(cols[7]));
         }
         const double total = std::chrono::duration<double>(Clock::now() - t0).count();
         meta << fmt::format("total {:.1f} s\n", total) << "load average at end: " << read_loadavg()

@@ -98,12 +98,6 @@ struct Options {
     std::exit(code);
 }
 
-std::vector<int> int_list(const std::string& s) {
-    std::vector<int> v;
-    for (const auto& x : split(s, ',')) v.push_back(std::stoi(x));
-    return v;
-}
-
 Options parse(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
@@ -194,18 +188,7 @@ Rendered render(const std::string& xml, const Options& o, const Medium& m, const
     r.wall = std::chrono::duration<double>(Clock::now() - t0).count();
     r.render_seconds = st.seconds;
     // Read back through the film's writer (untimed): the cube, its variance and count AOVs.
-    static int counter = 0;
-    const fs::path tmp =
-        fs::temp_directory_path() / fmt::format("femto_bench_media_{}_{}", getpid(), counter++);
-    fs::create_directories(tmp);
-    femto::RenderInfo info = femto::make_render_info(*scene, ro, st);
-    info.write_npy = true;
-    scene->sensor().film().write((tmp / "cube").string(), info);
-    std::vector<size_t> s1, s2;
-    r.cube = femto::io::read_npy((tmp / "cube.npy").string(), r.shape);
-    r.variance = femto::io::read_npy((tmp / "cube_variance.npy").string(), s1);
-    r.count = femto::io::read_npy((tmp / "cube_count.npy").string(), s2);
-    fs::remove_all(tmp);
+    r.cube = film_cube(*scene, ro, st, r.shape, &r.variance, &r.count);
     return r;
 }
 

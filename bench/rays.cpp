@@ -49,6 +49,7 @@
 #include <utility>
 #include <vector>
 
+#include "common.h"
 #include "femto/bsdf.h"
 #include "femto/error.h"
 #include "femto/host.h"
@@ -57,8 +58,6 @@
 #include "femto/scene.h"
 #include "femto/shape.h"
 #include "femto/warp.h"
-
-#include "common.h"
 
 namespace fs = std::filesystem;
 using femto::Vec2;

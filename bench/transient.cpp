@@ -46,6 +46,7 @@
 #include <utility>
 #include <vector>
 
+#include "common.h"
 #include "femto/error.h"
 #include "femto/host.h"
 #include "femto/image_io.h"
@@ -53,14 +54,13 @@
 #include "femto/scene.h"
 #include "femto/sensor.h"
 
-#include "common.h"
-
 namespace fs = std::filesystem;
 
 namespace {
 
 using femto_bench::cpu_model;
 using femto_bench::film_cube;
+using femto_bench::int_list;
 using femto_bench::load1;
 using femto_bench::median;
 using femto_bench::now_utc;
@@ -138,10 +138,9 @@ Options parse(int argc, char** argv) {
             o.max_depth = next_int();
         else if (a == "--bins")
             o.bins = next_int();
-        else if (a == "--threads") {
-            o.threads.clear();
-            for (const auto& t : split(next(), ',')) o.threads.push_back(std::stoi(t));
-        } else if (a == "--mem-res")
+        else if (a == "--threads")
+            o.threads = int_list(next());
+        else if (a == "--mem-res")
             o.mem_res = next_int();
         else if (a == "--mem-bins")
             o.mem_bins = next_int();
