@@ -88,13 +88,12 @@ for s, g in media:
     for metric in METRICS[:2]:
         steady = curve("media", s, g, "steady", metric)
         for b in bundles:
-          for n, e, w in curve("media", s, g, b, metric):
-            n_eq, w_eq, how = equal_error_spp(steady, e)
-            ratio_rows.append({"strategy": b, "sigma_s": s, "g": g, "metric": metric,
-                               "time_spp": n,
-                               "time_error": e, "time_wall_s": w, "steady_spp_equal_error": n_eq,
-                               "sample_ratio": n_eq / n, "time_ratio": w_eq / w if w > 0 else "",
-                               "how": how})
+            for n, e, w in curve("media", s, g, b, metric):
+                n_eq, w_eq, how = equal_error_spp(steady, e)
+                ratio_rows.append({"strategy": b, "sigma_s": s, "g": g, "metric": metric,
+                                   "time_spp": n, "time_error": e, "time_wall_s": w,
+                                   "steady_spp_equal_error": n_eq, "sample_ratio": n_eq / n,
+                                   "time_ratio": w_eq / w if w > 0 else "", "how": how})
 with open(os.path.join(RESULTS, "media_ratio.csv"), "w", newline="") as f:
     wr = csv.DictWriter(f, fieldnames=list(ratio_rows[0].keys()) if ratio_rows else ["none"])
     wr.writeheader()
@@ -174,25 +173,42 @@ print("\n".join(lines))
 # Plots.
 gs = sorted({g for _, g in media})
 ss = sorted({s for s, _ in media})
-if media:
-    fig, axes = plt.subplots(len(gs), len(ss), figsize=(4 * len(ss), 3.2 * len(gs)), squeeze=False)
+BUNDLES = (("steady", "tab:blue"), ("time", "tab:red"), ("time_mfp", "tab:green"))
+
+
+def medium_grid(filename, panel):
+    """One panel per medium (rows g, columns sigma_s), drawn by panel(ax, sigma_s, g)."""
+    fig, axes = plt.subplots(len(gs), len(ss), figsize=(4 * len(ss), 3.2 * len(gs)),
+                             squeeze=False)
     for i, g in enumerate(gs):
         for j, s in enumerate(ss):
-            ax = axes[i][j]
-            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red"),
-                                     ("time_mfp", "tab:green")):
-                for metric, style in (("frame_relmse", "-"), ("pixel_relmse", "--")):
-                    pts = [p for p in curve("media", s, g, strategy, metric) if p[1] > 0]
-                    if pts:
-                        ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, color=colour,
-                                  marker="o", ms=3, label=f"{strategy} {metric.split('_')[0]}")
-            ax.set_title(f"sigma_s {s}, g {g}", fontsize=9)
-            ax.set_xlabel("spp")
-            ax.set_ylabel("relMSE")
-            ax.grid(True, which="both", alpha=0.3)
+            panel(axes[i][j], s, g)
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(RESULTS, "media_error.png"), dpi=110)
+    fig.savefig(os.path.join(RESULTS, filename), dpi=110)
+
+
+def positive(t, v):
+    """The (t, v) pairs with a finite, positive v (log axes)."""
+    pts = [(a, b) for a, b in zip(t, v) if math.isfinite(b) and b > 0]
+    return [p[0] for p in pts], [p[1] for p in pts]
+
+
+def error_panel(ax, s, g):
+    for strategy, colour in BUNDLES:
+        for metric, style in (("frame_relmse", "-"), ("pixel_relmse", "--")):
+            pts = [p for p in curve("media", s, g, strategy, metric) if p[1] > 0]
+            if pts:
+                ax.loglog([p[0] for p in pts], [p[1] for p in pts], style, color=colour,
+                          marker="o", ms=3, label=f"{strategy} {metric.split('_')[0]}")
+    ax.set_title(f"sigma_s {s}, g {g}", fontsize=9)
+    ax.set_xlabel("spp")
+    ax.set_ylabel("relMSE")
+    ax.grid(True, which="both", alpha=0.3)
+
+
+if media:
+    medium_grid("media_error.png", error_panel)
 
 fr = defaultdict(list)
 for r in frames:
@@ -207,49 +223,36 @@ def series(part, s, g, strategy, spp, field):
 if media:
     mid = sorted({k[4] for k in fr if k[0] == "media"})
     spp = mid[len(mid) // 2] if mid else 0
-    fig, axes = plt.subplots(len(gs), len(ss), figsize=(4 * len(ss), 3.2 * len(gs)), squeeze=False)
-    for i, g in enumerate(gs):
-        for j, s in enumerate(ss):
-            ax = axes[i][j]
-            t, ref = series("media", s, g, "steady", spp, "pixel_ref")
-            ax.plot(t, ref, color="black", lw=1.2, label="reference")
-            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red"),
-                                     ("time_mfp", "tab:green")):
-                t, v = series("media", s, g, strategy, spp, "pixel")
-                ax.plot(t, v, color=colour, lw=0.8, label=f"{strategy}, {spp} spp")
-            ax.set_yscale("symlog", linthresh=max(1e-6, max(ref, default=1) * 1e-3))
-            ax.set_title(f"pixel (a), sigma_s {s}, g {g}", fontsize=9)
-            ax.set_xlabel("time (scene units)")
-    axes[0][0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(RESULTS, "media_profiles.png"), dpi=110)
-
     top_spp = max(mid) if mid else 0
-    fig, axes = plt.subplots(len(gs), len(ss), figsize=(4 * len(ss), 3.2 * len(gs)), squeeze=False)
-    for i, g in enumerate(gs):
-        for j, s in enumerate(ss):
-            ax = axes[i][j]
-            for strategy, colour in (("steady", "tab:blue"), ("time", "tab:red"),
-                                     ("time_mfp", "tab:green")):
-                t, v = series("media", s, g, strategy, top_spp, "frame_relmse")
-                pts = [(a, b) for a, b in zip(t, v) if math.isfinite(b) and b > 0]
-                if pts:
-                    ax.semilogy([p[0] for p in pts], [p[1] for p in pts], color=colour,
-                                label=f"{strategy}, {top_spp} spp")
-            ax.set_title(f"error per frame, sigma_s {s}, g {g}", fontsize=9)
-            ax.set_xlabel("time (scene units)")
-    axes[0][0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(RESULTS, "media_error_time.png"), dpi=110)
+
+    def profile_panel(ax, s, g):
+        t, ref = series("media", s, g, "steady", spp, "pixel_ref")
+        ax.plot(t, ref, color="black", lw=1.2, label="reference")
+        for strategy, colour in BUNDLES:
+            t, v = series("media", s, g, strategy, spp, "pixel")
+            ax.plot(t, v, color=colour, lw=0.8, label=f"{strategy}, {spp} spp")
+        ax.set_yscale("symlog", linthresh=max(1e-6, max(ref, default=1) * 1e-3))
+        ax.set_title(f"pixel (a), sigma_s {s}, g {g}", fontsize=9)
+        ax.set_xlabel("time (scene units)")
+
+    def error_time_panel(ax, s, g):
+        for strategy, colour in BUNDLES:
+            t, v = positive(*series("media", s, g, strategy, top_spp, "frame_relmse"))
+            if t:
+                ax.semilogy(t, v, color=colour, label=f"{strategy}, {top_spp} spp")
+        ax.set_title(f"error per frame, sigma_s {s}, g {g}", fontsize=9)
+        ax.set_xlabel("time (scene units)")
+
+    medium_grid("media_profiles.png", profile_panel)
+    medium_grid("media_error_time.png", error_time_panel)
 
 if single:
     sspp = max(k[4] for k in fr if k[0] == "single")
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 3.6))
     for c in single:
-        t, v = series("single", 0.9, 0.0, c, sspp, "frame_relmse")
-        pts = [(a, b) for a, b in zip(t, v) if math.isfinite(b) and b > 0]
-        if pts:
-            a1.semilogy([p[0] for p in pts], [p[1] for p in pts], label=c)
+        t, v = positive(*series("single", 0.9, 0.0, c, sspp, "frame_relmse"))
+        if t:
+            a1.semilogy(t, v, label=c)
         t, n = series("single", 0.9, 0.0, c, sspp, "samples")
         total = sum(n) or 1
         a2.plot(t, [x / total for x in n], label=c)
