@@ -1,6 +1,7 @@
 // Ambient occlusion: the fraction of the cosine-weighted hemisphere above the first hit that
 // is unoccluded within `max_distance`. An example of a user plugin built with the femto SDK.
 #include <femto/integrator.h>
+#include <femto/path_clock.h>
 #include <femto/plugin.h>
 #include <femto/warp.h>
 
@@ -17,8 +18,13 @@ public:
 
     void sample(const femto::Scene& scene, femto::Sampler& sampler, const femto::Ray& ray,
                 femto::ContributionList& out) const override {
+        // The clock applies femto's time rules: the first vertex's distance is the sensor
+        // distance (world-time films and depth need it), and the value lands at its time.
+        femto::PathClock clock(scene, out);
         femto::Hit hit;
         if (!scene.intersect(ray, hit)) return;
+        clock.travel(hit.t, 1.0);
+        clock.reach_vertex();
         // Occlusion is measured on the side the camera sees.
         const femto::Vec3 n = femto::dot(hit.ng, ray.d) < 0 ? hit.ng : -hit.ng;
         const femto::Frame frame(n);
@@ -30,7 +36,7 @@ public:
             r.tmax = max_distance_;
             if (!scene.occluded(r)) ++visible;
         }
-        out.add(femto::Color(float(visible) / float(samples_)), hit.t);
+        clock.record(femto::Color(float(visible) / float(samples_)));
     }
 
 private:

@@ -11,6 +11,10 @@ cmake -S "$src/tests/plugin_sdk" -B "$work/sdk-build" -G Ninja -DCMAKE_BUILD_TYP
 cmake --build "$work/sdk-build" > "$work/build.log"
 [ -f "$work/sdk-build/ao.so" ] || { echo "FAIL: ao.so was not built"; exit 1; }
 export FEMTO_PLUGIN_PATH="$work/sdk-build"
+# The installed conformance matrix on the out-of-tree mini_path integrator.
+"$work/sdk-build/conformance" --gtest_brief=1 > "$work/conformance.log" 2>&1 ||
+  { cat "$work/conformance.log"; echo "FAIL: mini_path fails the conformance matrix"; exit 1; }
+grep -q "PASSED" "$work/conformance.log" || { cat "$work/conformance.log"; echo "FAIL: no conformance test ran"; exit 1; }
 femto="$work/install/bin/femto"
 "$femto" plugins ao | grep -q "Ambient occlusion" || { echo "FAIL: femto plugins does not list ao"; exit 1; }
 "$femto" render "$src/tests/plugin_sdk/scene.xml" -o "$work/ao" -q

@@ -9,17 +9,11 @@
 
 #include "femto/error.h"
 #include "femto/host.h"
+#include "femto/testing/render.h"
 
 namespace femto::test {
 
-/// A fresh, empty temporary folder per call.
-inline std::filesystem::path temp_dir(const std::string& name) {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     ("femto-test-" + name + "-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(dir);
-    std::filesystem::create_directories(dir);
-    return dir;
-}
+using femto::testing::temp_dir;
 
 inline void write_text(const std::filesystem::path& path, const std::string& text) {
     std::ofstream out(path);

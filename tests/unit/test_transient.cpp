@@ -12,7 +12,8 @@
 //  - Monte Carlo means are compared within 4 standard errors (two-sided), the standard error
 //    derived for each estimator where it is used (jitter of the pixel position, a binomial
 //    choice, or the ratio estimator of a mean time over independent pixels).
-//  - `path` and `transient_path` trace the same estimator (host trace_path) and draw the same
+//  - `path` and `transient_path` trace the same estimator (plugins/integrators/path) and draw the
+//  same
 //    random numbers per (pixel, sample) when roulette is off and the time window contains every
 //    path: then the two steady images agree up to float summation order (see EnergyMatchesPath).
 #include <gtest/gtest.h>
@@ -41,17 +42,12 @@ using namespace femto;
 using femto::test::Cube;
 using femto::test::read_npy;
 using femto::test::render_cube;
+using femto::testing::bin_of;
+using femto::testing::render_steady;
 
 namespace {
 
 const std::string kScenes = std::string(FEMTO_SOURCE_DIR) + "/scenes/";
-
-std::vector<float> render_steady(Scene& scene, uint64_t seed) {
-    RenderOptions opt;
-    opt.seed = seed;
-    render(scene, opt);
-    return scene.sensor().film().steady_image();
-}
 
 LoadOptions defines(std::vector<std::pair<std::string, std::string>> d) {
     LoadOptions o;
@@ -73,15 +69,6 @@ std::string replace_element(const std::string& xml, const std::string& open,
     const size_t b = xml.find(close, a);
     EXPECT_NE(b, std::string::npos) << close;
     return xml.substr(0, a) + with + xml.substr(b + close.size());
-}
-
-/// Time bin of the window [start, start + bins * width) holding t, or -1.
-int bin_of(double start, double width, int bins, double t) {
-    TimeGrid g;
-    g.start = start;
-    g.bin_width = width;
-    g.bins = bins;
-    return g.bin_of(t);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -295,100 +282,8 @@ TEST(FluorescentMaterial, EventsAverageToReflectancePlusFluorescence) {
         }
 }
 
-// ---------------------------------------------------------------------------------------------
-// Time of flight over a plane (scenes/tof-plane)
-
-namespace {
-
-struct Footprint {
-    double r_min, r_max;  // distance range from the point under the light
-};
-
-// The pixel's footprint on the plane z = 0 (orthographic camera looking down -z).
-Footprint footprint(const Sensor& sensor, int px, int py) {
-    const Ray a = sensor.sample_ray({float(px), float(py)}, {});
-    const Ray b = sensor.sample_ray({float(px + 1), float(py + 1)}, {});
-    const double x0 = std::min(a.o.x, b.o.x), x1 = std::max(a.o.x, b.o.x);
-    const double y0 = std::min(a.o.y, b.o.y), y1 = std::max(a.o.y, b.o.y);
-    const double dx = std::max({0.0, x0, -x1}), dy = std::max({0.0, y0, -y1});
-    const double fx = std::max(std::abs(x0), std::abs(x1)),
-                 fy = std::max(std::abs(y0), std::abs(y1));
-    return {std::hypot(dx, dy), std::hypot(fx, fy)};
-}
-
-constexpr double kTofH = 1.5, kTofI = 5, kTofRho = 0.6, kTofCamera = 5;
-
-// Checks that every pixel's energy lies in the bins its footprint's arrival times span, and
-// that the time-integrated amplitude matches rho/pi * I * cos / d^2 averaged over the pixel.
-void check_tof_plane(bool world_time) {
-    const int res = 16, spp = 64;
-    const double start = world_time ? 1.4 : 6.4, width = 0.005;
-    const int bins = 370;  // arrivals: 1.5 .. 3.2 in world time, 5 more in camera time
-    auto scene = load_scene(kScenes + "tof-plane/scene.xml",
-                            defines({{"res", std::to_string(res)},
-                                     {"spp", std::to_string(spp)},
-                                     {"start", std::to_string(start)},
-                                     {"bin_width", std::to_string(width)},
-                                     {"bins", std::to_string(bins)},
-                                     {"world_time", world_time ? "true" : "false"}}));
-    const Cube cube = render_cube(*scene, 17, world_time ? "tof-world" : "tof-camera");
-    ASSERT_EQ(cube.H, res);
-    ASSERT_EQ(cube.W, res);
-    ASSERT_EQ(cube.T, bins);
-    const Sensor& sensor = scene->sensor();
-    const double sensor_segment = world_time ? 0.0 : kTofCamera;
-    auto radiance_at = [&](Vec2 pos) {
-        const Ray r = sensor.sample_ray(pos, {});
-        const double d2 = double(r.o.x) * r.o.x + double(r.o.y) * r.o.y + kTofH * kTofH;
-        return kTofRho / M_PI * kTofI * (kTofH / std::sqrt(d2)) / d2;
-    };
-    double max_span = 0;
-    for (int py = 0; py < res; ++py)
-        for (int px = 0; px < res; ++px) {
-            const Footprint f = footprint(sensor, px, py);
-            const double t_min = sensor_segment + std::hypot(f.r_min, kTofH);
-            const double t_max = sensor_segment + std::hypot(f.r_max, kTofH);
-            const int b0 = bin_of(start, width, bins, t_min - 1e-4);
-            const int b1 = bin_of(start, width, bins, t_max + 1e-4);
-            ASSERT_GE(b0, 0);
-            ASSERT_GE(b1, b0);
-            max_span = std::max(max_span, t_max - t_min);
-            double inside = 0;
-            for (int t = 0; t < bins; ++t) {
-                const double e = cube.energy(py, px, t);
-                if (t < b0 || t > b1) {
-                    EXPECT_EQ(e, 0.0)
-                        << "pixel " << px << "," << py << " bin " << t << " outside [" << b0 << ", "
-                        << b1 << "] (t in [" << t_min << ", " << t_max << "])";
-                } else {
-                    inside += cube.at(py, px, t, 1);
-                }
-            }
-            // Amplitude: the pixel averages L over uniformly jittered positions; compare with
-            // the pixel average, allowing 4 standard errors of that jitter (as test_render).
-            const int grid = 32;
-            double sum = 0, sum2 = 0;
-            for (int j = 0; j < grid; ++j)
-                for (int i = 0; i < grid; ++i) {
-                    const double v = radiance_at({px + (i + 0.5f) / grid, py + (j + 0.5f) / grid});
-                    sum += v;
-                    sum2 += v * v;
-                }
-            const double mean = sum / (grid * grid);
-            const double sd = std::sqrt(std::max(0.0, sum2 / (grid * grid) - mean * mean));
-            EXPECT_NEAR(inside, mean, 4 * sd / std::sqrt(double(spp)) + 1e-5 * mean)
-                << "pixel " << px << "," << py;
-        }
-    // How sharp the check is: a footprint's time range (0.25-unit pixels) spans at most
-    // 0.25 * sqrt(2) * r / d < 0.33 units at the corners and a few bins near the centre.
-    EXPECT_LE(max_span, 0.33);
-}
-
-}  // namespace
-
-TEST(Transient, TofPlaneArrivalAndAmplitudeInCameraTime) { check_tof_plane(false); }
-
-TEST(Transient, TofPlaneArrivalInWorldTime) { check_tof_plane(true); }
+// Time of flight over a plane, the glass-slab delay and fluorescence on a plane are checks of
+// the integrator conformance matrix (femto/testing/integrator_conformance.h).
 
 // ---------------------------------------------------------------------------------------------
 // Energy: the transient cube summed over time is the steady `path` render
@@ -422,17 +317,17 @@ std::string as_steady_path(const std::string& xml, int max_depth) {
 }  // namespace
 
 TEST(Transient, EnergyMatchesPath) {
-    // Both integrators run host trace_path with the same options (roulette off: `path` gets
-    // rr_depth = max_depth + 1, which is never reached; a transient path only stops early when
-    // its time passes the window's end, which the windows below exclude: each is longer than
-    // max_depth times the longest segment in its scene (bounded by the scene's extent, times
-    // the glass index 1.52 in `spheres`) plus the longest camera segment; for `fluorescent`
-    // the window also holds up to max_depth - 1 lifetime delays to a tail probability below
-    // 1e-12). The samplers draw numbers per (seed, pixel, sample), so both integrators see the
-    // same random numbers and produce the same contributions; only the films differ. The
-    // steady images must then agree up to float rounding of the two accumulations (hdrfilm
-    // sums in double; the cube sums per bin in float over <= 64 samples, relative error
-    // < 64 * 6e-8 ~ 4e-6): 1e-4 relative, plus 1e-6 absolute for dark pixels.
+    // Both plugins are the same estimator (plugins/integrators/path) with the same options
+    // (roulette off: `path` gets rr_depth = max_depth + 1, which is never reached; a transient path
+    // only stops early when its time passes the window's end, which the windows below exclude: each
+    // is longer than max_depth times the longest segment in its scene (bounded by the scene's
+    // extent, times the glass index 1.52 in `spheres`) plus the longest camera segment; for
+    // `fluorescent` the window also holds up to max_depth - 1 lifetime delays to a tail probability
+    // below 1e-12). The samplers draw numbers per (seed, pixel, sample), so both integrators see
+    // the same random numbers and produce the same contributions; only the films differ. The steady
+    // images must then agree up to float rounding of the two accumulations (hdrfilm sums in double;
+    // the cube sums per bin in float over <= 64 samples, relative error < 64 * 6e-8 ~ 4e-6): 1e-4
+    // relative, plus 1e-6 absolute for dark pixels.
     const std::vector<EnergyCase> cases = {
         {"tof-plane", 2, {{"res", "16"}, {"spp", "16"}}},
         {"cornell-box",
@@ -463,98 +358,9 @@ TEST(Transient, EnergyMatchesPath) {
         auto transient = load_scene_string(xml, defines(c.defines), kScenes + c.scene);
         auto steady = load_scene_string(as_steady_path(xml, c.max_depth), defines(c.defines),
                                         kScenes + c.scene);
-        const auto a = render_steady(*transient, 23);
-        const auto b = render_steady(*steady, 23);
-        ASSERT_EQ(a.size(), b.size());
-        double total = 0;
-        int bad = 0;
-        for (size_t i = 0; i < a.size(); ++i) {
-            total += b[i];
-            const double tol = 1e-4 * std::max(std::abs(a[i]), std::abs(b[i])) + 1e-6;
-            if (std::abs(double(a[i]) - b[i]) > tol && ++bad <= 10)
-                ADD_FAILURE() << "value " << i << " (pixel " << i / 3 << ", channel " << i % 3
-                              << "): transient " << a[i] << " vs path " << b[i];
-        }
-        EXPECT_EQ(bad, 0);
-        EXPECT_GT(total, 0.0);  // the comparison is not vacuous
+        femto::testing::expect_same_image(render_steady(*transient, 23), render_steady(*steady, 23),
+                                          "transient", "path");
     }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Refraction delay: a glass slab of thickness d and index eta delays light by (eta - 1) d
-
-TEST(Transient, GlassSlabDelaysByEtaMinusOneTimesThickness) {
-    // An orthographic camera at z = 5 looks straight down at an emitting rectangle at z = 0
-    // (radiance 1, black so it reflects nothing). A slab of glass (eta = 1.5) fills
-    // 1 <= z <= 1 + d. Without it, light arrives at camera time 5. Through it the straight
-    // (normal-incidence) path is 5 - d + eta d = 5 + (eta - 1) d; light reflected 2k times
-    // inside the slab arrives 2 k eta d later. With Fresnel reflectance R = ((eta-1)/(eta+1))^2
-    // at normal incidence, the first arrival carries (1 - R)^2 of the radiance.
-    const double d = 0.5, eta = 1.5, start = 4.905, width = 0.02;
-    const int bins = 200, res = 16, spp = 64;
-    auto xml = [&](bool slab) {
-        std::string s =
-            "<scene version=\"3.0.0\"><integrator type=\"transient_path\"/>"
-            "<sensor type=\"orthographic\"><transform name=\"to_world\">"
-            "<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/></transform>"
-            "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" +
-            std::to_string(spp) +
-            "\"/></sampler><film type=\"transient\"><integer name=\"width\" value=\"" +
-            std::to_string(res) + "\"/><integer name=\"height\" value=\"" + std::to_string(res) +
-            "\"/><float name=\"start\" value=\"" + std::to_string(start) +
-            "\"/><float name=\"bin_width\" value=\"" + std::to_string(width) +
-            "\"/><integer name=\"bins\" value=\"" + std::to_string(bins) +
-            "\"/><rfilter type=\"box\"/></film></sensor>"
-            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/>"
-            "</transform><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0\"/></bsdf>"
-            "<emitter type=\"area\"><float name=\"radiance\" value=\"1\"/></emitter></shape>";
-        if (slab)
-            s += "<shape type=\"cube\"><transform name=\"to_world\"><scale x=\"3\" y=\"3\" z=\"" +
-                 std::to_string(d / 2) + "\"/><translate z=\"" + std::to_string(1 + d / 2) +
-                 "\"/></transform><bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"" +
-                 std::to_string(eta) + "\"/><float name=\"ext_ior\" value=\"1\"/></bsdf></shape>";
-        return s + "</scene>";
-    };
-    auto reference = load_scene_string(xml(false));
-    const Cube ref = render_cube(*reference, 5, "slab-ref");
-    auto with_slab = load_scene_string(xml(true));
-    const Cube glass = render_cube(*with_slab, 5, "slab");
-    ASSERT_EQ(glass.T, bins);
-
-    const int b_ref = bin_of(start, width, bins, 5.0);
-    const int b_first = bin_of(start, width, bins, 5.0 + (eta - 1) * d);
-    std::vector<int> b_echo;  // arrivals after 2k internal reflections, k >= 1, in the window
-    for (int k = 1;; ++k) {
-        const int b = bin_of(start, width, bins, 5.0 + (eta - 1) * d + 2 * k * eta * d);
-        if (b < 0) break;
-        b_echo.push_back(b);
-    }
-    ASSERT_EQ(b_ref, 4);
-    ASSERT_EQ(b_first, 17);
-    double first = 0;
-    for (int y = 0; y < res; ++y)
-        for (int x = 0; x < res; ++x) {
-            for (int t = 0; t < bins; ++t) {
-                if (t != b_ref) {
-                    EXPECT_EQ(ref.energy(y, x, t), 0.0) << x << "," << y << " " << t;
-                }
-                const bool expected =
-                    t == b_first || std::find(b_echo.begin(), b_echo.end(), t) != b_echo.end();
-                if (!expected) {
-                    EXPECT_EQ(glass.energy(y, x, t), 0.0)
-                        << "pixel " << x << "," << y << ": light through the slab in bin " << t
-                        << " (time " << start + (t + 0.5) * width << "); expected bin " << b_first
-                        << " (time 5 + (eta - 1) d = " << 5.0 + (eta - 1) * d << ")";
-                }
-            }
-            EXPECT_NEAR(ref.at(y, x, b_ref, 0), 1.0, 1e-5);
-            first += glass.at(y, x, b_first, 0);
-        }
-    // Each camera sample either crosses both faces (probability (1 - R)^2, weight 1) or not:
-    // a binomial mean over res^2 * spp samples.
-    const double R = std::pow((eta - 1) / (eta + 1), 2), p = (1 - R) * (1 - R);
-    const double n = double(res) * res * spp;
-    EXPECT_NEAR(first / (res * res), p, 4 * std::sqrt(p * (1 - p) / n) + 1e-6);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -8,6 +8,7 @@
 #include "femto/math.h"
 #include "femto/sensor.h"
 #include "femto/shape.h"
+#include "femto/time.h"
 
 namespace femto {
 
@@ -60,6 +61,11 @@ public:
     /// Earliest emission time of any emitter (PulseProfile::earliest), for cutting paths
     /// that can no longer reach a film's time window.
     double earliest_emission() const { return earliest_emission_; }
+    /// The film's time window as paths see it (PathClock reads it). The renderer refreshes it
+    /// before every pass, since a temporal filter's reach may change after its pilot pass.
+    const TimeWindow& time_window() const { return time_window_; }
+    /// Re-reads the film's window (Film::max_path_length()); called by the renderer.
+    void refresh_time_window();
     /// True when a shape bounds a medium or the sensor or an emitter sits in one: integrators
     /// then track media along paths (volumetric path tracing).
     bool has_media() const { return has_media_; }
@@ -74,6 +80,7 @@ private:
     std::vector<const Emitter*> emitter_list_;
     Bounds3 bounds_;
     double earliest_emission_ = 0.0;
+    TimeWindow time_window_;
     bool has_media_ = false;
 };
 

@@ -4,6 +4,7 @@
 // distance d inside a medium of index eta counts as eta * d). Films bin it on a TimeGrid.
 #pragma once
 
+#include <limits>
 #include <string>
 
 #include "femto/properties.h"
@@ -32,6 +33,20 @@ struct TimeGrid {
     /// Path length (scene units) <-> picoseconds, given length_unit (throws if unknown).
     double to_picoseconds(double path_length) const;
     double from_picoseconds(double ps) const;
+};
+
+/// What an integrator needs to know of the film's time window (design section 4): light that
+/// reaches the film later than `end` is not recorded, so paths may stop once nothing they can
+/// still carry would arrive before it (ch. 5.6.1). Scene::time_window() holds the current one.
+struct TimeWindow {
+    /// Latest time (optical path length, camera time) the film records: the window's end plus
+    /// the temporal filter's reach; infinite for steady films and in world time.
+    double end = std::numeric_limits<double>::infinity();
+    /// Earliest emission time of any emitter (PulseProfile::earliest).
+    double earliest_emission = 0.0;
+    /// Longest optical length a camera path may have travelled and still bring light to the
+    /// film: light leaving an emitter no earlier than earliest_emission must arrive by `end`.
+    double path_cut() const { return end - earliest_emission; }
 };
 
 /// The time a film records for a contribution of optical path length `path_length`: camera

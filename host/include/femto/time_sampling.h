@@ -77,17 +77,26 @@ public:
     virtual double sample(const ConnectionQuery& q, double u) const = 0;
     /// Density (per unit length) of sample() returning r.
     virtual double pdf(const ConnectionQuery& q, double r) const = 0;
-
-    /// Equiangular sampling (Kulla & Fajardo 2012): density proportional to 1 / |x(r) -
-    /// target|^2, the steady-state reference. Works for an infinite segment too.
-    static double equiangular_sample(const ConnectionQuery& q, double u);
-    static double equiangular_pdf(const ConnectionQuery& q, double r);
-    /// Line-to-point sampling (eq. 5.24-5.25, appendix 5.C.2): the length r + |x(r) - target|
-    /// of the two-segment connection is uniform over its range on the segment, so in a medium
-    /// of index eta the connection's time is uniform. Needs a finite length.
-    static double line_to_point_sample(const ConnectionQuery& q, double u);
-    static double line_to_point_pdf(const ConnectionQuery& q, double r);
 };
+
+/// The segment of a connection query seen from its target: l = target - origin, b = l .
+/// direction (where the target projects on the line), d2 = |l|^2 - b^2 its squared distance
+/// from the line (in double: with the target nearly on the line it must not be lost against
+/// r^2 and |l|^2), and D that distance kept a hair above zero.
+struct ConnectionGeometry {
+    double l2, b, d2, D;
+    explicit ConnectionGeometry(const ConnectionQuery& q);
+    /// |x(r) - target| for x(r) = origin + r direction, as sqrt((r - b)^2 + d2).
+    double distance_to_target(double r) const { return std::sqrt((r - b) * (r - b) + d2); }
+};
+
+/// Equiangular sampling (Kulla & Fajardo 2012): a distance on the query's segment with density
+/// proportional to 1 / |x(r) - target|^2, the falloff of a point light's irradiance. The
+/// steady reference of the connection strategies; works for an infinite segment too. Returns
+/// a negative value when the segment is too short to resolve.
+double equiangular_sample(const ConnectionQuery& q, double u);
+/// Density (per unit length) of equiangular_sample() returning r.
+double equiangular_pdf(const ConnectionQuery& q, double r);
 
 /// A medium vertex choosing its outgoing direction (ch. 5.6.3, Fig. 5.6 right).
 struct AngularQuery {
@@ -111,12 +120,6 @@ public:
     virtual Vec3 sample(const AngularQuery& q, Vec2 u) const = 0;
     /// Solid-angle density of sample() returning wo.
     virtual double pdf(const AngularQuery& q, const Vec3& wo) const = 0;
-
-    /// Time angular sampling (eq. 5.26-5.27, appendix 5.C.3): with r = q.distance and L the
-    /// distance to the target, the length r + |x + r wo - target| is uniform over [r + |L - r|,
-    /// r + L + r]. Falls back to the phase function when there is no usable target.
-    static Vec3 time_sample(const AngularQuery& q, Vec2 u);
-    static double time_pdf(const AngularQuery& q, const Vec3& wo);
 };
 
 }  // namespace femto

@@ -77,6 +77,7 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
         for (const Emitter* e : emitter_list_)
             earliest_emission_ = std::min(earliest_emission_, e->pulse().earliest());
     }
+    refresh_time_window();
 
     RTCDevice dev = device();
     accel_->scene = rtcNewScene(dev);
@@ -180,6 +181,11 @@ uint64_t Scene::rays_traced() const {
     uint64_t total = 0;
     for (const auto& c : accel_->rays) total += c.count;
     return total;
+}
+
+void Scene::refresh_time_window() {
+    time_window_.end = sensor_->film().max_path_length();
+    time_window_.earliest_emission = earliest_emission_;
 }
 
 }  // namespace femto

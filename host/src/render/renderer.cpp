@@ -12,6 +12,7 @@
 #include <unistd.h>
 #include <xmmintrin.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -91,13 +92,51 @@ void enable_flush_to_zero() {
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
 }
 
+// Tiles grouped by colour (tx % 2, ty % 2): tiles of one colour never overlap, filter borders
+// included, so they merge at the same time without locks.
+std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H) {
+    std::array<std::vector<Tile>, 4> by_colour;
+    for (int ty = 0; ty * kTileSize < H; ++ty)
+        for (int tx = 0; tx * kTileSize < W; ++tx)
+            by_colour[size_t((ty % 2) * 2 + (tx % 2))].push_back(
+                {tx * kTileSize, ty * kTileSize, std::min(kTileSize, W - tx * kTileSize),
+                 std::min(kTileSize, H - ty * kTileSize)});
+    return by_colour;
+}
+
+// Samples [s0, s1) of every pixel of `tile`: each camera sample's numbers come from (seed,
+// pixel, sample index) alone. The tile's block is merged into the film at the end.
+void render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0, uint32_t s1,
+                 Sampler& sampler, ContributionList& list) {
+    const Sensor& sensor = scene.sensor();
+    Film& film = sensor.film();
+    const Integrator& integrator = scene.integrator();
+    auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
+    for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
+        if (!film.row_active(y)) continue;
+        for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
+            const uint64_t pixel = uint64_t(y) * uint64_t(film.width()) + uint64_t(x);
+            for (uint32_t s = s0; s < s1; ++s) {
+                sampler.start(seed, pixel, s);
+                const Vec2 jitter = sampler.next_2d();
+                const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
+                const Ray ray = sensor.sample_ray(pos, sampler.next_2d());
+                list.clear();
+                list.set_sample_index(s);
+                integrator.sample(scene, sampler, ray, list);
+                block->put(pos, list);
+            }
+        }
+    }
+    film.merge(*block);
+}
+
 }  // namespace
 
 RenderStats render(Scene& scene, const RenderOptions& options) {
     const Sensor& sensor = scene.sensor();
     Film& film = sensor.film();
     const Sampler& prototype = sensor.sampler();
-    const Integrator& integrator = scene.integrator();
     const uint32_t spp = options.spp ? options.spp : prototype.sample_count();
     if (spp == 0) throw SceneError("the number of samples per pixel must be positive");
     if (options.threads < 0) throw SceneError("the thread count must be positive (0 = all cores)");
@@ -109,14 +148,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     enable_flush_to_zero();
     scene.integrator().preprocess(scene);
 
-    // Tiles grouped by colour (tx % 2, ty % 2).
     const int W = film.width(), H = film.height();
-    std::vector<Tile> by_colour[4];
-    for (int ty = 0; ty * kTileSize < H; ++ty)
-        for (int tx = 0; tx * kTileSize < W; ++tx)
-            by_colour[(ty % 2) * 2 + (tx % 2)].push_back({tx * kTileSize, ty * kTileSize,
-                                                          std::min(kTileSize, W - tx * kTileSize),
-                                                          std::min(kTileSize, H - ty * kTileSize)});
+    const auto by_colour = tiles_by_colour(W, H);
     if (film.rfilter().radius() > kTileSize / 2)
         throw SceneError(
             fmt::format("the reconstruction filter's radius ({} px) is larger than femto "
@@ -140,28 +173,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         for (const auto& tiles : by_colour) {
             tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
                 enable_flush_to_zero();
-                const Tile& tile = tiles[t];
-                Sampler& sampler = *samplers.local();
-                ContributionList& list = lists.local();
-                auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
-                for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
-                    if (!film.row_active(y)) continue;
-                    for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
-                        const uint64_t pixel = uint64_t(y) * uint64_t(W) + uint64_t(x);
-                        for (uint32_t s = s0; s < s1; ++s) {
-                            sampler.start(seed, pixel, s);
-                            const Vec2 jitter = sampler.next_2d();
-                            const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
-                            const Ray ray = sensor.sample_ray(pos, sampler.next_2d());
-                            list.clear();
-                            list.set_sample_index(s);
-                            integrator.sample(scene, sampler, ray, list);
-                            block->put(pos, list);
-                        }
-                    }
-                }
-                film.merge(*block);
-                progress.advance(uint64_t(tile.w) * uint64_t(tile.h) * (s1 - s0));
+                render_tile(scene, tiles[t], seed, s0, s1, *samplers.local(), lists.local());
+                progress.advance(uint64_t(tiles[t].w) * uint64_t(tiles[t].h) * (s1 - s0));
             });
         }
     };
@@ -173,6 +186,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     if (pilot_spp > 0) {
         // The pilot's random streams are independent of the image's (another seed).
         film.begin_pilot();
+        scene.refresh_time_window();
         run_pass(options.seed ^ 0x9E3779B97F4A7C15ull, 0, pilot_spp);
         film.end_pilot();
     }
@@ -180,6 +194,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     for (uint32_t s0 = 0; s0 < spp; s0 += pass_spp, ++pass) {
         const uint32_t s1 = std::min(spp, s0 + pass_spp);
         film.start_pass(pass);
+        scene.refresh_time_window();
         run_pass(options.seed, s0, s1);
         stats.spp_done = s1;
         if (options.stop && options.stop->load() && s1 < spp) {

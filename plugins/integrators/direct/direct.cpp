@@ -1,11 +1,16 @@
 // Direct illumination with multiple importance sampling of emitters and the BSDF (Mitsuba's
 // `direct`): `emitter_samples` light samples and `bsdf_samples` BSDF samples per camera ray,
-// combined with the power heuristic.
+// combined with the power heuristic. Time follows the same rules as every integrator
+// (PathClock): the first surface that scatters sets the sensor distance, its vertex event
+// (a fluorescent material's delay and colour transfer) applies to all light leaving it.
 #include "femto/bsdf.h"
 #include "femto/error.h"
 #include "femto/integrator.h"
+#include "femto/mis.h"
+#include "femto/path_clock.h"
 #include "femto/plugin.h"
 #include "femto/scene.h"
+#include "femto/transport.h"
 
 namespace {
 
@@ -31,46 +36,30 @@ public:
                 "transient_path for a scene with <medium>");
     }
 
-    // Power heuristic for n_a samples of density a against n_b samples of density b.
-    static float mis(float n_a, float a, float n_b, float b) {
-        const float x = n_a * a, y = n_b * b;
-        return x * x + y * y > 0 ? x * x / (x * x + y * y) : 0.f;
-    }
-
-    static double emission_time(const Emitter& em, Sampler& sampler) {
-        return em.pulse().is_delta() ? em.pulse().offset : em.pulse().sample(sampler.next_1d());
-    }
-
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
                 ContributionList& out) const override {
+        PathClock clock(scene, out);
+        Throughput throughput;
         Hit hit;
-        Ray r = ray;
-        double length0 = 0;
-        for (int guard = 0; guard < 64; ++guard) {  // skip null (pass-through) surfaces
-            if (!scene.intersect(r, hit)) return;
-            length0 += hit.t;
-            if (const Emitter* em = hit.shape->emitter(); em && !hide_emitters_)
-                out.add(em->eval(hit, -r.d), length0 + emission_time(*em, sampler));
-            if (!hit.shape->bsdf()->is_null()) {
-                out.set_sensor_distance(length0);
-                break;
-            }
-            r = hit.spawn(r.d);
-            if (guard == 63) return;
-        }
+        if (!first_vertex(scene, sampler, ray, clock, hit)) return;
         const Bsdf& bsdf = *hit.shape->bsdf();
+        // The vertex's event (delay, colour transfer) applies to all light leaving it.
+        apply_vertex_event(bsdf, hit, sampler, clock, throughput);
         const float ne = float(emitter_samples_), nb = float(bsdf_samples_);
         if (bsdf.flags() & kBsdfSmooth)
             for (int64_t i = 0; i < emitter_samples_; ++i) {
-                const float u_sel = sampler.next_1d();
-                const EmitterSample es = scene.sample_emitter(hit.p, u_sel, sampler.next_2d());
-                if (!(es.pdf > 0) || es.weight.is_black()) continue;
-                const Vec3 wo = hit.to_local(es.wi);
+                const EmitterSample light = sample_emitter(scene, hit.p, sampler);
+                if (!(light.pdf > 0) || light.weight.is_black()) continue;
+                const Vec3 wo = hit.to_local(light.wi);
                 const Color f = bsdf.eval(hit, hit.wi, wo);
-                if (f.is_black() || scene.occluded(hit.spawn_to(es.p))) continue;
-                const float w = es.delta ? 1.f : mis(ne, es.pdf, nb, bsdf.pdf(hit, hit.wi, wo));
-                out.add(f * es.weight * (w / ne),
-                        length0 + double(es.distance) + emission_time(*es.emitter, sampler));
+                if (f.is_black()) continue;
+                const ShadowConnection c = connect_to_light(scene, hit, light, {}, sampler);
+                if (c.blocked()) continue;
+                const float w = light.delta
+                                    ? 1.f
+                                    : power_heuristic(ne, light.pdf, nb, bsdf.pdf(hit, hit.wi, wo));
+                clock.record(throughput(f * light.weight * (w / ne)), *light.emitter, sampler,
+                             c.optical_length);
             }
         for (int64_t i = 0; i < bsdf_samples_; ++i) {
             const float u_lobe = sampler.next_1d();
@@ -84,13 +73,31 @@ public:
             const Color Le = em->eval(lit, -next.d);
             if (Le.is_black()) continue;
             const bool delta = (bs.sampled_lobe & kBsdfDelta) != 0;
-            const float w = delta ? 1.f : mis(nb, bs.pdf, ne, scene.pdf_emitter(*em, hit.p, lit));
-            out.add(bs.weight * Le * (w / nb),
-                    length0 + double(lit.t) + emission_time(*em, sampler));
+            const float w =
+                delta ? 1.f : power_heuristic(nb, bs.pdf, ne, scene.pdf_emitter(*em, hit.p, lit));
+            clock.record(throughput(bs.weight * Le * (w / nb)), *em, sampler, double(lit.t));
         }
     }
 
 private:
+    // Follows the camera ray through null (pass-through) surfaces to the first surface that
+    // scatters, recording the emitters seen on the way. Returns false when there is none.
+    bool first_vertex(const Scene& scene, Sampler& sampler, const Ray& ray, PathClock& clock,
+                      Hit& hit) const {
+        Ray r = ray;
+        for (int crossings = 0; crossings < 64; ++crossings) {
+            if (!scene.intersect(r, hit)) return false;
+            clock.travel(double(hit.t), 1.0);
+            const bool scatters = !hit.shape->bsdf()->is_null();
+            if (scatters) clock.reach_vertex();
+            if (const Emitter* em = hit.shape->emitter(); em && !hide_emitters_)
+                clock.record(em->eval(hit, -r.d), *em, sampler);
+            if (scatters) return true;
+            r = hit.spawn(r.d);
+        }
+        return false;
+    }
+
     int64_t emitter_samples_, bsdf_samples_;
     bool hide_emitters_;
 };

@@ -1,0 +1,77 @@
+// femto public API: the time rules of a camera path, in one type (design section 4,
+// docs/units.md, thesis eq. 5.11-5.16).
+//
+// An integrator that follows a path from the camera owns one PathClock per camera sample and
+// lets it do every time computation, so that each contribution lands at the right time and
+// every integrator follows the same rules:
+//   - time is optical length: a segment of length d at refractive index eta takes eta * d
+//     (travel());
+//   - materials and phase functions may hold light at a vertex (fluorescence): delay();
+//   - the first scattering vertex (a surface that is not `null`, or a medium vertex) fixes the
+//     sensor distance, which world-time films subtract (eq. 4.1) and store as the pixel's depth
+//     (reach_vertex());
+//   - light leaves an emitter at the time its pulse says: record() draws that emission time
+//     and adds the radiance at the path's time plus the shadow connection's optical length;
+//   - a path whose time is past the window's cut can no longer reach the film (expired()).
+// The window comes from the scene (Scene::time_window(), refreshed by the renderer before each
+// pass), never from the film per sample.
+#pragma once
+
+#include "femto/film.h"
+#include "femto/sampler.h"
+#include "femto/scene.h"
+#include "femto/time.h"
+
+namespace femto {
+
+class PathClock {
+public:
+    /// Starts a camera path at the sensor (time 0); contributions go to `out`.
+    PathClock(const Scene& scene, ContributionList& out)
+        : window_(scene.time_window()), out_(out) {}
+
+    /// Optical length travelled so far plus the vertices' delays (scene units).
+    double time() const { return time_; }
+    const TimeWindow& window() const { return window_; }
+    /// Optical length the path may still travel before nothing it carries can reach the film
+    /// (infinite with a steady film; negative once expired).
+    double remaining() const { return window_.path_cut() - time_; }
+    /// True when the path is past the window: no light it could still carry arrives in time.
+    bool expired() const { return time_ > window_.path_cut(); }
+
+    /// The path travels `distance` at refractive index `eta`.
+    void travel(double distance, double eta) { time_ += distance * eta; }
+    /// A vertex holds the light for `delay` (VertexEvent::delay).
+    void delay(double delay) { time_ += delay; }
+    /// The path scatters here (a surface that is not `null`, or a medium vertex); the first
+    /// such vertex sets the camera sample's sensor distance.
+    void reach_vertex() {
+        if (out_.sensor_distance() < 0) out_.set_sensor_distance(time_);
+    }
+
+    /// Adds radiance `radiance` emitted by `emitter` that reaches the current vertex over a
+    /// further optical length `extra` (a shadow connection; 0 for an emitter the path hit).
+    /// The emission time is drawn from the emitter's pulse (one number from `sampler` unless
+    /// the pulse is a delta), even when the radiance is black, so that the random stream does
+    /// not depend on the value.
+    void record(const Color& radiance, const Emitter& emitter, Sampler& sampler,
+                double extra = 0.0) const {
+        const double emitted = emission_time(emitter, sampler);
+        out_.add(radiance, time_ + extra + emitted);
+    }
+    /// Adds a value measured at the current vertex that no emitter sent (ambient occlusion, a
+    /// debugging quantity): it is recorded at the clock's time.
+    void record(const Color& value) const { out_.add(value, time_); }
+    /// When `emitter`'s light leaves it: its pulse's offset, or a sample of its profile.
+    static double emission_time(const Emitter& emitter, Sampler& sampler) {
+        const PulseProfile& pulse = emitter.pulse();
+        return pulse.is_delta() ? pulse.offset : pulse.sample(sampler.next_1d());
+    }
+
+private:
+    TimeWindow window_;
+    ContributionList& out_;
+    double time_ = 0.0;
+};
+
+}  // namespace femto

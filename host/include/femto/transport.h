@@ -1,0 +1,195 @@
+// femto public API: the transport toolkit, the building blocks an estimator is made of
+// (docs/writing-plugins.md walks through them in the order an integrator meets them):
+//   - Throughput: a path's weight, including vertex events that move energy between colour
+//     channels (fluorescence), and apply_vertex_event(), which also gives the clock the delay;
+//   - MediumTracker: the medium a path travels in and the refractive index outside media;
+//   - sample_emitter(): a light sample drawn in femto's order of random numbers;
+//   - connect_to_light(): the shadow connection to it, through null boundaries and media, with
+//     its transmittance and eta-weighted optical length;
+//   - DistanceMixture and sample_distance(): the distance strategy in a medium (ch. 5.6.1),
+//     alone or MIS-combined with mean-free-path sampling;
+//   - connection_reach(): how far along a segment a connection strategy's vertex may lie and
+//     still reach its light within the film's window (eq. 5.110-5.111).
+// The time rules themselves are PathClock's (femto/path_clock.h); the MIS weights are in
+// femto/mis.h. `plugins/integrators/path` is an estimator written with these pieces.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "femto/bsdf.h"
+#include "femto/color.h"
+#include "femto/emitter.h"
+#include "femto/medium.h"
+#include "femto/path_clock.h"
+#include "femto/sampler.h"
+#include "femto/scene.h"
+#include "femto/time_sampling.h"
+
+namespace femto {
+
+// ---- path weight -----------------------------------------------------------------------------
+
+/// The weight a path applies to light arriving at its current vertex: a colour per channel
+/// (diag(colour)) until a vertex event moves energy between channels, then mix * diag(colour).
+/// The fast diagonal form is kept as long as possible.
+class Throughput {
+public:
+    /// The weighted value of light `c` arriving at the current vertex.
+    Color operator()(const Color& c) const { return mixing_ ? mix_ * (colour_ * c) : colour_ * c; }
+    Throughput& operator*=(const Color& c) {
+        colour_ *= c;
+        return *this;
+    }
+    /// Applies a vertex event's colour transfer (VertexEvent::transfer).
+    void transfer(const ColorMatrix& t);
+    /// True when no light can pass any more (the per-channel weight is zero).
+    bool is_black() const { return colour_.is_black(); }
+    /// The most the path can carry into any one channel of unit white light: the survival
+    /// probability Russian roulette uses.
+    float max_gain() const {
+        return mixing_ ? mix_.scale_columns(colour_).max_row_sum() : colour_.max_component();
+    }
+
+private:
+    Color colour_{1.f, 1.f, 1.f};
+    ColorMatrix mix_;  // identity (and unused) until a non-diagonal transfer
+    bool mixing_ = false;
+};
+
+/// Samples the vertex event of a surface whose material has one (fluorescence, eq. 5.13): its
+/// delay goes to the clock and its colour transfer to the throughput; everything leaving the
+/// vertex, its light samples included, carries both. Draws one number when it has one.
+inline void apply_vertex_event(const Bsdf& bsdf, const Hit& hit, Sampler& sampler, PathClock& clock,
+                               Throughput& throughput) {
+    if (!bsdf.has_vertex_event()) return;
+    const VertexEvent event = bsdf.sample_vertex_event(hit, sampler.next_1d());
+    clock.delay(event.delay);
+    if (event.transfers) throughput.transfer(event.transfer);
+}
+
+// ---- media -----------------------------------------------------------------------------------
+
+/// The medium a path travels in (null: none) and the refractive index outside media, which
+/// transmissions through dielectrics change. Time runs at eta() along the current segment.
+struct MediumTracker {
+    const Medium* medium = nullptr;
+    double index = 1.0;
+
+    /// Starts where the sensor sits.
+    static MediumTracker at_sensor(const Scene& scene) { return {scene.sensor().medium(), 1.0}; }
+    /// Refractive index along the current segment.
+    double eta() const { return medium ? medium->eta() : index; }
+    /// The medium beyond `hit`'s surface for a path leaving it in direction d: a shape that
+    /// bounds no medium leaves it unchanged; otherwise the side d points to decides (the
+    /// geometric normal points to the exterior).
+    const Medium* beyond(const Hit& hit, const Vec3& d) const {
+        const Shape& shape = *hit.shape;
+        if (!shape.has_media()) return medium;
+        return dot(d, hit.ng) < 0 ? shape.interior() : shape.exterior();
+    }
+    /// The path crosses `hit`'s surface in direction d.
+    void cross(const Hit& hit, const Vec3& d) { medium = beyond(hit, d); }
+    /// A BSDF sample that transmits through a dielectric changes the index outside media by
+    /// the sample's relative index (BsdfSample::eta).
+    void refract(const BsdfSample& bs) {
+        if (bs.sampled_lobe &
+            (kBsdfDeltaTransmission | kBsdfGlossyTransmission | kBsdfDiffuseTransmission))
+            index *= double(bs.eta);
+    }
+};
+
+// ---- light sampling and shadow connections ---------------------------------------------------
+
+/// One light sample for next-event estimation at `ref`: the emitter is chosen with the first
+/// number, the point on it with the next two (Scene::sample_emitter).
+inline EmitterSample sample_emitter(const Scene& scene, const Vec3& ref, Sampler& sampler) {
+    const float u_select = sampler.next_1d();
+    return scene.sample_emitter(ref, u_select, sampler.next_2d());
+}
+
+/// What light loses and how long it takes along a shadow connection.
+struct ShadowConnection {
+    Color transmittance{1.f, 1.f, 1.f};  ///< black when something opaque blocks it
+    double optical_length = 0.0;         ///< eta-weighted length (add it to the clock's time)
+    bool blocked() const { return transmittance.is_black(); }
+};
+
+/// The shadow ray `ray` (from ray.o to ray.o + ray.d * ray.tmax) starting in `medium`: passes
+/// null surfaces (media boundaries), changing media there, and multiplies each medium's
+/// transmittance; blocked at any other surface.
+ShadowConnection trace_shadow(const Scene& scene, Ray ray, MediumTracker medium, Sampler& sampler);
+
+/// The shadow connection from surface vertex `from` to light sample `light`. Without media in
+/// the scene it is an occlusion test and light crosses `light.distance` in vacuum (a shadow
+/// ray cannot leave a dielectric: its surface blocks it).
+ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const EmitterSample& light,
+                                  const MediumTracker& medium, Sampler& sampler);
+
+/// The shadow connection from a point `x` inside `medium.medium` to light sample `light`.
+ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const EmitterSample& light,
+                                  const MediumTracker& medium, Sampler& sampler);
+
+// ---- distance sampling in media (ch. 5.6.1) -------------------------------------------------
+
+/// The distance strategy in one medium: an exponential at the strategy's rate (mean free path
+/// when there is none), or, with `mis`, a half-half mixture of it and the mean-free-path
+/// exponential (one-sample MIS, balance heuristic). The rate does not depend on the direction,
+/// so a distance may be drawn before the direction it will be travelled in (time angular
+/// sampling needs that).
+class DistanceMixture {
+public:
+    DistanceMixture(const Medium& medium, const DistanceSampler* strategy, bool mis,
+                    const DistanceContext& ctx)
+        : steady_(DistanceSampler::mean_free_path_rate(medium)),
+          strategy_(strategy ? strategy->rate(medium, ctx) : steady_),
+          mix_(mis && strategy && strategy_ != steady_) {}
+
+    /// A distance from one uniform number (+infinity when the rate is zero).
+    double sample(double u) const {
+        double rate = strategy_;
+        if (mix_) {  // pick one of the two exponentials with probability 1/2, reusing u
+            rate = u < 0.5 ? steady_ : strategy_;
+            u = u < 0.5 ? 2 * u : 2 * u - 1;
+        }
+        return rate > 0.0 ? DistanceSampler::sample(rate, std::min(u, 1.0 - 1e-12)) : kInfinity;
+    }
+    /// Density of sample() returning r.
+    double pdf(double r) const {
+        return mix_ ? 0.5 * (DistanceSampler::pdf(steady_, r) + DistanceSampler::pdf(strategy_, r))
+                    : DistanceSampler::pdf(strategy_, r);
+    }
+    /// Probability that sample() returns more than d.
+    double survival(double d) const {
+        return mix_ ? 0.5 * (DistanceSampler::survival(steady_, d) +
+                             DistanceSampler::survival(strategy_, d))
+                    : DistanceSampler::survival(strategy_, d);
+    }
+
+private:
+    double steady_, strategy_;
+    bool mix_;
+};
+
+/// A distance drawn along a ray in a medium: a medium vertex before the surface at `tmax`, or
+/// the surface. The weight is transmittance * sigma_s / pdf at a vertex and transmittance /
+/// P(passing) at the surface, so the estimate is unbiased for any rate (ratio-tracked
+/// transmittance in heterogeneous media).
+struct DistanceSample {
+    bool scattered = false;  ///< a medium vertex at `distance`; else the path reaches tmax
+    double distance = 0.0;
+    double pdf = 0.0;  ///< of the vertex, when scattered
+    Color weight{1.f, 1.f, 1.f};
+};
+DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
+                               const DistanceMixture& strategy, double u, Sampler& sampler);
+
+/// How far along a segment (origin o, unit direction d, in a medium of index eta) a vertex can
+/// lie and still connect to `target` within `remaining` optical length: the connection covers
+/// eta * r in the medium and then at least |x(r) - target| (nothing is faster than light in
+/// vacuum). Bounds where a connection strategy samples (eq. 5.110-5.111); wherever its density
+/// is zero the distance strategy's vertices keep the whole weight, so nothing is missed.
+double connection_reach(const Vec3& o, const Vec3& d, const Vec3& target, double eta,
+                        double remaining);
+
+}  // namespace femto

@@ -1,0 +1,30 @@
+// MonteCarloIntegrator: the parameters every path-following integrator shares.
+#include "femto/integrator.h"
+
+#include <cmath>
+
+#include "femto/error.h"
+#include "femto/properties.h"
+
+namespace femto {
+
+MonteCarloIntegrator::MonteCarloIntegrator(const Properties& props, int64_t default_rr_depth)
+    : max_depth_(props.get_int("max_depth", -1)),
+      rr_depth_(props.get_int("rr_depth", default_rr_depth)),
+      hide_emitters_(props.get_bool("hide_emitters", false)),
+      location_(props.location_of("max_depth")) {
+    if (max_depth_ < -1) props.fail("max_depth", "max_depth must be -1 (unbounded) or >= 0");
+    if (rr_depth_ < 0) props.fail("rr_depth", "rr_depth must be >= 1, or 0 for no roulette");
+}
+
+void MonteCarloIntegrator::preprocess(const Scene& scene) {
+    if (max_depth_ < 0 && rr_depth_ == 0 && !std::isfinite(scene.time_window().end))
+        throw SceneError(location_,
+                         type_name() +
+                             " with max_depth=-1 and no Russian roulette (rr_depth=0) needs a "
+                             "time window that ends its paths: a transient or streak film in "
+                             "camera time (in world time the sensor segment is only known after "
+                             "the path ends); set max_depth otherwise");
+}
+
+}  // namespace femto

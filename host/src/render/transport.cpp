@@ -1,0 +1,91 @@
+// The transport toolkit's out-of-line pieces (femto/transport.h).
+#include "femto/transport.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace femto {
+
+void Throughput::transfer(const ColorMatrix& t) {
+    const bool diagonal = t.m[0][1] == 0.f && t.m[0][2] == 0.f && t.m[1][0] == 0.f &&
+                          t.m[1][2] == 0.f && t.m[2][0] == 0.f && t.m[2][1] == 0.f;
+    if (diagonal) {  // mix * diag(colour) * diag(t): stay in the fast form
+        colour_ *= Color(t.m[0][0], t.m[1][1], t.m[2][2]);
+        return;
+    }
+    mix_ = (mixing_ ? mix_ : ColorMatrix()).scale_columns(colour_) * t;
+    mixing_ = true;
+    colour_ = Color(1.f);
+}
+
+ShadowConnection trace_shadow(const Scene& scene, Ray ray, MediumTracker medium, Sampler& sampler) {
+    ShadowConnection c;
+    for (int crossings = 0; crossings < 256; ++crossings) {
+        Hit hit;
+        const bool found = scene.intersect(ray, hit);
+        const double segment = found ? double(hit.t) : double(ray.tmax);
+        if (medium.medium) c.transmittance *= medium.medium->transmittance(ray, segment, sampler);
+        c.optical_length += segment * medium.eta();
+        if (!found) return c;
+        if (!hit.shape->bsdf()->is_null() || c.blocked()) return {Color(0.f), 0.0};
+        medium.cross(hit, ray.d);
+        const float left = ray.tmax - hit.t;
+        ray = hit.spawn(ray.d);
+        ray.tmax = left;
+    }
+    return {Color(0.f), 0.0};  // pathological nesting: treat as blocked
+}
+
+ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const EmitterSample& light,
+                                  const MediumTracker& medium, Sampler& sampler) {
+    const Ray ray = from.spawn_to(light.p);
+    if (!scene.has_media()) {
+        if (scene.occluded(ray)) return {Color(0.f), 0.0};
+        return {Color(1.f), double(light.distance)};
+    }
+    MediumTracker beyond = medium;
+    beyond.medium = medium.beyond(from, light.wi);
+    return trace_shadow(scene, ray, beyond, sampler);
+}
+
+ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const EmitterSample& light,
+                                  const MediumTracker& medium, Sampler& sampler) {
+    // Stops just short of the light point, as Hit::spawn_to does for surfaces.
+    return trace_shadow(scene, Ray{x, light.wi, 0.f, light.distance * (1.f - 1e-4f)}, medium,
+                        sampler);
+}
+
+DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
+                               const DistanceMixture& strategy, double u, Sampler& sampler) {
+    DistanceSample ds;
+    const double r = strategy.sample(u);
+    if (r < tmax) {
+        ds.scattered = true;
+        ds.distance = r;
+        ds.pdf = strategy.pdf(r);
+        const Vec3 p = ray.o + ray.d * float(r);
+        ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / ds.pdf);
+    } else if (std::isfinite(tmax)) {
+        ds.weight = medium.transmittance(ray, tmax, sampler) * float(1.0 / strategy.survival(tmax));
+    } else {
+        ds.weight = Color(0.f);  // an infinite medium with no surface ahead absorbs it all
+    }
+    return ds;
+}
+
+// eta r + |x(r) - target| grows with r; its root is the smaller root of
+// (eta^2 - 1) r^2 - 2 (eta left - b) r + (left^2 - |l|^2) = 0, written without cancellation.
+double connection_reach(const Vec3& o, const Vec3& d, const Vec3& target, double eta,
+                        double remaining) {
+    const double left = remaining;
+    if (!std::isfinite(left)) return kInfinity;
+    if (!(left > 0)) return 0.0;
+    const double lx = double(target.x) - o.x, ly = double(target.y) - o.y,
+                 lz = double(target.z) - o.z;
+    const double l2 = lx * lx + ly * ly + lz * lz, b = lx * d.x + ly * d.y + lz * d.z;
+    if (!(l2 < left * left)) return 0.0;
+    const double a = eta * eta - 1, half_b = eta * left - b, c = left * left - l2;
+    return c / (half_b + std::sqrt(std::max(half_b * half_b - a * c, 0.0)));
+}
+
+}  // namespace femto

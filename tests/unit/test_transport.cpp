@@ -1,0 +1,197 @@
+// The transport toolkit's pieces on their own (femto/mis.h, femto/path_clock.h,
+// femto/transport.h): MIS weights, the path clock's time rules, the throughput's colour
+// transfers, medium tracking, the distance mixture's density and the connection reach.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "chi2.h"
+#include "femto/host.h"
+#include "femto/mis.h"
+#include "femto/path_clock.h"
+#include "femto/random.h"
+#include "femto/transport.h"
+#include "scene_util.h"
+
+using namespace femto;
+
+namespace {
+
+// A point light at (0, 0, 2) with a Gaussian pulse, a rectangle below, a transient film of
+// window [1, 3).
+std::unique_ptr<Scene> small_scene(const std::string& pulse = "") {
+    return load_scene_string(test::scene_xml(
+        "<sensor type=\"perspective\"><film type=\"transient\"><integer name=\"width\" "
+        "value=\"4\"/><integer name=\"height\" value=\"4\"/><float name=\"start\" value=\"1\"/>"
+        "<float name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"4\"/></film>"
+        "</sensor><shape type=\"rectangle\"/><emitter type=\"point\"><point name=\"position\" "
+        "value=\"0,0,2\"/>" +
+        pulse + "</emitter>"));
+}
+
+}  // namespace
+
+TEST(Mis, HeuristicsSumToOne) {
+    for (float a : {0.f, 0.3f, 1.f, 7.f})
+        for (float b : {0.1f, 2.f, 50.f}) {
+            EXPECT_NEAR(power_heuristic(a, b) + power_heuristic(b, a), 1.f, 1e-6f);
+            EXPECT_NEAR(balance_heuristic(a, b) + balance_heuristic(b, a), 1.0, 1e-12);
+            // n samples of a technique weigh as one sample of n times its density
+            EXPECT_FLOAT_EQ(power_heuristic(3.f, a, 2.f, b), power_heuristic(3 * a, 2 * b));
+        }
+    EXPECT_EQ(power_heuristic(0.f, 0.f), 0.f);
+    EXPECT_EQ(balance_heuristic(0.0, 0.0), 0.0);
+    EXPECT_FLOAT_EQ(power_heuristic(1.f, 1.f), 0.5f);
+    EXPECT_DOUBLE_EQ(balance_heuristic(1.0, 3.0), 0.25);
+}
+
+TEST(PathClock, TimeIsOpticalLengthPlusDelays) {
+    auto scene = small_scene();
+    ContributionList out;
+    PathClock clock(*scene, out);
+    EXPECT_EQ(clock.time(), 0.0);
+    clock.travel(2.0, 1.0);
+    clock.travel(1.0, 1.5);  // inside glass: eta * d
+    clock.delay(0.25);
+    EXPECT_DOUBLE_EQ(clock.time(), 3.75);
+}
+
+TEST(PathClock, TheFirstScatteringVertexSetsTheSensorDistance) {
+    auto scene = small_scene();
+    ContributionList out;
+    PathClock clock(*scene, out);
+    clock.travel(1.25, 1.0);
+    clock.reach_vertex();
+    clock.travel(3.0, 1.0);
+    clock.reach_vertex();  // later vertices do not move it
+    EXPECT_DOUBLE_EQ(out.sensor_distance(), 1.25);
+}
+
+TEST(PathClock, WindowCutAndEmissionTime) {
+    // The film records up to t = 3; the pulse cannot start before its earliest time, so a
+    // path may travel 3 - earliest before nothing it carries arrives in time.
+    auto scene = small_scene(
+        "<string name=\"pulse\" value=\"box\"/><float name=\"pulse_width\" value=\"0.5\"/>"
+        "<float name=\"time_offset\" value=\"0.2\"/>");
+    const TimeWindow& w = scene->time_window();
+    EXPECT_DOUBLE_EQ(w.end, 3.0);
+    const double earliest = scene->earliest_emission();
+    EXPECT_DOUBLE_EQ(w.path_cut(), 3.0 - earliest);
+    ContributionList out;
+    PathClock clock(*scene, out);
+    clock.travel(w.path_cut(), 1.0);
+    EXPECT_FALSE(clock.expired());
+    EXPECT_DOUBLE_EQ(clock.remaining(), 0.0);
+    clock.travel(1e-9, 1.0);
+    EXPECT_TRUE(clock.expired());
+    // Recorded light arrives at the path's time + the connection + the emission time, which
+    // lies in the pulse's support.
+    auto sampler = create_default_object(PluginKind::Sampler, "independent", {});
+    Sampler& s = static_cast<Sampler&>(*sampler);
+    s.start(1, 0, 0);
+    ContributionList list;
+    PathClock c2(*scene, list);
+    c2.travel(1.0, 1.0);
+    for (int i = 0; i < 100; ++i) c2.record(Color(1.f), *scene->emitters()[0], s, 0.5);
+    ASSERT_EQ(list.items().size(), 100u);
+    for (const Contribution& c : list.items()) {
+        EXPECT_GE(c.path_length, 1.5 + earliest - 1e-12);
+        EXPECT_LE(c.path_length, 1.5 + earliest + 0.5 + 1e-12);
+    }
+}
+
+TEST(PathClock, ADeltaPulseDrawsNoNumber) {
+    auto scene = small_scene();
+    auto a = create_default_object(PluginKind::Sampler, "independent", {});
+    auto b = create_default_object(PluginKind::Sampler, "independent", {});
+    Sampler &sa = static_cast<Sampler&>(*a), &sb = static_cast<Sampler&>(*b);
+    sa.start(3, 1, 2), sb.start(3, 1, 2);
+    ContributionList out;
+    PathClock clock(*scene, out);
+    clock.record(Color(1.f), *scene->emitters()[0], sa, 2.0);
+    EXPECT_EQ(sa.next_1d(), sb.next_1d());
+    ASSERT_EQ(out.items().size(), 1u);
+    EXPECT_DOUBLE_EQ(out.items()[0].path_length, 2.0);
+}
+
+TEST(Throughput, DiagonalTransfersStayPerChannelAndMatricesMixChannels) {
+    Throughput t;
+    t *= Color(0.5f, 1.f, 2.f);
+    ColorMatrix diag;
+    diag.m[0][0] = 2, diag.m[1][1] = 0.5f, diag.m[2][2] = 1;
+    t.transfer(diag);
+    const Color c = t(Color(1.f));
+    EXPECT_FLOAT_EQ(c.r, 1.f);
+    EXPECT_FLOAT_EQ(c.g, 0.5f);
+    EXPECT_FLOAT_EQ(c.b, 2.f);
+    EXPECT_FLOAT_EQ(t.max_gain(), 2.f);
+    // Fluorescence-like: blue arriving leaves as green.
+    ColorMatrix blue_to_green;
+    blue_to_green.m[0][0] = blue_to_green.m[1][1] = blue_to_green.m[2][2] = 0;
+    blue_to_green.m[1][2] = 1;
+    t.transfer(blue_to_green);
+    t *= Color(3.f);  // a later BSDF weight (applies to the light arriving)
+    const Color g = t(Color(0.f, 0.f, 1.f));
+    EXPECT_FLOAT_EQ(g.r, 0.f);
+    EXPECT_FLOAT_EQ(g.g, 0.5f * 3.f);  // camera-side weight of green times the incoming blue
+    EXPECT_FLOAT_EQ(g.b, 0.f);
+    EXPECT_FLOAT_EQ(t.max_gain(), 1.5f);
+}
+
+TEST(MediumTracker, RefractionChangesTheIndexOutsideMedia) {
+    MediumTracker m;
+    EXPECT_DOUBLE_EQ(m.eta(), 1.0);
+    BsdfSample into;
+    into.sampled_lobe = kBsdfDeltaTransmission;
+    into.eta = 1.5f;
+    m.refract(into);
+    EXPECT_DOUBLE_EQ(m.eta(), 1.5);
+    BsdfSample reflect;
+    reflect.sampled_lobe = kBsdfDeltaReflection;
+    reflect.eta = 1.f;
+    m.refract(reflect);
+    EXPECT_DOUBLE_EQ(m.eta(), 1.5);
+}
+
+TEST(DistanceMixture, DensityIntegratesToOneAndMatchesSurvival) {
+    auto medium_obj = create_default_object(PluginKind::Medium, "homogeneous", {});
+    const Medium& medium = static_cast<const Medium&>(*medium_obj);
+    auto exp_obj = create_default_object(PluginKind::Distance, "exponential", {});
+    const auto& exponential = static_cast<const DistanceSampler&>(*exp_obj);
+    const DistanceContext ctx{4.0};
+    for (const bool mis : {false, true}) {
+        SCOPED_TRACE(mis ? "mixture" : "strategy alone");
+        const DistanceMixture mix(medium, &exponential, mis, ctx);
+        // P(r > d) = 1 - integral_0^d pdf
+        const double d = 1.7, steps = 20000, h = d / steps;
+        double integral = 0;
+        for (int i = 0; i < steps; ++i) integral += mix.pdf((i + 0.5) * h) * h;
+        EXPECT_NEAR(integral + mix.survival(d), 1.0, 1e-7);
+        // Samples follow the density: a chi-square test over 20 equal-probability cells of
+        // the cdf 1 - survival.
+        Pcg32 rng(11, mis ? 2 : 1);
+        std::vector<double> counts(20, 0.0);
+        const int n = 100000;
+        for (int i = 0; i < n; ++i) {
+            const double r = mix.sample(rng.next_double());
+            const double cdf = 1 - mix.survival(r);
+            counts[std::min(19, int(cdf * 20))] += 1;
+        }
+        double chi2 = 0;
+        for (double c : counts) chi2 += (c - n / 20.0) * (c - n / 20.0) / (n / 20.0);
+        EXPECT_LT(chi2, 43.8);  // 19 dof, p = 1e-3
+    }
+}
+
+TEST(ConnectionReach, AVertexAtTheReachArrivesExactlyAtTheWindow) {
+    // eta r + |x(r) - target| = remaining at the reach, and less before it.
+    const Vec3 o(0.f, 0.f, 0.f), d(1.f, 0.f, 0.f), target(2.f, 1.f, 0.f);
+    for (const double eta : {1.0, 1.33})
+        for (const double remaining : {2.5, 4.0, 10.0}) {
+            const double r = connection_reach(o, d, target, eta, remaining);
+            const double arrive = eta * r + std::hypot(2.0 - r, 1.0);
+            EXPECT_NEAR(arrive, remaining, 1e-9 * remaining) << eta << " " << remaining;
+        }
+    EXPECT_EQ(connection_reach(o, d, target, 1.0, 2.0), 0.0);  // |target| > remaining
+    EXPECT_TRUE(std::isinf(connection_reach(o, d, target, 1.0, kInfinity)));
+}
