@@ -4,11 +4,12 @@
 // procedurally generated room holding a displaced sphere of >= 1M triangles, written as a
 // binary PLY) and each thread count:
 //
-//  - raw: an Embree scene built from the loaded femto scene's shapes exactly as the renderer
-//    builds its own (same geometry, RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST), traced
-//    with rtcIntersect1 over an array of pre-generated random incoherent rays: origins
-//    uniform by area over all surfaces (Shape::sample_area), offset along the normal as
-//    femto offsets its own rays, directions uniform on the hemisphere around the normal.
+//  - raw: an Embree scene built from the loaded femto scene's shapes by the renderer's own
+//    construction (femto::detail::EmbreeScene, host/src/accel/embree_scene.h: same geometry,
+//    RTC_BUILD_QUALITY_MEDIUM, RTC_SCENE_FLAG_ROBUST), traced with rtcIntersect1 over an
+//    array of pre-generated random incoherent rays: origins uniform by area over all
+//    surfaces (Shape::sample_area), offset along the normal as femto offsets its own rays,
+//    directions uniform on the hemisphere around the normal.
 //    Generation is not timed. Informative figures next to it: the same rays sorted by origin
 //    (Morton order), and shadow rays (rtcOccluded1) to uniform points on the area lights.
 //  - femto: femto::render() of the scene with the `path` integrator at a fixed seed and spp;
@@ -49,8 +50,8 @@
 #include <utility>
 #include <vector>
 
+#include "accel/embree_scene.h"
 #include "common.h"
-#include "femto/bsdf.h"
 #include "femto/error.h"
 #include "femto/host.h"
 #include "femto/math.h"
@@ -426,11 +427,6 @@ std::pair<std::string, std::string> steady_cornell_xml(const std::string& file) 
 
 // -- raw Embree ------------------------------------------------------------------------------
 
-void embree_error(void*, RTCError code, const char* message) {
-    if (code == RTC_ERROR_NONE) return;
-    std::fprintf(stderr, "embree error %d: %s\n", int(code), message ? message : "");
-}
-
 /// A ray as the benchmark stores it: 28 bytes, expanded into an RTCRayHit when traced (as
 /// femto::Scene::intersect does with a femto::Ray).
 struct CompactRay {
@@ -438,76 +434,28 @@ struct CompactRay {
     float tmax;
 };
 
-/// An Embree scene built from a femto scene's shapes the way femto::Scene builds its own.
+/// Embree's own scene for a femto scene's shapes, built by the host's femto::detail::EmbreeScene
+/// (the construction femto::Scene uses: geometry, build quality, flags), plus the ray sets and
+/// the timed raw tracing. It is a second BVH next to the renderer's, so that the diagnostic
+/// `--raw-not-robust` can build it without RTC_SCENE_FLAG_ROBUST.
 class RawScene {
 public:
     RawScene(const femto::Scene& scene, bool robust) {
-        device_ = rtcNewDevice("verbose=0");
-        if (!device_) throw std::runtime_error("cannot create an Embree device");
-        rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
-        scene_ = rtcNewScene(device_);
-        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
-        rtcSetSceneFlags(scene_, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
-        unsigned id = 0;
-        for (const auto& sp : scene.shapes()) {
-            const femto::Shape& shape = *sp;
-            ++id;
-            const bool null_surface = shape.bsdf() && shape.bsdf()->is_null();
-            if (null_surface && !shape.emitter()) continue;
-            RTCGeometry geom;
-            if (shape.is_sphere()) {
-                geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-                auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-                    geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
-                const Vec3 c = shape.sphere_center();
-                v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = shape.sphere_radius();
-                ++spheres_;
-            } else {
-                const femto::TriangleMesh& m = shape.mesh();
-                geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-                auto* v = static_cast<float*>(
-                    rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                            3 * sizeof(float), m.positions.size()));
-                for (size_t i = 0; i < m.positions.size(); ++i) {
-                    v[3 * i] = m.positions[i].x;
-                    v[3 * i + 1] = m.positions[i].y;
-                    v[3 * i + 2] = m.positions[i].z;
-                }
-                auto* idx = static_cast<uint32_t*>(
-                    rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                            3 * sizeof(uint32_t), m.triangle_count()));
-                std::memcpy(idx, m.indices.data(), m.indices.size() * sizeof(uint32_t));
-                triangles_ += m.triangle_count();
-            }
-            // femto lets shadow rays through emitting `null` surfaces (an occlusion filter);
-            // no benchmark scene has one, and the raw scene would count them as blockers.
-            rtcCommitGeometry(geom);
-            rtcAttachGeometryByID(scene_, geom, id - 1);
-            rtcReleaseGeometry(geom);
-            surfaces_.push_back(&shape);
-            if (shape.emitter()) lights_.push_back(&shape);
-        }
         const auto t0 = Clock::now();
-        rtcCommitScene(scene_);
+        embree_ = std::make_unique<femto::detail::EmbreeScene>(scene.shapes(), robust);
         build_seconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
-        const char* error = nullptr;
-        if (rtcGetDeviceError(device_) != RTC_ERROR_NONE)
-            error = "Embree failed to build the benchmark scene";
-        else if (surfaces_.empty())
-            error = "the scene has no visible surface to start raw rays from";
-        if (error) {
-            release();
-            throw std::runtime_error(error);
+        for (const femto::Shape* shape : embree_->shapes()) {
+            if (!shape) continue;  // left out of the BVH (an invisible `null` surface)
+            surfaces_.push_back(shape);
+            if (shape->emitter()) lights_.push_back(shape);
         }
+        if (surfaces_.empty())
+            throw std::runtime_error("the scene has no visible surface to start raw rays from");
         surface_cdf_ = area_cdf(surfaces_);
         light_cdf_ = area_cdf(lights_);
     }
-    ~RawScene() { release(); }
-    RawScene(const RawScene&) = delete;
-    RawScene& operator=(const RawScene&) = delete;
-
-    size_t triangles() const { return triangles_; }
-    size_t spheres() const { return spheres_; }
+    size_t triangles() const { return embree_->triangles(); }
+    size_t spheres() const { return embree_->spheres(); }
     double build_seconds() const { return build_seconds_; }
     bool has_lights() const { return !lights_.empty(); }
 
@@ -585,13 +533,6 @@ public:
     }
 
 private:
-    void release() {
-        if (scene_) rtcReleaseScene(scene_);
-        if (device_) rtcReleaseDevice(device_);
-        scene_ = nullptr;
-        device_ = nullptr;
-    }
-
     static std::vector<float> area_cdf(const std::vector<const femto::Shape*>& shapes) {
         std::vector<float> cdf;
         double total = 0;
@@ -611,38 +552,22 @@ private:
 
     int trace_intersect(const CompactRay& r, RTCIntersectContext& ctx) const {
         RTCRayHit rh;
-        rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
-        rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
-        rh.ray.tnear = 0.f;
-        rh.ray.tfar = r.tmax;
-        rh.ray.mask = 0xFFFFFFFFu;
-        rh.ray.flags = 0;
-        rh.ray.time = 0.f;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene_, &ctx, &rh);
+        femto::detail::init_rayhit(rh, r.o, r.d, 0.f, r.tmax);
+        rtcIntersect1(embree_->get(), &ctx, &rh);
         return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
     }
 
     int trace_occluded(const CompactRay& r, RTCIntersectContext& ctx) const {
         RTCRay ray;
-        ray.org_x = r.o.x, ray.org_y = r.o.y, ray.org_z = r.o.z;
-        ray.dir_x = r.d.x, ray.dir_y = r.d.y, ray.dir_z = r.d.z;
-        ray.tnear = 0.f;
-        ray.tfar = r.tmax;
-        ray.mask = 0xFFFFFFFFu;
-        ray.flags = 0;
-        ray.time = 0.f;
-        rtcOccluded1(scene_, &ctx, &ray);
+        femto::detail::init_ray(ray, r.o, r.d, 0.f, r.tmax);
+        rtcOccluded1(embree_->get(), &ctx, &ray);
         return ray.tfar < 0;
     }
 
-    RTCDevice device_ = nullptr;
-    RTCScene scene_ = nullptr;
+    std::unique_ptr<femto::detail::EmbreeScene> embree_;
     std::vector<const femto::Shape*> surfaces_, lights_;
     std::vector<float> surface_cdf_, light_cdf_;
-    size_t triangles_ = 0, spheres_ = 0;
-    double build_seconds_ = 0;
+    double build_seconds_ = 0;  ///< the EmbreeScene's construction: buffers and BVH
 };
 
 /// Spreads the low 21 bits of x so that bit b moves to bit 3b.

@@ -5,38 +5,15 @@
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 
-#include <cstdio>
-#include <cstring>
 #include <mutex>
-#include <stdexcept>
 
-#include "femto/bsdf.h"
+#include "accel/embree_scene.h"
 #include "femto/integrator.h"
 #include "femto/medium.h"
 
 namespace femto {
 
 namespace {
-
-void embree_error(void*, RTCError code, const char* message) {
-    if (code == RTC_ERROR_NONE) return;
-    std::fprintf(stderr, "embree error %d: %s\n", int(code), message ? message : "");
-}
-
-RTCDevice device() {
-    static RTCDevice dev = [] {
-        RTCDevice d = rtcNewDevice("verbose=0");
-        if (!d) throw std::runtime_error("cannot create the Embree device");
-        rtcSetDeviceErrorFunction(d, embree_error, nullptr);
-        return d;
-    }();
-    return dev;
-}
-
-// Surfaces with a pure null material let shadow rays through.
-void ignore_in_shadow_rays(const RTCFilterFunctionNArguments* args) {
-    for (unsigned i = 0; i < args->N; ++i) args->valid[i] = 0;
-}
 
 struct alignas(64) RayCounter {
     uint64_t count = 0;
@@ -45,21 +22,17 @@ struct alignas(64) RayCounter {
 }  // namespace
 
 struct Scene::Accel {
-    RTCScene scene = nullptr;
-    std::vector<const Shape*> by_geom_id;
+    explicit Accel(const std::vector<std::shared_ptr<Shape>>& shapes) : embree(shapes) {}
+    detail::EmbreeScene embree;
     tbb::enumerable_thread_specific<RayCounter, tbb::cache_aligned_allocator<RayCounter>,
                                     tbb::ets_key_per_instance>
         rays;
-    ~Accel() {
-        if (scene) rtcReleaseScene(scene);
-    }
 };
 
 Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sensor,
              std::vector<std::shared_ptr<Shape>> shapes,
              std::vector<std::shared_ptr<Emitter>> emitters)
-    : accel_(std::make_unique<Accel>()),
-      integrator_(std::move(integrator)),
+    : integrator_(std::move(integrator)),
       sensor_(std::move(sensor)),
       shapes_(std::move(shapes)),
       emitters_(std::move(emitters)) {
@@ -79,47 +52,8 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
     }
     refresh_time_window();
 
-    RTCDevice dev = device();
-    accel_->scene = rtcNewScene(dev);
-    rtcSetSceneBuildQuality(accel_->scene, RTC_BUILD_QUALITY_MEDIUM);
-    rtcSetSceneFlags(accel_->scene, RTC_SCENE_FLAG_ROBUST);
-    accel_->by_geom_id.resize(shapes_.size(), nullptr);
-    for (size_t i = 0; i < shapes_.size(); ++i) {
-        const Shape& shape = *shapes_[i];
-        const bool null_surface = shape.bsdf() && shape.bsdf()->is_null();
-        if (null_surface && !shape.emitter() && !shape.has_media())
-            continue;  // invisible: nothing to see, block or enter
-        RTCGeometry geom;
-        if (shape.is_sphere()) {
-            geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-                geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
-            const Vec3 c = shape.sphere_center();
-            v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = shape.sphere_radius();
-            bounds_.expand(c - Vec3(shape.sphere_radius()));
-            bounds_.expand(c + Vec3(shape.sphere_radius()));
-        } else {
-            const TriangleMesh& m = shape.mesh();
-            geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* v = static_cast<float*>(
-                rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                        3 * sizeof(float), m.positions.size()));
-            std::memcpy(v, m.positions.data(), m.positions.size() * sizeof(Vec3));
-            auto* idx = static_cast<uint32_t*>(
-                rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                        3 * sizeof(uint32_t), m.triangle_count()));
-            std::memcpy(idx, m.indices.data(), m.indices.size() * sizeof(uint32_t));
-            for (const Vec3& p : m.positions) bounds_.expand(p);
-        }
-        if (null_surface) rtcSetGeometryOccludedFilterFunction(geom, ignore_in_shadow_rays);
-        rtcCommitGeometry(geom);
-        rtcAttachGeometryByID(accel_->scene, geom, unsigned(i));
-        rtcReleaseGeometry(geom);
-        accel_->by_geom_id[i] = &shape;
-    }
-    rtcCommitScene(accel_->scene);
-    if (rtcGetDeviceError(dev) != RTC_ERROR_NONE)
-        throw std::runtime_error("Embree failed to build the scene (see the message above)");
+    accel_ = std::make_unique<Accel>(shapes_);
+    bounds_ = accel_->embree.bounds();
 }
 
 Scene::~Scene() = default;
@@ -129,19 +63,11 @@ bool Scene::intersect(const Ray& ray, Hit& hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
-    rh.ray.org_x = ray.o.x, rh.ray.org_y = ray.o.y, rh.ray.org_z = ray.o.z;
-    rh.ray.dir_x = ray.d.x, rh.ray.dir_y = ray.d.y, rh.ray.dir_z = ray.d.z;
-    rh.ray.tnear = ray.tmin;
-    rh.ray.tfar = ray.tmax;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0.f;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(accel_->scene, &ctx, &rh);
+    detail::init_rayhit(rh, ray.o, ray.d, ray.tmin, ray.tmax);
+    rtcIntersect1(accel_->embree.get(), &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    accel_->by_geom_id[rh.hit.geomID]->fill_hit(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v,
-                                                hit);
+    accel_->embree.shapes()[rh.hit.geomID]->fill_hit(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u,
+                                                     rh.hit.v, hit);
     return true;
 }
 
@@ -150,14 +76,8 @@ bool Scene::occluded(const Ray& ray) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay r;
-    r.org_x = ray.o.x, r.org_y = ray.o.y, r.org_z = ray.o.z;
-    r.dir_x = ray.d.x, r.dir_y = ray.d.y, r.dir_z = ray.d.z;
-    r.tnear = ray.tmin;
-    r.tfar = ray.tmax;
-    r.mask = 0xFFFFFFFFu;
-    r.flags = 0;
-    r.time = 0.f;
-    rtcOccluded1(accel_->scene, &ctx, &r);
+    detail::init_ray(r, ray.o, ray.d, ray.tmin, ray.tmax);
+    rtcOccluded1(accel_->embree.get(), &ctx, &r);
     return r.tfar < 0;  // Embree sets tfar = -inf on a hit
 }
 
