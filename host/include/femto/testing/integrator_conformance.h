@@ -177,7 +177,7 @@ TEST_P(IntegratorConformance, TimeIntegralIsTheSteadyImage) {
     // so their images agree to float rounding (the cube sums per bin in float, hdrfilm in
     // double: 1e-4 relative), provided the window holds every path: the camera segment is at
     // most 9, each further one at most 1.6 * 4.9 (glass), and up to D fluorescence delays of
-    // mean 0.2 stay below 40 with probability 1 - 1e-40.
+    // mean 0.2 stay below 50 with probability 1 - 1e-40 (the window is [0, 100)).
     const int D = depth(5), res = 12, spp = 8;
     const std::string walls =
         "<shape type=\"rectangle\"><transform name=\"to_world\"><rotate x=\"1\" angle=\"-90\"/>"
@@ -198,16 +198,27 @@ TEST_P(IntegratorConformance, TimeIntegralIsTheSteadyImage) {
         "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"0.3\"/><rotate "
         "x=\"1\" angle=\"90\"/><translate y=\"0.99\"/></transform><emitter type=\"area\"><rgb "
         "name=\"radiance\" value=\"8,7,6\"/></emitter></shape>";
-    auto camera = [&](const std::string& film) {
-        return "<sensor type=\"perspective\"><float name=\"fov\" value=\"50\"/><transform "
-               "name=\"to_world\"><lookat origin=\"0,0,3.5\" target=\"0,0,0\" up=\"0,1,0\"/>"
-               "</transform>" +
-               sampler(spp) + film + "</sensor>";
-    };
-    auto transient = load(camera(transient_film(res, 0, 0.1, 400)) + walls, D);
-    auto steady = load(camera(steady_film(res)) + walls, D);
-    expect_same_image(render_steady(*transient, 23), render_steady(*steady, 23),
-                      "cube summed over time", "steady");
+    // Media-capable integrators also render the box filled with fog that holds the camera
+    // (sigma_t 0.35: a segment longer than 100 has probability e^-35).
+    for (const bool fog : {false, true}) {
+        if (fog && !GetParam().media) continue;
+        SCOPED_TRACE(fog ? "in fog" : "in vacuum");
+        const std::string medium =
+            fog ? "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_s\" "
+                  "value=\"0.3\"/><float name=\"sigma_a\" value=\"0.05\"/></medium>"
+                : "";
+        auto camera = [&](const std::string& film) {
+            return medium +
+                   "<sensor type=\"perspective\"><float name=\"fov\" value=\"50\"/><transform "
+                   "name=\"to_world\"><lookat origin=\"0,0,3.5\" target=\"0,0,0\" "
+                   "up=\"0,1,0\"/></transform>" +
+                   (fog ? "<ref id=\"fog\"/>" : "") + sampler(spp) + film + "</sensor>";
+        };
+        auto transient = load(camera(transient_film(res, 0, 0.25, 400)) + walls, D);
+        auto steady = load(camera(steady_film(res)) + walls, D);
+        expect_same_image(render_steady(*transient, 23), render_steady(*steady, 23),
+                          "cube summed over time", "steady");
+    }
 }
 
 // ---- time of flight over a plane ------------------------------------------------------------
