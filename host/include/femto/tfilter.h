@@ -127,7 +127,7 @@ public:
     const TimeGrid& grid() const { return grid_; }
     const TemporalFilter& tfilter() const { return *tfilter_; }
     /// True when the film records world time (the sensor segment removed, eq. 4.1).
-    bool world_time() const { return world_time_; }
+    bool world_time() const { return grid_.frame == TimeFrame::World; }
 
 protected:
     explicit TimeResolvedFilm(const Properties& props);
@@ -136,8 +136,7 @@ protected:
     /// During the pilot pass, hands the block's arrivals to the filter and returns true.
     bool merge_pilot(const FilmBlock& block);
 
-    TimeGrid grid_;
-    bool world_time_ = false;
+    TimeGrid grid_;       ///< its frame is camera or world time (`world_time`)
     float exposure_ = 0;  ///< preview exposure in stops (0: automatic)
     std::shared_ptr<TemporalFilter> tfilter_;
 

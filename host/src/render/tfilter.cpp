@@ -53,7 +53,7 @@ void PilotBlock::deliver(TemporalFilter& filter) const {
 
 TimeResolvedFilm::TimeResolvedFilm(const Properties& props)
     : Film(props), grid_(read_time_grid(props)) {
-    world_time_ = props.get_bool("world_time", false);
+    if (props.get_bool("world_time", false)) grid_.frame = TimeFrame::World;
     exposure_ = float(props.get_float("exposure", 0.0));
     tfilter_ = read_temporal_filter(props);
     tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
@@ -65,13 +65,13 @@ void TimeResolvedFilm::end_pilot() {
 }
 
 double TimeResolvedFilm::max_path_length() const {
-    return world_time_ ? std::numeric_limits<double>::infinity()
-                       : grid_.end() + tfilter_->max_radius();
+    return world_time() ? std::numeric_limits<double>::infinity()
+                        : grid_.end() + tfilter_->max_radius();
 }
 
 std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, int w, int h) const {
     if (!pilot_) return nullptr;
-    return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time_);
+    return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time());
 }
 
 bool TimeResolvedFilm::merge_pilot(const FilmBlock& block) {

@@ -195,8 +195,7 @@ public:
                                     invalid_));
         std::vector<std::string> files;
         for (size_t s = 0; s < rows_.size(); ++s) {
-            io::Attributes attrs =
-                io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
+            io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());
             attrs.push_back({"femto:row", std::to_string(rows_[s])});
             const io::Cube row = row_cube(s);
             const std::string base = fmt::format("{}_row{:04}", out_base, rows_[s]);

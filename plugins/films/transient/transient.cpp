@@ -236,8 +236,7 @@ public:
         for (size_t p = 0; p < pixels; ++p)
             if (weights_[p].depth_weight > 0)
                 depth[p] = float(weights_[p].depth_sum / weights_[p].depth_weight);
-        io::Attributes attrs =
-            io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
+        io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());
         if (tfilter_->max_radius() > 0) attrs.push_back(window_spill_attribute());
         const std::vector<float> scale = pixel_normalisation();
         std::vector<std::string> files;
