@@ -2,10 +2,13 @@
 // base of the time-resolved films.
 #include "femto/tfilter.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "femto/log.h"
 #include "femto/plugin.h"
 #include "femto/properties.h"
 
@@ -72,6 +75,12 @@ double TimeResolvedFilm::max_path_length() const {
 std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, int w, int h) const {
     if (!pilot_) return nullptr;
     return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time());
+}
+
+void TimeResolvedFilm::warn_rejected() const {
+    if (rejected_ > 0)
+        log_warning(fmt::format("{} camera samples with a NaN or infinite radiance were discarded",
+                                rejected_));
 }
 
 bool TimeResolvedFilm::merge_pilot(const FilmBlock& block) {
