@@ -155,11 +155,11 @@ int cmd_frames(const io::Cube& cube) {
     return 0;
 }
 
-int cmd_peak_time(const io::Cube& cube, const viz::TimeAxis& axis) {
+int cmd_peak_time(const io::Cube& cube, const TimeGrid& grid) {
     check_extension(g_opts.output, ".png", "-o");
     if (!g_opts.exr.empty()) {
         check_extension(g_opts.exr, ".exr", "--exr");
-        if (!axis.known)
+        if (!grid.known)
             throw SceneError(
                 "--exr writes times, which need the cube's time axis: give --start "
                 "and --bin-width for a .npy");
@@ -171,7 +171,7 @@ int cmd_peak_time(const io::Cube& cube, const viz::TimeAxis& axis) {
     viz::write_png8(g_opts.output, cube.width, cube.height, img);
     announce(g_opts.output);
     if (!g_opts.exr.empty()) {
-        const std::vector<float> times = viz::peak_times(cube, axis);
+        const std::vector<float> times = viz::peak_times(cube, grid);
         io::Attributes attrs = time_attributes(cube);
         attrs.emplace_back("femto:content",
                            "peak time per pixel (bin centre, scene units); NaN where black");
@@ -228,12 +228,12 @@ int cmd_streak(const io::Cube& cube) {
     return 0;
 }
 
-int cmd_unwarp(const io::Cube& cube, const viz::TimeAxis& axis) {
+int cmd_unwarp(const io::Cube& cube, const TimeGrid& grid) {
     check_extension(g_opts.output, ".exr", "-o");
     if (g_opts.to != "world" && g_opts.to != "camera")
         throw SceneError(fmt::format("--to must be world or camera, not \"{}\"", g_opts.to));
     prepare_file(g_opts.output, "-o");
-    const viz::UnwarpResult r = viz::unwarp(cube, axis, g_opts.to == "world", g_opts.keep_window);
+    const viz::UnwarpResult r = viz::unwarp(cube, grid, g_opts.to == "world", g_opts.keep_window);
     if (r.dropped > 1e-6)
         fmt::print(stderr,
                    "femto viz: warning: {:.3g}% of the energy was shifted outside the time "
@@ -355,12 +355,12 @@ int run_viz_command() {
             "unwarp takes streak images",
             g_opts.cube, row ? *row : "?", sub->get_name()));
     }
-    const viz::TimeAxis axis = viz::time_axis(cube, g_opts.start, g_opts.bin_width);
+    const TimeGrid grid = viz::time_grid(cube, g_opts.start, g_opts.bin_width);
     if (g_frames->parsed()) return cmd_frames(cube);
-    if (g_peak->parsed()) return cmd_peak_time(cube, axis);
+    if (g_peak->parsed()) return cmd_peak_time(cube, grid);
     if (g_rainbow->parsed()) return cmd_rainbow(cube);
     if (g_streak->parsed()) return cmd_streak(cube);
-    if (g_unwarp->parsed()) return cmd_unwarp(cube, axis);
+    if (g_unwarp->parsed()) return cmd_unwarp(cube, grid);
     throw SceneError("femto viz needs a subcommand: frames, peak-time, rainbow, streak, unwarp");
 }
 

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,7 @@
 #include "femto/host.h"
 #include "femto/image_io.h"
 #include "femto/sensor.h"
+#include "femto/tfilter.h"
 #include "femto/viz.h"
 #include "scene_util.h"
 
@@ -81,11 +83,12 @@ TEST(Viz, PeakTimeOfSyntheticCube) {
             at(c, x, y, peak, 1) = 4.f;            // green peak: the luminance maximum
             at(c, x, y, (peak + 5) % T, 0) = 2.f;  // a red bump with less luminance
         }
-    const viz::TimeAxis axis = viz::time_axis(c);
-    ASSERT_TRUE(axis.known);
-    EXPECT_EQ(axis.time, "camera");
+    const TimeGrid grid = viz::time_grid(c);
+    ASSERT_TRUE(grid.known);
+    EXPECT_EQ(grid.frame, TimeFrame::Camera);
+    EXPECT_EQ(grid.bins, T);
     const std::vector<int> bins = viz::peak_bins(c);
-    const std::vector<float> times = viz::peak_times(c, axis);
+    const std::vector<float> times = viz::peak_times(c, grid);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
             const size_t p = size_t(y) * W + size_t(x);
@@ -111,8 +114,9 @@ TEST(Viz, PeakTimeOfSyntheticCube) {
     // Time override for a cube without attributes (a .npy): --start / --bin-width.
     io::Cube bare = c;
     bare.attributes.clear();
-    EXPECT_FALSE(viz::time_axis(bare).known);
-    const viz::TimeAxis given = viz::time_axis(bare, 1.0, 0.25);
+    EXPECT_FALSE(viz::time_grid(bare).known);
+    EXPECT_EQ(viz::time_grid(bare).frame, TimeFrame::Unknown);
+    const TimeGrid given = viz::time_grid(bare, 1.0, 0.25);
     EXPECT_TRUE(given.known);
     EXPECT_DOUBLE_EQ(given.bin_centre(2), 1.625);
 }
@@ -143,7 +147,7 @@ TEST(Viz, UnwarpWholeBinsRoundTripIsExact) {
     for (int p = 0; p < W * H; ++p) depth[size_t(p)] = 0.5f * float(p % W + 1);  // 2..8 bins
     depth[5] = -1.f;  // nothing hit: not shifted
     const io::Cube cam = warped_cube(bw, 6, depth, W, H, T);
-    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_axis(cam), true);
+    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_grid(cam), true);
     EXPECT_EQ(*world.cube.attribute("femto:time"), "world");
     EXPECT_EQ(world.dropped, 0.0);
     EXPECT_EQ(world.cube.depth, cam.depth);
@@ -168,8 +172,8 @@ TEST(Viz, UnwarpWholeBinsRoundTripIsExact) {
             }
         }
     // Back to camera time: the same series at the same times.
-    EXPECT_THROW(viz::unwarp(world.cube, viz::time_axis(world.cube), true), SceneError);
-    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_axis(world.cube), false);
+    EXPECT_THROW(viz::unwarp(world.cube, viz::time_grid(world.cube), true), SceneError);
+    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_grid(world.cube), false);
     EXPECT_EQ(*back.cube.attribute("femto:time"), "camera");
     const double bs = start_of(back.cube);
     for (size_t p = 0; p < size_t(W * H); ++p)
@@ -197,15 +201,15 @@ TEST(Viz, UnwarpKeepWindowRoundTrip) {
         for (int t = 0; t < T; ++t)
             if (t < 6 || t > 13)
                 for (int ch = 0; ch < 3; ++ch) cam.data[(p * T + size_t(t)) * 3 + size_t(ch)] = 0;
-    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_axis(cam), true, true);
+    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_grid(cam), true, true);
     EXPECT_EQ(world.cube.bins, T);
     EXPECT_EQ(start_of(world.cube), 3.0);
     EXPECT_EQ(world.dropped, 0.0);
-    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_axis(world.cube), false, true);
+    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_grid(world.cube), false, true);
     EXPECT_EQ(back.cube.data, cam.data);
     // Depth 1.5 shifts 3 bins: energy at the start of the window falls out and is reported.
     io::Cube early = warped_cube(bw, 0, depth, W, H, T);
-    const viz::UnwarpResult cut = viz::unwarp(early, viz::time_axis(early), true, true);
+    const viz::UnwarpResult cut = viz::unwarp(early, viz::time_grid(early), true, true);
     EXPECT_GT(cut.dropped, 0.0);
     EXPECT_LT(cut.dropped, 0.2);
 }
@@ -226,8 +230,8 @@ TEST(Viz, UnwarpFractionalShiftConservesEnergyAndMovesMeanTime) {
         }
         return et / e;
     };
-    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_axis(cam), true);
-    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_axis(world.cube), false);
+    const viz::UnwarpResult world = viz::unwarp(cam, viz::time_grid(cam), true);
+    const viz::UnwarpResult back = viz::unwarp(world.cube, viz::time_grid(world.cube), false);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
             const size_t p = size_t(y) * W + size_t(x);
@@ -245,15 +249,15 @@ TEST(Viz, UnwarpFractionalShiftConservesEnergyAndMovesMeanTime) {
 TEST(Viz, UnwarpNeedsDepthAndTimeFrame) {
     io::Cube c = make_cube(2, 2, 4, 0.0, 1.0);
     at(c, 0, 0, 1, 0) = 1.f;
-    EXPECT_THROW(viz::unwarp(c, viz::time_axis(c), true), SceneError);  // no depth
+    EXPECT_THROW(viz::unwarp(c, viz::time_grid(c), true), SceneError);  // no depth
     c.depth.assign(4, 1.f);
-    EXPECT_NO_THROW(viz::unwarp(c, viz::time_axis(c), true));
-    EXPECT_THROW(viz::unwarp(c, viz::time_axis(c), false), SceneError);  // already camera
+    EXPECT_NO_THROW(viz::unwarp(c, viz::time_grid(c), true));
+    EXPECT_THROW(viz::unwarp(c, viz::time_grid(c), false), SceneError);  // already camera
     io::Cube unknown = c;
     unknown.attributes = {{"femto:start", "0"}, {"femto:bin_width", "1"}};
-    EXPECT_THROW(viz::unwarp(unknown, viz::time_axis(unknown), true), SceneError);
+    EXPECT_THROW(viz::unwarp(unknown, viz::time_grid(unknown), true), SceneError);
     unknown.attributes.clear();
-    EXPECT_THROW(viz::unwarp(unknown, viz::time_axis(unknown), true), SceneError);  // no axis
+    EXPECT_THROW(viz::unwarp(unknown, viz::time_grid(unknown), true), SceneError);  // no axis
 }
 
 // ---- streak images (the x-t image of one row, a cube of height 1) -----------------------------
@@ -284,8 +288,8 @@ TEST(Viz, StreakImageFileRoundTrip) {
     EXPECT_EQ(s.data, std::vector<float>(c.data.begin() + 5 * 4 * 3, c.data.begin() + 10 * 4 * 3));
     EXPECT_EQ(s.depth, std::vector<float>({6, 7, -1, 9, 10}));
     EXPECT_EQ(*s.attribute("femto:row"), "1");
-    EXPECT_DOUBLE_EQ(viz::time_axis(s).start, 1.5);
-    EXPECT_EQ(viz::time_axis(s).time, "camera");
+    EXPECT_DOUBLE_EQ(viz::time_grid(s).start, 1.5);
+    EXPECT_EQ(viz::time_grid(s).frame, TimeFrame::Camera);
     // Without depth there is no channel Z, and unwarping says what is missing.
     io::Cube flat = c;
     flat.depth.clear();
@@ -294,7 +298,7 @@ TEST(Viz, StreakImageFileRoundTrip) {
     ASSERT_TRUE(viz::is_streak(f));
     EXPECT_TRUE(f.depth.empty());
     try {
-        viz::unwarp(f, viz::time_axis(f), true);
+        viz::unwarp(f, viz::time_grid(f), true);
         ADD_FAILURE();
     } catch (const SceneError& e) {
         EXPECT_NE(std::string(e.what()).find("streak image has no channel Z"), std::string::npos)
@@ -327,7 +331,7 @@ TEST(Viz, StreakImageUnwarpWholeBinsRoundTripIsExact) {
     io::Cube labelled = cam;
     labelled.attributes = attrs;
     const io::Cube in = through_file(labelled, "cam.exr");
-    const io::Cube world = through_file(viz::unwarp(in, viz::time_axis(in), true).cube, "w.exr");
+    const io::Cube world = through_file(viz::unwarp(in, viz::time_grid(in), true).cube, "w.exr");
     EXPECT_EQ(*world.attribute("femto:time"), "world");
     EXPECT_EQ(*world.attribute("femto:row"), "7");
     EXPECT_NE(world.attribute("femto:unwarped"), nullptr);
@@ -348,7 +352,7 @@ TEST(Viz, StreakImageUnwarpWholeBinsRoundTripIsExact) {
         }
     }
     const io::Cube back =
-        through_file(viz::unwarp(world, viz::time_axis(world), false).cube, "c.exr");
+        through_file(viz::unwarp(world, viz::time_grid(world), false).cube, "c.exr");
     EXPECT_EQ(*back.attribute("femto:time"), "camera");
     const double bs = start_of(back);
     for (size_t p = 0; p < size_t(W); ++p)
@@ -451,8 +455,8 @@ TEST(Viz, LoadsExrAndNpyCubesAndRejectsOtherFiles) {
     EXPECT_EQ(a.depth, c.depth);
     EXPECT_EQ(b.data, c.data);
     EXPECT_TRUE(b.depth.empty());
-    EXPECT_DOUBLE_EQ(viz::time_axis(a).start, 1.5);
-    EXPECT_FALSE(viz::time_axis(b).known);
+    EXPECT_DOUBLE_EQ(viz::time_grid(a).start, 1.5);
+    EXPECT_FALSE(viz::time_grid(b).known);
     // A steady image is not a cube; a missing file is named.
     const std::string steady = (dir / "s.exr").string();
     io::write_exr_rgb(steady, 3, 2, c.data.data(), {});
@@ -636,11 +640,11 @@ TEST(StreakFilm, UnwarpEqualsUnwarpedCubeRow) {
     render_streak_and_cube(dir, "gaussian");
     const io::Cube cube = viz::load_cube((dir / "t.exr").string());
     ASSERT_FALSE(viz::is_streak(cube));
-    const viz::UnwarpResult cw = viz::unwarp(cube, viz::time_axis(cube), true);
-    const double bw = viz::time_axis(cube).bin_width, cs = start_of(cw.cube);
+    const viz::UnwarpResult cw = viz::unwarp(cube, viz::time_grid(cube), true);
+    const double bw = viz::time_grid(cube).bin_width, cs = start_of(cw.cube);
     for (int r : {3, 32}) {
         const io::Cube s = viz::load_cube((dir / ("s" + fmt_row(r) + ".exr")).string());
-        const viz::UnwarpResult sw = viz::unwarp(s, viz::time_axis(s), true);
+        const viz::UnwarpResult sw = viz::unwarp(s, viz::time_grid(s), true);
         ASSERT_TRUE(viz::is_streak(sw.cube));
         EXPECT_EQ(*sw.cube.attribute("femto:time"), "world");
         EXPECT_EQ(*sw.cube.attribute("femto:row"), std::to_string(r));
@@ -685,6 +689,30 @@ TEST(StreakFilm, UnwarpEqualsUnwarpedCubeRow) {
         EXPECT_EQ(*back.attribute("femto:time"), "world");
     }
     std::filesystem::remove_all(dir);
+}
+
+// Both time-resolved films splat through TimeResolvedBlock: a camera sample with a NaN or
+// infinite radiance adds nothing, not even its filter weight, and is counted once.
+TEST(StreakFilm, RejectsNonFiniteSamplesAsTheTransientFilm) {
+    for (const std::string type : {"transient", "streak"}) {
+        auto scene = load_scene_string(streak_scene(
+            type, type == "streak" ? "<integer name=\"row\" value=\"3\"/>" : "", "box"));
+        Film& film = scene->sensor().film();
+        const auto* trf = dynamic_cast<const TimeResolvedFilm*>(&film);
+        ASSERT_NE(trf, nullptr) << type;
+        ContributionList good, nan, inf;
+        good.add(Color(1.f), 7.0);  // bin 5 of [6.5, 10.5)
+        nan.add(Color(1.f), 7.0);
+        nan.add(Color(std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f), 7.0);
+        inf.add(Color(0.f, std::numeric_limits<float>::infinity(), 0.f), 7.0);
+        auto block = film.make_block(0, 0, 8, 8);
+        for (const ContributionList* sample : {&nan, &good, &inf})
+            block->put(Vec2{2.5f, 3.5f}, *sample);  // the box filter: pixel (2, 3) alone
+        film.merge(*block);
+        EXPECT_EQ(trf->rejected_samples(), 2u) << type;
+        const std::vector<float> img = film.steady_image();
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(img[(3 * 40 + 2) * 3 + size_t(c)], 1.f) << type;
+    }
 }
 
 TEST(StreakFilm, SkipsRowsOutsideTheFootprint) {

@@ -2,8 +2,10 @@
 // how a contribution at time t is spread over the film's time bins (thesis ch. 5.4-5.5).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "femto/color.h"
@@ -109,12 +111,85 @@ private:
     mutable std::vector<std::vector<PilotArrival>> arrivals_;  // [h_][w_]
 };
 
+/// The sums a time-resolved film keeps per pixel next to its bins (doubles: they add up many
+/// small weights). The filter weights normalise the bins; the depth is what `femto viz unwarp`
+/// needs; the spill is what the temporal filter moved across the window's edges.
+struct PixelSums {
+    double weight = 0;        ///< sum of the filter weights w of all samples
+    double weight2 = 0;       ///< sum of w^2 (effective sample count: weight^2 / weight2)
+    double depth_sum = 0;     ///< sum of w * sensor distance over the samples that hit something
+    double depth_weight = 0;  ///< sum of w over those samples
+    double spill[3] = {0, 0, 0};  ///< sum of w * energy moved out of the window (splat_sample)
+
+    PixelSums& operator+=(const PixelSums& o) {
+        weight += o.weight;
+        weight2 += o.weight2;
+        depth_sum += o.depth_sum;
+        depth_weight += o.depth_weight;
+        for (int c = 0; c < 3; ++c) spill[c] += o.spill[c];
+        return *this;
+    }
+    /// The filter-weighted mean sensor distance of the samples that hit something; -1 where
+    /// none did.
+    float depth() const { return depth_weight > 0 ? float(depth_sum / depth_weight) : -1.f; }
+};
+
+class TimeResolvedFilm;
+
+/// Base of the blocks of time-resolved films: the splat they share. A block covers a tile plus
+/// the reconstruction filter's border, pixels [x0(), x0() + w()) x [y0(), y0() + h()); its
+/// subclass keeps only the storage and calls splat() from put().
+class TimeResolvedBlock : public FilmBlock {
+public:
+    /// Camera samples this block rejected because a contribution's radiance was NaN or
+    /// infinite (the whole sample is dropped).
+    uint64_t rejected() const { return rejected_; }
+    int x0() const { return x0_; }
+    int y0() const { return y0_; }
+    int w() const { return w_; }
+    int h() const { return h_; }
+
+protected:
+    /// The block of tile [x0, x0 + w) x [y0, y0 + h), grown by the film's filter border.
+    TimeResolvedBlock(const TimeResolvedFilm& film, int x0, int y0, int w, int h);
+
+    /// Splats one camera sample at film position `pos`: for every block pixel (x, y) within the
+    /// reconstruction filter's reach (weight w) that `storage` holds, adds w (and the sample's
+    /// sensor distance when it hit something) to the pixel's PixelSums and w x the temporal
+    /// filter's bin values (splat_sample) to its bins. `Storage` provides
+    ///     size_t slot(int x, int y);        // pixel (x, y) in the storage; SIZE_MAX: not held
+    ///     PixelSums& sums(size_t slot);
+    ///     void add(size_t slot, int bin, float w, const Color& v);   // bin += w * v
+    /// and, to receive each bin once per sample with the sum v of the sample's n values in it
+    /// (e.g. for a second moment w * v^2), instead of add() per (contribution, bin) pair:
+    ///     bool totals() const;
+    ///     void add_total(size_t slot, int bin, float w, const Color& v, int n);
+    /// A sample with a NaN or infinite radiance adds nothing and is counted in rejected().
+    template <typename Storage>
+    void splat(Vec2 pos, const ContributionList& sample, Storage& storage);
+
+    const TimeResolvedFilm& film_;
+    int x0_, y0_, w_, h_;
+
+private:
+    template <typename Storage>
+    Color splat_totals(uint64_t pixel, size_t slot, float w, const ContributionList& sample,
+                       Storage& storage);
+
+    std::vector<BinWeight> scratch_;
+    std::vector<std::pair<int, Color>> sample_bins_;  // splat_totals: one sample's bin values
+    uint64_t rejected_ = 0;
+};
+
 /// Base of films that record time (`transient`, `streak`): reads the time grid (`start`,
 /// `bin_width`, `bins`, or their `*_ps` forms), `world_time`, `exposure` and the nested
 /// <tfilter>, prepares the filter for the film's pixels, and runs the filter's pilot pass.
-/// A subclass makes its own blocks and merges them, after giving the pilot pass its turn:
+/// A subclass makes its own blocks (derived from TimeResolvedBlock) and merges them, after
+/// giving the pilot pass its turn:
 ///     if (auto b = make_pilot_block(x0, y0, w, h)) return b;   // in make_block()
 ///     if (merge_pilot(block)) return;                           // in merge()
+///     merge_rejected(static_cast<const MyBlock&>(block));      // then, in merge()
+/// and calls warn_rejected() when it writes.
 class TimeResolvedFilm : public Film {
 public:
     uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
@@ -127,7 +202,9 @@ public:
     const TimeGrid& grid() const { return grid_; }
     const TemporalFilter& tfilter() const { return *tfilter_; }
     /// True when the film records world time (the sensor segment removed, eq. 4.1).
-    bool world_time() const { return world_time_; }
+    bool world_time() const { return grid_.frame == TimeFrame::World; }
+    /// Camera samples rejected so far for a NaN or infinite radiance (TimeResolvedBlock).
+    uint64_t rejected_samples() const { return rejected_; }
 
 protected:
     explicit TimeResolvedFilm(const Properties& props);
@@ -135,14 +212,86 @@ protected:
     std::unique_ptr<FilmBlock> make_pilot_block(int x0, int y0, int w, int h) const;
     /// During the pilot pass, hands the block's arrivals to the filter and returns true.
     bool merge_pilot(const FilmBlock& block);
+    /// Adds the block's count of rejected samples to the film's.
+    void merge_rejected(const TimeResolvedBlock& block) { rejected_ += block.rejected(); }
+    /// Logs a warning with the number of rejected samples, if any.
+    void warn_rejected() const;
 
-    TimeGrid grid_;
-    bool world_time_ = false;
+    TimeGrid grid_;       ///< its frame is camera or world time (`world_time`)
     float exposure_ = 0;  ///< preview exposure in stops (0: automatic)
     std::shared_ptr<TemporalFilter> tfilter_;
 
 private:
     bool pilot_ = false;  // between begin_pilot() and end_pilot()
+    uint64_t rejected_ = 0;
 };
+
+inline TimeResolvedBlock::TimeResolvedBlock(const TimeResolvedFilm& film, int x0, int y0, int w,
+                                            int h)
+    : film_(film),
+      x0_(x0 - film.filter_border()),
+      y0_(y0 - film.filter_border()),
+      w_(w + 2 * film.filter_border()),
+      h_(h + 2 * film.filter_border()) {}
+
+template <typename Storage>
+void TimeResolvedBlock::splat(Vec2 pos, const ContributionList& sample, Storage& storage) {
+    for (const Contribution& c : sample.items())
+        if (!c.radiance.is_finite()) {
+            ++rejected_;
+            return;
+        }
+    const double sensor = sample.sensor_distance();
+    const TemporalFilter& tfilter = film_.tfilter();
+    const TimeGrid& grid = film_.grid();
+    const bool world_time = film_.world_time();
+    for_each_filter_pixel(
+        film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
+            const size_t slot = storage.slot(x, y);
+            if (slot == SIZE_MAX) return;
+            PixelSums& sums = storage.sums(slot);
+            sums.weight += w;
+            sums.weight2 += double(w) * w;
+            if (sensor >= 0) {
+                sums.depth_sum += w * sensor;
+                sums.depth_weight += w;
+            }
+            const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
+            Color spill;
+            bool added = false;
+            if constexpr (requires { storage.add_total(slot, 0, w, spill, 1); }) {
+                if (storage.totals()) {
+                    spill = splat_totals(pixel, slot, w, sample, storage);
+                    added = true;
+                }
+            }
+            if (!added)
+                spill =
+                    splat_sample(tfilter, grid, pixel, sample, world_time, scratch_,
+                                 [&](int bin, const Color& v) { storage.add(slot, bin, w, v); });
+            for (int c = 0; c < 3; ++c) sums.spill[c] += double(w) * spill[c];
+        });
+}
+
+template <typename Storage>
+Color TimeResolvedBlock::splat_totals(uint64_t pixel, size_t slot, float w,
+                                      const ContributionList& sample, Storage& storage) {
+    sample_bins_.clear();
+    const Color spill = splat_sample(film_.tfilter(), film_.grid(), pixel, sample,
+                                     film_.world_time(), scratch_, [&](int bin, const Color& v) {
+                                         sample_bins_.push_back({bin, v});
+                                     });
+    std::sort(sample_bins_.begin(), sample_bins_.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (size_t i = 0; i < sample_bins_.size();) {
+        const int bin = sample_bins_[i].first;
+        Color v;
+        int n = 0;
+        for (; i < sample_bins_.size() && sample_bins_[i].first == bin; ++i, ++n)
+            v += sample_bins_[i].second;
+        storage.add_total(slot, bin, w, v, n);
+    }
+    return spill;
+}
 
 }  // namespace femto

@@ -14,12 +14,26 @@ namespace femto {
 /// Speed of light in vacuum, in metres per second (exact).
 inline constexpr double kSpeedOfLight = 299792458.0;
 
-/// Uniform time bins [start + i * bin_width, start + (i + 1) * bin_width), i < bins.
+/// Which time a film records (design section 4): camera time, the whole path (as a real camera
+/// measures it), or world time, the sensor segment removed (eq. 4.1).
+enum class TimeFrame { Unknown, Camera, World };
+
+/// "camera", "world" or "" (unknown): the value of an output's femto:time attribute.
+const char* time_frame_name(TimeFrame frame);
+/// The frame named by time_frame_name(); Unknown for anything else.
+TimeFrame parse_time_frame(const std::string& name);
+
+/// Uniform time bins [start + i * bin_width, start + (i + 1) * bin_width), i < bins: a film's
+/// time window, or the time axis of a cube read back from a file.
 struct TimeGrid {
     double start = 0.0;
     double bin_width = 1.0;
     int bins = 1;
     std::string length_unit;  ///< "m", "cm", "mm", "um", "nm", "km" or "" (unknown)
+    TimeFrame frame = TimeFrame::Camera;
+    /// False when only bin indices are known (a cube read from a .npy without its start and
+    /// bin width): start and bin_width are then placeholders.
+    bool known = true;
 
     double end() const { return start + bin_width * bins; }
     /// Bin holding time t, or -1 outside the window.
@@ -28,6 +42,8 @@ struct TimeGrid {
         const int b = int((t - start) / bin_width);
         return b < bins ? b : bins - 1;
     }
+    /// Time at the middle of bin `bin`.
+    double bin_centre(int bin) const { return start + (bin + 0.5) * bin_width; }
     /// Metres per scene unit for length_unit, or 0 when it is unknown.
     double metres_per_unit() const;
     /// Path length (scene units) <-> picoseconds, given length_unit (throws if unknown).
@@ -57,7 +73,8 @@ inline double recorded_time(double path_length, double sensor_distance, bool wor
 }
 
 /// Reads a film's time window: `start`, `bin_width`, `bins` in scene units, or `start_ps` and
-/// `bin_width_ps` in picoseconds together with `length_unit`. Throws located SceneErrors.
+/// `bin_width_ps` in picoseconds together with `length_unit` (the frame is left as camera time;
+/// films read `world_time` themselves). Throws located SceneErrors.
 TimeGrid read_time_grid(const Properties& props);
 
 /// The time-window parameters, to append to a transient film's FEMTO_PLUGIN schema list.

@@ -25,23 +25,14 @@ namespace femto::io {
 Attributes render_attributes(const RenderInfo& info);
 
 /// The femto:* header attributes of a time-resolved output (render info, the time grid in
-/// scene units and, when length_unit is known, picoseconds; camera or world time; the
-/// temporal filter's type). Films append their own (e.g. femto:row) after these.
-Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info, bool world_time,
+/// scene units and, when length_unit is known, picoseconds; its frame, camera or world time;
+/// the temporal filter's type). Films append their own (e.g. femto:row) after these.
+Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info,
                                     const std::string& tfilter);
 
 }  // namespace femto::io
 
 namespace femto::viz {
-
-/// Time axis of a cube: bin i covers [start + i * bin_width, start + (i + 1) * bin_width).
-struct TimeAxis {
-    double start = 0.0;
-    double bin_width = 1.0;
-    bool known = false;  ///< false: only bin indices are known (e.g. a .npy without --start)
-    std::string time;    ///< "camera", "world" or "" (unknown)
-    double bin_centre(int bin) const { return start + (bin + 0.5) * bin_width; }
-};
 
 /// Reads a cube written by a transient film: an OpenEXR cube (io::read_exr_cube), a streak
 /// image (write_streak_exr; recognised by its femto:layout and femto:row attributes) as a cube
@@ -52,8 +43,10 @@ io::Cube load_cube(const std::string& path);
 /// Whether the cube was read from a streak image (its femto:layout attribute): a cube of
 /// height 1 whose row is the image's femto:row.
 bool is_streak(const io::Cube& cube);
-/// The time axis from the cube's femto:* attributes, overridden by `start` / `bin_width`.
-TimeAxis time_axis(const io::Cube& cube, std::optional<double> start = std::nullopt,
+/// The cube's time grid: its bins, and start, bin width, length unit and frame from its femto:*
+/// attributes, `start` / `bin_width` overriding theirs. Not `known` when the cube has neither
+/// (e.g. a .npy) and they are not both given; the frame is Unknown without femto:time.
+TimeGrid time_grid(const io::Cube& cube, std::optional<double> start = std::nullopt,
                    std::optional<double> bin_width = std::nullopt);
 
 // ---- tone mapping --------------------------------------------------------------------------
@@ -89,7 +82,7 @@ Color time_colour(double u);
 /// Per pixel, the bin of maximum radiance (of luminance), or -1 where the pixel is black.
 std::vector<int> peak_bins(const io::Cube& cube);
 /// Per pixel, the time of maximum radiance (bin centre, scene units); NaN where black.
-std::vector<float> peak_times(const io::Cube& cube, const TimeAxis& axis);
+std::vector<float> peak_times(const io::Cube& cube, const TimeGrid& grid);
 /// The peak-time image (ch. 4.5): each pixel coloured by its peak time (time_colour over the
 /// bins that hold peaks), with the brightness of its peak (the radiance within two bins of
 /// the peak, log tone). With `isochrone_spacing` > 0, as in the thesis only every
@@ -120,7 +113,7 @@ struct UnwarpResult {
     io::Cube cube;
     double dropped = 0.0;  ///< fraction of the total energy shifted outside (keep_window)
 };
-UnwarpResult unwarp(const io::Cube& cube, const TimeAxis& axis, bool to_world,
+UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world,
                     bool keep_window = false);
 
 // ---- files ---------------------------------------------------------------------------------

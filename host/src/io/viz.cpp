@@ -37,7 +37,7 @@ Attributes render_attributes(const RenderInfo& info) {
     };
 }
 
-Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info, bool world_time,
+Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info,
                                     const std::string& tfilter) {
     Attributes attrs = render_attributes(info);
     const Attributes time = {
@@ -46,7 +46,7 @@ Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info
         {"femto:bins", std::to_string(grid.bins)},
         {"femto:units", "optical path length in scene units (time x c)"},
         {"femto:length_unit", grid.length_unit},
-        {"femto:time", world_time ? "world" : "camera"},
+        {"femto:time", time_frame_name(grid.frame)},
         {"femto:tfilter", tfilter},
     };
     attrs.insert(attrs.end(), time.begin(), time.end());
@@ -209,26 +209,29 @@ io::Cube load_cube(const std::string& path) {
     return cube;
 }
 
-TimeAxis time_axis(const io::Cube& cube, std::optional<double> start,
+TimeGrid time_grid(const io::Cube& cube, std::optional<double> start,
                    std::optional<double> bin_width) {
-    TimeAxis axis;
+    TimeGrid grid;
+    grid.bins = cube.bins;
     double s = 0, w = 0;
     const std::string* as = cube.attribute("femto:start");
     const std::string* aw = cube.attribute("femto:bin_width");
     const bool have = as && aw && parse_double(*as, s) && parse_double(*aw, w) && w > 0;
     if (have) {
-        axis.start = s;
-        axis.bin_width = w;
+        grid.start = s;
+        grid.bin_width = w;
     }
-    if (start) axis.start = *start;
+    if (start) grid.start = *start;
     if (bin_width) {
         if (!(*bin_width > 0) || !std::isfinite(*bin_width))
             throw SceneError(fmt::format("--bin-width must be > 0, got {}", *bin_width));
-        axis.bin_width = *bin_width;
+        grid.bin_width = *bin_width;
     }
-    axis.known = have || (start && bin_width);
-    if (const std::string* t = cube.attribute("femto:time")) axis.time = *t;
-    return axis;
+    grid.known = have || (start && bin_width);
+    if (const std::string* u = cube.attribute("femto:length_unit")) grid.length_unit = *u;
+    const std::string* t = cube.attribute("femto:time");
+    grid.frame = t ? parse_time_frame(*t) : TimeFrame::Unknown;
+    return grid;
 }
 
 Tone parse_tone(const std::string& name) {
@@ -325,12 +328,12 @@ std::vector<int> peak_bins(const io::Cube& cube) {
     return peaks;
 }
 
-std::vector<float> peak_times(const io::Cube& cube, const TimeAxis& axis) {
+std::vector<float> peak_times(const io::Cube& cube, const TimeGrid& grid) {
     const std::vector<int> peaks = peak_bins(cube);
     std::vector<float> times(peaks.size());
     for (size_t i = 0; i < peaks.size(); ++i)
         times[i] = peaks[i] < 0 ? std::numeric_limits<float>::quiet_NaN()
-                                : float(axis.bin_centre(peaks[i]));
+                                : float(grid.bin_centre(peaks[i]));
     return times;
 }
 
@@ -412,8 +415,8 @@ std::vector<float> streak_slice(const io::Cube& cube, int y) {
     return out;
 }
 
-UnwarpResult unwarp(const io::Cube& cube, const TimeAxis& axis, bool to_world, bool keep_window) {
-    const char* target = to_world ? "world" : "camera";
+UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, bool keep_window) {
+    const TimeFrame target = to_world ? TimeFrame::World : TimeFrame::Camera;
     if (cube.depth.empty())
         throw SceneError(
             is_streak(cube)
@@ -422,14 +425,15 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeAxis& axis, bool to_world, b
                   "of an OpenEXR cube (femto viz streak CUBE.exr --exr)"
                 : "the cube has no depth part (per-pixel sensor distance), which unwarping "
                   "needs: use the OpenEXR cube a transient film wrote, not a .npy");
-    if (!axis.known) throw SceneError("the cube has no time axis (femto:start, femto:bin_width)");
-    if (axis.time == target)
-        throw SceneError(fmt::format("the cube is already in {} time (femto:time)", target));
-    if (axis.time != "camera" && axis.time != "world")
+    if (!grid.known) throw SceneError("the cube has no time axis (femto:start, femto:bin_width)");
+    if (grid.frame == target)
+        throw SceneError(
+            fmt::format("the cube is already in {} time (femto:time)", time_frame_name(target)));
+    if (grid.frame == TimeFrame::Unknown)
         throw SceneError(
             "the cube does not say whether it holds camera or world time (femto:time)");
     const size_t pixels = size_t(cube.width) * size_t(cube.height), T = size_t(cube.bins);
-    const double bw = axis.bin_width;
+    const double bw = grid.bin_width;
     // Shift of each pixel in bins: new time = old time + shift * bw.
     std::vector<double> shift(pixels, 0.0);
     double smin = 0, smax = 0;
@@ -515,8 +519,8 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeAxis& axis, bool to_world, b
             k_lo += first;
         }
     }
-    const double new_start = axis.start + double(k_lo) * bw;
-    set_attribute(out.attributes, "femto:time", target);
+    const double new_start = grid.start + double(k_lo) * bw;
+    set_attribute(out.attributes, "femto:time", time_frame_name(target));
     set_attribute(out.attributes, "femto:start", fmt::format("{:.17g}", new_start));
     set_attribute(out.attributes, "femto:bin_width", fmt::format("{:.17g}", bw));
     set_attribute(out.attributes, "femto:bins", std::to_string(out.bins));

@@ -2,10 +2,13 @@
 // base of the time-resolved films.
 #include "femto/tfilter.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "femto/log.h"
 #include "femto/plugin.h"
 #include "femto/properties.h"
 
@@ -53,7 +56,7 @@ void PilotBlock::deliver(TemporalFilter& filter) const {
 
 TimeResolvedFilm::TimeResolvedFilm(const Properties& props)
     : Film(props), grid_(read_time_grid(props)) {
-    world_time_ = props.get_bool("world_time", false);
+    if (props.get_bool("world_time", false)) grid_.frame = TimeFrame::World;
     exposure_ = float(props.get_float("exposure", 0.0));
     tfilter_ = read_temporal_filter(props);
     tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
@@ -65,13 +68,19 @@ void TimeResolvedFilm::end_pilot() {
 }
 
 double TimeResolvedFilm::max_path_length() const {
-    return world_time_ ? std::numeric_limits<double>::infinity()
-                       : grid_.end() + tfilter_->max_radius();
+    return world_time() ? std::numeric_limits<double>::infinity()
+                        : grid_.end() + tfilter_->max_radius();
 }
 
 std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, int w, int h) const {
     if (!pilot_) return nullptr;
-    return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time_);
+    return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time());
+}
+
+void TimeResolvedFilm::warn_rejected() const {
+    if (rejected_ > 0)
+        log_warning(fmt::format("{} camera samples with a NaN or infinite radiance were discarded",
+                                rejected_));
 }
 
 bool TimeResolvedFilm::merge_pilot(const FilmBlock& block) {

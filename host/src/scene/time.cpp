@@ -14,6 +14,24 @@ constexpr struct {
 constexpr int kMaxBins = 1 << 20;
 }  // namespace
 
+const char* time_frame_name(TimeFrame frame) {
+    switch (frame) {
+        case TimeFrame::Camera:
+            return "camera";
+        case TimeFrame::World:
+            return "world";
+        case TimeFrame::Unknown:
+            break;
+    }
+    return "";
+}
+
+TimeFrame parse_time_frame(const std::string& name) {
+    if (name == "camera") return TimeFrame::Camera;
+    if (name == "world") return TimeFrame::World;
+    return TimeFrame::Unknown;
+}
+
 double TimeGrid::metres_per_unit() const {
     for (const auto& u : kUnits)
         if (length_unit == u.name) return u.metres;

@@ -20,7 +20,6 @@
 
 #include "femto/film.h"
 #include "femto/image_io.h"
-#include "femto/log.h"
 #include "femto/plugin.h"
 #include "femto/tfilter.h"
 #include "femto/time.h"
@@ -32,27 +31,32 @@ using namespace femto;
 
 class StreakFilm;
 
-// Per recorded pixel: the sums the transient film keeps in its PixelWeights.
-struct PixelSums {
-    double weight = 0;        // sum of filter weights of all samples
-    double depth_sum = 0;     // sum of w * sensor distance over samples that hit something
-    double depth_weight = 0;  // sum of w over those samples
-};
-
-// One block: the recorded rows that fall inside a tile plus its filter border.
-class StreakBlock final : public FilmBlock {
+// One block: the recorded rows that fall inside a tile plus its filter border. The splat is
+// TimeResolvedBlock's, as the transient film's; this block is its storage, which holds only
+// the recorded rows (slot = index into rows_ * w_ + block column).
+class StreakBlock final : public TimeResolvedBlock {
 public:
-    StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, int border);
-    void put(Vec2 pos, const ContributionList& sample) override;
+    StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h);
+    void put(Vec2 pos, const ContributionList& sample) override { splat(pos, sample, *this); }
 
-    const StreakFilm& film_;
-    int x0_, y0_, w_, h_, bins_;
+    // Storage of TimeResolvedBlock::splat().
+    size_t slot(int x, int y) const {
+        const int s = slot_of_y_[size_t(y - y0_)];
+        return s < 0 ? SIZE_MAX : size_t(s) * size_t(w_) + size_t(x - x0_);
+    }
+    PixelSums& sums(size_t slot) { return sums_[slot]; }
+    void add(size_t slot, int bin, float w, const Color& v) {
+        float* dst = &data_[(slot * size_t(bins_) + size_t(bin)) * 3];
+        dst[0] += w * v.r;
+        dst[1] += w * v.g;
+        dst[2] += w * v.b;
+    }
+
+    int bins_;
     std::vector<int> rows_;        // recorded rows inside [y0_, y0_ + h_)
     std::vector<int> slot_of_y_;   // per block row: index into rows_, or -1
     std::vector<float> data_;      // [rows_][w_][bins][3]
     std::vector<PixelSums> sums_;  // [rows_][w_]
-    std::vector<BinWeight> scratch_;
-    uint64_t invalid_ = 0;
 };
 
 std::vector<int> parse_rows(const Properties& props, int height) {
@@ -120,26 +124,24 @@ public:
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
         if (auto pilot = make_pilot_block(x0, y0, w, h)) return pilot;
-        return std::make_unique<StreakBlock>(*this, x0, y0, w, h, filter_border());
+        return std::make_unique<StreakBlock>(*this, x0, y0, w, h);
     }
 
     void merge(const FilmBlock& b) override {
         if (merge_pilot(b)) return;
         const auto& block = static_cast<const StreakBlock&>(b);
-        invalid_ += block.invalid_;
+        merge_rejected(block);
         const size_t T3 = size_t(grid_.bins) * 3;
         for (size_t s = 0; s < block.rows_.size(); ++s) {
             const size_t slot = size_t(slot_of_row_[size_t(block.rows_[s])]);
-            for (int bx = 0; bx < block.w_; ++bx) {
-                const int x = block.x0_ + bx;
+            for (int bx = 0; bx < block.w(); ++bx) {
+                const int x = block.x0() + bx;
                 if (x < 0 || x >= width_) continue;
-                const size_t src = s * size_t(block.w_) + size_t(bx);
+                const size_t src = s * size_t(block.w()) + size_t(bx);
                 const size_t dst = slot * size_t(width_) + size_t(x);
                 const PixelSums& in_sums = block.sums_[src];
                 if (in_sums.weight == 0) continue;
-                sums_[dst].weight += in_sums.weight;
-                sums_[dst].depth_sum += in_sums.depth_sum;
-                sums_[dst].depth_weight += in_sums.depth_weight;
+                sums_[dst] += in_sums;
                 const float* in = &block.data_[src * T3];
                 float* out = &data_[dst * T3];
                 for (size_t i = 0; i < T3; ++i) out[i] += in[i];
@@ -179,7 +181,7 @@ public:
         c.depth.assign(W, -1.f);
         for (size_t x = 0; x < W; ++x) {
             const PixelSums& ps = sums_[slot * W + x];
-            if (ps.depth_weight > 0) c.depth[x] = float(ps.depth_sum / ps.depth_weight);
+            c.depth[x] = ps.depth();
             if (ps.weight == 0) continue;
             const float* in = &data_[(slot * W + x) * T * 3];
             float* out = &c.data[x * T * 3];
@@ -190,13 +192,10 @@ public:
 
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
-        if (invalid_ > 0)
-            log_warning(fmt::format("{} contributions with NaN or infinite radiance were discarded",
-                                    invalid_));
+        warn_rejected();
         std::vector<std::string> files;
         for (size_t s = 0; s < rows_.size(); ++s) {
-            io::Attributes attrs =
-                io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
+            io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());
             attrs.push_back({"femto:row", std::to_string(rows_[s])});
             const io::Cube row = row_cube(s);
             const std::string base = fmt::format("{}_row{:04}", out_base, rows_[s]);
@@ -214,17 +213,10 @@ public:
     std::vector<char> active_;      // per image row: samples there reach a recorded row
     std::vector<float> data_;       // [rows_][width][bins][3]
     std::vector<PixelSums> sums_;   // [rows_][width]
-    uint64_t invalid_ = 0;
 };
 
-StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, int border)
-    : film_(film),
-      x0_(x0 - border),
-      y0_(y0 - border),
-      w_(w + 2 * border),
-      h_(h + 2 * border),
-      bins_(film.grid().bins),
-      slot_of_y_(size_t(h_), -1) {
+StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h)
+    : TimeResolvedBlock(film, x0, y0, w, h), bins_(film.grid().bins), slot_of_y_(size_t(h_), -1) {
     for (int r : film.rows_)
         if (r >= y0_ && r < y0_ + h_) {
             slot_of_y_[size_t(r - y0_)] = int(rows_.size());
@@ -232,37 +224,6 @@ StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h, i
         }
     data_.assign(rows_.size() * size_t(w_) * size_t(bins_) * 3, 0.f);
     sums_.assign(rows_.size() * size_t(w_), PixelSums());
-}
-
-void StreakBlock::put(Vec2 pos, const ContributionList& sample) {
-    if (rows_.empty()) return;
-    const double sensor = sample.sensor_distance();
-    for (const auto& c : sample.items())
-        if (!c.radiance.is_finite()) {
-            ++invalid_;
-            return;
-        }
-    for_each_filter_pixel(
-        film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
-            const int slot = slot_of_y_[size_t(y - y0_)];
-            if (slot < 0) return;
-            const size_t local = size_t(slot) * size_t(w_) + size_t(x - x0_);
-            PixelSums& ps = sums_[local];
-            ps.weight += w;
-            if (sensor >= 0) {  // as the transient film: the depth of samples that hit
-                ps.depth_sum += w * sensor;
-                ps.depth_weight += w;
-            }
-            const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
-            float* px = &data_[local * size_t(bins_) * 3];
-            splat_sample(film_.tfilter(), film_.grid(), pixel, sample, film_.world_time(), scratch_,
-                         [&](int bin, const Color& v) {
-                             float* dst = px + size_t(bin) * 3;
-                             dst[0] += w * v.r;
-                             dst[1] += w * v.g;
-                             dst[2] += w * v.b;
-                         });
-        });
 }
 
 }  // namespace

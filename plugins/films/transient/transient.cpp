@@ -16,7 +16,6 @@
 
 #include "femto/film.h"
 #include "femto/image_io.h"
-#include "femto/log.h"
 #include "femto/plugin.h"
 #include "femto/tfilter.h"
 #include "femto/time.h"
@@ -25,14 +24,6 @@
 namespace {
 
 using namespace femto;
-
-struct PixelWeights {
-    double weight = 0;            // sum of filter weights of all samples
-    double weight2 = 0;           // sum of their squares (effective sample count, aovs="variance")
-    double depth_sum = 0;         // sum of w * sensor distance over samples that hit something
-    double depth_weight = 0;      // sum of w over those samples
-    double spill[3] = {0, 0, 0};  // sum of w * energy the tfilter moved out of the window
-};
 
 class TransientFilm;
 
@@ -45,16 +36,44 @@ struct BlockStorage {
     std::vector<float> cube;   // [bins][h][w][3]
     std::vector<float> count;  // [bins][h][w] contributions per bin (aovs="count")
     std::vector<float> sq;     // [bins][h][w][3] sum of w * (per-sample bin value)^2
-    std::vector<PixelWeights> weights;
+    std::vector<PixelSums> weights;
     std::vector<uint64_t> touched_bits;  // one bit per (pixel, bin)
     std::vector<uint32_t> touched;       // the (bin * pixels + pixel) entries set, in order
 };
 
-class CubeBlock final : public FilmBlock {
+// The splat itself is TimeResolvedBlock's; this block is its storage (slot = block pixel).
+class CubeBlock final : public TimeResolvedBlock {
 public:
-    CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h, int border);
+    CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h);
     ~CubeBlock() override;
-    void put(Vec2 pos, const ContributionList& sample) override;
+    void put(Vec2 pos, const ContributionList& sample) override {
+        clean_ = false;
+        splat(pos, sample, *this);
+    }
+
+    // Storage of TimeResolvedBlock::splat().
+    size_t slot(int x, int y) const { return size_t(y - y0_) * size_t(w_) + size_t(x - x0_); }
+    PixelSums& sums(size_t local) { return st_->weights[local]; }
+    void add(size_t local, int bin, float w, const Color& v) {
+        const size_t flat = touch(local, bin);
+        float* dst = &st_->cube[flat * 3];
+        dst[0] += w * v.r;
+        dst[1] += w * v.g;
+        dst[2] += w * v.b;
+        if (count_) st_->count[flat] += 1.f;
+    }
+    // Variance needs this sample's value per bin (several contributions may share a bin): w * v
+    // into the cube and w * v^2 into the second moment.
+    bool totals() const { return variance_; }
+    void add_total(size_t local, int bin, float w, const Color& v, int n) {
+        const size_t flat = touch(local, bin);
+        for (int ch = 0; ch < 3; ++ch) {
+            st_->cube[flat * 3 + size_t(ch)] += w * v[ch];
+            st_->sq[flat * 3 + size_t(ch)] += w * v[ch] * v[ch];
+        }
+        if (count_) st_->count[flat] += float(n);
+    }
+
     /// Index of (local pixel, bin) in the storage; marks it as holding data.
     size_t touch(size_t local, int bin) {
         const size_t flat = size_t(bin) * pixels_ + local;
@@ -67,17 +86,13 @@ public:
         return flat;
     }
 
-    const TransientFilm& film_;
-    int x0_, y0_, w_, h_, bins_;
     size_t pixels_;
     std::unique_ptr<BlockStorage> st_;
+    bool variance_, count_;      // the storage has the second moment / the counts
     mutable bool clean_ = true;  // all sums merged (and zeroed) since the last put
-    std::vector<BinWeight> scratch_;
-    std::vector<std::pair<int, Color>> sample_bins_;  // one sample's value per bin
     // Film pixel of each block pixel, or SIZE_MAX outside the film: merge looks it up instead
     // of dividing twice per touched entry (merge is a hot loop of cube films).
     std::vector<size_t> dst_of_local_;
-    uint64_t invalid_ = 0;
 };
 
 class TransientFilm final : public TimeResolvedFilm {
@@ -119,7 +134,7 @@ public:
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
         if (auto pilot = make_pilot_block(x0, y0, w, h)) return pilot;
-        return std::make_unique<CubeBlock>(*this, x0, y0, w, h, filter_border());
+        return std::make_unique<CubeBlock>(*this, x0, y0, w, h);
     }
 
     /// A zeroed storage for a block of `pixels` pixels, recycled when possible.
@@ -152,9 +167,9 @@ public:
         if (merge_pilot(b)) return;
         const auto& block = static_cast<const CubeBlock&>(b);
         BlockStorage& st = *block.st_;
-        invalid_ += block.invalid_;
+        merge_rejected(block);
         const size_t bins = size_t(grid_.bins);
-        const size_t block_pixels = size_t(block.w_) * size_t(block.h_);
+        const size_t block_pixels = block.pixels_;
         const std::vector<size_t>& dst_of = block.dst_of_local_;
         for (const uint32_t flat : st.touched) {
             const size_t bin = flat / block_pixels, local = flat - bin * block_pixels;
@@ -175,18 +190,11 @@ public:
         }
         st.touched.clear();
         for (size_t local = 0; local < block_pixels; ++local) {
-            PixelWeights& s = st.weights[local];
+            PixelSums& s = st.weights[local];
             if (s.weight == 0) continue;
             const size_t dst = dst_of[local];
-            if (dst != SIZE_MAX) {
-                PixelWeights& d = weights_[dst];
-                d.weight += s.weight;
-                d.weight2 += s.weight2;
-                d.depth_sum += s.depth_sum;
-                d.depth_weight += s.depth_weight;
-                for (int c = 0; c < 3; ++c) d.spill[c] += s.spill[c];
-            }
-            s = PixelWeights();
+            if (dst != SIZE_MAX) weights_[dst] += s;
+            s = PixelSums();
         }
         block.clean_ = true;
     }
@@ -218,7 +226,7 @@ public:
     /// histogram would sum to over the window.
     std::pair<std::string, std::string> window_spill_attribute() const {
         double mean[3] = {0, 0, 0};
-        for (const PixelWeights& pw : weights_)
+        for (const PixelSums& pw : weights_)
             if (pw.weight > 0)
                 for (int c = 0; c < 3; ++c) mean[c] += pw.spill[c] / pw.weight;
         const double n = double(weights_.size());
@@ -228,16 +236,11 @@ public:
 
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
-        if (invalid_ > 0)
-            log_warning(fmt::format("{} contributions with NaN or infinite radiance were discarded",
-                                    invalid_));
+        warn_rejected();
         const size_t pixels = size_t(width_) * size_t(height_);
-        std::vector<float> depth(pixels, -1.f);
-        for (size_t p = 0; p < pixels; ++p)
-            if (weights_[p].depth_weight > 0)
-                depth[p] = float(weights_[p].depth_sum / weights_[p].depth_weight);
-        io::Attributes attrs =
-            io::time_resolved_attributes(grid_, info, world_time_, tfilter_->type_name());
+        std::vector<float> depth(pixels);
+        for (size_t p = 0; p < pixels; ++p) depth[p] = weights_[p].depth();
+        io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());
         if (tfilter_->max_radius() > 0) attrs.push_back(window_spill_attribute());
         const std::vector<float> scale = pixel_normalisation();
         std::vector<std::string> files;
@@ -260,7 +263,7 @@ public:
             const size_t T3 = size_t(grid_.bins) * 3;
             std::vector<float> var(cube_.size(), 0.f);
             for (size_t p = 0; p < pixels; ++p) {
-                const PixelWeights& pw = weights_[p];
+                const PixelSums& pw = weights_[p];
                 if (!(pw.weight > 0) || !(pw.weight2 > 0)) continue;
                 const double n_eff = pw.weight * pw.weight / pw.weight2;
                 if (!(n_eff > 1)) continue;
@@ -286,19 +289,15 @@ public:
     std::vector<float> cube_, count_, sq_;
     mutable std::mutex pool_mutex_;
     mutable std::vector<std::unique_ptr<BlockStorage>> pool_;
-    std::vector<PixelWeights> weights_;
-    uint64_t invalid_ = 0;
+    std::vector<PixelSums> weights_;
 };
 
-CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h, int border)
-    : film_(film),
-      x0_(x0 - border),
-      y0_(y0 - border),
-      w_(w + 2 * border),
-      h_(h + 2 * border),
-      bins_(film.grid().bins),
+CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h)
+    : TimeResolvedBlock(film, x0, y0, w, h),
       pixels_(size_t(w_) * size_t(h_)),
       st_(film.acquire_storage(pixels_)),
+      variance_(!st_->sq.empty()),
+      count_(!st_->count.empty()),
       dst_of_local_(pixels_) {
     for (int by = 0; by < h_; ++by)
         for (int bx = 0; bx < w_; ++bx) {
@@ -316,71 +315,10 @@ CubeBlock::~CubeBlock() {
         std::fill(st_->sq.begin(), st_->sq.end(), 0.f);
         std::fill(st_->count.begin(), st_->count.end(), 0.f);
         std::fill(st_->touched_bits.begin(), st_->touched_bits.end(), 0);
-        std::fill(st_->weights.begin(), st_->weights.end(), PixelWeights());
+        std::fill(st_->weights.begin(), st_->weights.end(), PixelSums());
         st_->touched.clear();
     }
-    film_.release_storage(std::move(st_));
-}
-
-void CubeBlock::put(Vec2 pos, const ContributionList& sample) {
-    const double sensor = sample.sensor_distance();
-    for (const auto& c : sample.items())
-        if (!c.radiance.is_finite()) {
-            ++invalid_;
-            return;
-        }
-    clean_ = false;
-    BlockStorage& st = *st_;
-    const bool variance = !st.sq.empty(), count = !st.count.empty();
-    const TemporalFilter& tfilter = film_.tfilter();
-    for_each_filter_pixel(
-        film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
-            const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
-            PixelWeights& pw = st.weights[local];
-            pw.weight += w;
-            pw.weight2 += double(w) * w;
-            if (sensor >= 0) {
-                pw.depth_sum += w * sensor;
-                pw.depth_weight += w;
-            }
-            const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
-            Color spill;
-            if (variance) {
-                // Variance needs this sample's value per bin (several contributions may share a
-                // bin), then w * v into the cube and w * v^2 into the second moment.
-                sample_bins_.clear();
-                spill = splat_sample(tfilter, film_.grid(), pixel, sample, film_.world_time(),
-                                     scratch_, [&](int bin, const Color& v) {
-                                         sample_bins_.push_back({bin, v});
-                                     });
-                std::sort(sample_bins_.begin(), sample_bins_.end(),
-                          [](const auto& a, const auto& b) { return a.first < b.first; });
-                for (size_t i = 0; i < sample_bins_.size();) {
-                    const int bin = sample_bins_[i].first;
-                    Color v;
-                    int n = 0;
-                    for (; i < sample_bins_.size() && sample_bins_[i].first == bin; ++i, ++n)
-                        v += sample_bins_[i].second;
-                    const size_t flat = touch(local, bin);
-                    for (int ch = 0; ch < 3; ++ch) {
-                        st.cube[flat * 3 + size_t(ch)] += w * v[ch];
-                        st.sq[flat * 3 + size_t(ch)] += w * v[ch] * v[ch];
-                    }
-                    if (count) st.count[flat] += float(n);
-                }
-            } else {
-                spill = splat_sample(tfilter, film_.grid(), pixel, sample, film_.world_time(),
-                                     scratch_, [&](int bin, const Color& v) {
-                                         const size_t flat = touch(local, bin);
-                                         float* dst = &st.cube[flat * 3];
-                                         dst[0] += w * v.r;
-                                         dst[1] += w * v.g;
-                                         dst[2] += w * v.b;
-                                         if (count) st.count[flat] += 1.f;
-                                     });
-            }
-            for (int ch = 0; ch < 3; ++ch) pw.spill[ch] += double(w) * spill[ch];
-        });
+    static_cast<const TransientFilm&>(film_).release_storage(std::move(st_));
 }
 
 }  // namespace
