@@ -58,9 +58,6 @@ public:
     virtual void end_pilot() {}
 };
 
-/// The nested <tfilter> of a film's properties, or a histogram when there is none.
-std::shared_ptr<TemporalFilter> read_temporal_filter(const Properties& props);
-
 /// Reconstructs one camera sample's contributions in time for one film pixel: calls
 /// add(bin, value) for every (contribution, bin) pair, value = radiance x bin weight.
 /// Returns the energy the filter moved across the window's edges (kernel mass of in-window

@@ -61,9 +61,7 @@ double PulseProfile::earliest() const {
 double PulseProfile::mean() const { return shape == Shape::Box ? offset + 0.5 * width : offset; }
 
 Emitter::Emitter(const Properties& props) {
-    auto media = props.objects(PluginKind::Medium);
-    if (media.size() > 1) props.fail("medium", "an emitter sits in at most one <medium>");
-    if (!media.empty()) medium_ = std::static_pointer_cast<Medium>(media[0]);
+    medium_ = std::static_pointer_cast<Medium>(props.child(PluginKind::Medium));
     const std::string shape = props.get_string("pulse", "delta");
     pulse_.offset = props.get_float("time_offset", 0.0);
     if (shape == "delta") {

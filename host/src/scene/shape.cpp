@@ -8,7 +8,6 @@
 #include "femto/emitter.h"
 #include "femto/medium.h"
 #include "femto/warp.h"
-#include "scene/loader.h"
 
 namespace femto {
 
@@ -22,11 +21,7 @@ Ray Hit::spawn_to(const Vec3& target) const {
 
 Shape::Shape(const Properties& props) : location_(props.location()) {
     flip_normals_ = props.get_bool("flip_normals", false);
-    auto bsdfs = props.objects(PluginKind::Bsdf);
-    if (bsdfs.size() > 1) props.fail("bsdf", "a shape takes at most one <bsdf>");
-    bsdf_ = bsdfs.empty() ? std::static_pointer_cast<Bsdf>(detail::create_default(
-                                PluginKind::Bsdf, "diffuse", props.location()))
-                          : std::static_pointer_cast<Bsdf>(bsdfs[0]);
+    bsdf_ = std::static_pointer_cast<Bsdf>(props.child(PluginKind::Bsdf, "diffuse"));
     interior_ = std::static_pointer_cast<Medium>(props.get_object("interior", PluginKind::Medium));
     exterior_ = std::static_pointer_cast<Medium>(props.get_object("exterior", PluginKind::Medium));
     for (const ObjectPtr& m : props.objects(PluginKind::Medium))
@@ -34,10 +29,8 @@ Shape::Shape(const Properties& props) : location_(props.location()) {
             throw SceneError(props.location(),
                              "a <medium> inside a shape must be named \"interior\" or "
                              "\"exterior\" (e.g. <ref name=\"interior\" id=\"fog\"/>)");
-    auto emitters = props.objects(PluginKind::Emitter);
-    if (emitters.size() > 1) props.fail("emitter", "a shape takes at most one <emitter>");
-    if (!emitters.empty()) {
-        emitter_ = std::static_pointer_cast<Emitter>(emitters[0]);
+    emitter_ = std::static_pointer_cast<Emitter>(props.child(PluginKind::Emitter));
+    if (emitter_) {
         if (emitter_->is_delta())
             throw SceneError(props.location(),
                              "only area emitters can be attached to a shape; put "
