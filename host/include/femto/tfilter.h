@@ -126,6 +126,10 @@ public:
     /// True when the film records world time (the sensor segment removed, eq. 4.1).
     bool world_time() const { return world_time_; }
 
+    /// Film's parameters, the time window (time_grid_params()), `world_time`, `exposure` and
+    /// the <tfilter> child (default `histogram`): what the constructor reads.
+    static std::vector<ParamSpec> inherited_params();
+
 protected:
     explicit TimeResolvedFilm(const Properties& props);
     /// During the pilot pass, the block that collects arrivals for the filter; else null.

@@ -42,6 +42,16 @@ void PilotBlock::deliver(TemporalFilter& filter) const {
         }
 }
 
+std::vector<ParamSpec> TimeResolvedFilm::inherited_params() {
+    return inherit_params(
+        inherit_params(Film::inherited_params(), "TimeResolvedFilm", time_grid_params()),
+        "TimeResolvedFilm",
+        {{"world_time", "boolean", "false",
+          "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
+         {"exposure", "float", "0", "exposure of the PNG preview(s), in stops"},
+         {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}});
+}
+
 TimeResolvedFilm::TimeResolvedFilm(const Properties& props)
     : Film(props), grid_(read_time_grid(props)) {
     world_time_ = props.get_bool("world_time", false);

@@ -60,6 +60,16 @@ double PulseProfile::earliest() const {
 
 double PulseProfile::mean() const { return shape == Shape::Box ? offset + 0.5 * width : offset; }
 
+std::vector<ParamSpec> Emitter::inherited_params() {
+    return inherit_params(
+        Object::inherited_params(), "Emitter",
+        {{"pulse", "string", "delta", "emission profile in time: delta, box or gaussian"},
+         {"pulse_width", "float", "", "box pulse length (optical path length, scene units)"},
+         {"pulse_sigma", "float", "", "gaussian pulse deviation (optical path length)"},
+         {"time_offset", "float", "0", "emission start (delta/box) or mean (gaussian), same units"},
+         {"medium", "medium", "", "medium the emitter sits in (nested <medium> or <ref>)"}});
+}
+
 Emitter::Emitter(const Properties& props) {
     medium_ = std::static_pointer_cast<Medium>(props.child(PluginKind::Medium));
     const std::string shape = props.get_string("pulse", "delta");

@@ -8,6 +8,13 @@
 
 namespace femto {
 
+std::vector<ParamSpec> Medium::inherited_params() {
+    return inherit_params(
+        Object::inherited_params(), "Medium",
+        {{"eta", "float", "1", "index of refraction: light travels at c / eta inside"},
+         {"phase", "phase", "isotropic", "phase function (nested <phase>)"}});
+}
+
 Medium::Medium(const Properties& props) {
     eta_ = props.get_float("eta", 1.0);
     if (!(eta_ >= 1.0) || !std::isfinite(eta_))

@@ -21,11 +21,26 @@ Transform read_to_world(const Properties& props) {
     return t;
 }
 
+std::vector<ParamSpec> Sensor::inherited_params() {
+    return inherit_params(
+        Object::inherited_params(), "Sensor",
+        {{"to_world", "transform", "identity", "camera-to-world transform"},
+         {"film", "film", "hdrfilm", "the film (nested)"},
+         {"sampler", "sampler", "independent", "the sampler (nested)"},
+         {"medium", "medium", "", "medium the sensor sits in (nested <medium> or <ref>)"}});
+}
+
 Sensor::Sensor(const Properties& props) {
     to_world_ = read_to_world(props);
     film_ = std::static_pointer_cast<Film>(props.child(PluginKind::Film, "hdrfilm"));
     sampler_ = std::static_pointer_cast<Sampler>(props.child(PluginKind::Sampler, "independent"));
     medium_ = std::static_pointer_cast<Medium>(props.child(PluginKind::Medium));
+}
+
+std::vector<ParamSpec> Sampler::inherited_params() {
+    return inherit_params(Object::inherited_params(), "Sampler",
+                          {{"sample_count", "integer", "4", "samples per pixel (> 0)"},
+                           {"seed", "integer", "0", "seed offset, combined with the render seed"}});
 }
 
 Sampler::Sampler(const Properties& props) {
@@ -35,6 +50,13 @@ Sampler::Sampler(const Properties& props) {
                                        std::to_string(count));
     sample_count_ = uint32_t(count);
     seed_ = uint64_t(props.get_int("seed", 0));
+}
+
+std::vector<ParamSpec> Film::inherited_params() {
+    return inherit_params(Object::inherited_params(), "Film",
+                          {{"width", "integer", "768", "image width in pixels"},
+                           {"height", "integer", "576", "image height in pixels"},
+                           {"rfilter", "rfilter", "gaussian", "reconstruction filter (nested)"}});
 }
 
 Film::Film(const Properties& props) {

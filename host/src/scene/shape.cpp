@@ -19,7 +19,19 @@ Ray Hit::spawn_to(const Vec3& target) const {
     return Ray{o, d / dist, 0.f, dist * (1.f - 1e-4f)};
 }
 
+std::vector<ParamSpec> Shape::inherited_params() {
+    return inherit_params(
+        Object::inherited_params(), "Shape",
+        {{"to_world", "transform", "identity", "object-to-world transform"},
+         {"flip_normals", "boolean", "false", "make the inside the outside"},
+         {"bsdf", "bsdf", "diffuse", "material of the surface"},
+         {"emitter", "emitter", "", "area emitter attached to the surface"},
+         {"interior", "medium", "", "medium inside the shape (nested or <ref name=\"interior\">)"},
+         {"exterior", "medium", "", "medium outside the shape"}});
+}
+
 Shape::Shape(const Properties& props) : location_(props.location()) {
+    to_world_ = read_to_world(props);
     flip_normals_ = props.get_bool("flip_normals", false);
     bsdf_ = std::static_pointer_cast<Bsdf>(props.child(PluginKind::Bsdf, "diffuse"));
     interior_ = std::static_pointer_cast<Medium>(props.get_object("interior", PluginKind::Medium));

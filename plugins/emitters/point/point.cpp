@@ -54,5 +54,4 @@ FEMTO_PLUGIN(femto::PointEmitter, femto::PluginKind::Emitter, "point", "Isotropi
              {{"intensity", "color", "1", "radiant intensity (W/sr per channel)"},
               {"position", "point", "(0, 0, 0)", "location (alternative to to_world)"},
               {"to_world", "transform", "identity",
-               "places the light at to_world(0, 0, 0) (alternative to position)"},
-              FEMTO_PULSE_PARAMS})
+               "places the light at to_world(0, 0, 0) (alternative to position)"}})

@@ -99,5 +99,4 @@ FEMTO_PLUGIN(femto::SpotEmitter, femto::PluginKind::Emitter, "spot",
               {"beam_width", "float", "3/4 cutoff_angle",
                "angle (degrees) within which the full intensity is emitted"},
               {"to_world", "transform", "identity",
-               "light frame: at to_world(0, 0, 0), shining along local +z"},
-              FEMTO_PULSE_PARAMS})
+               "light frame: at to_world(0, 0, 0), shining along local +z"}})
