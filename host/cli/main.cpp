@@ -80,14 +80,16 @@ int cmd_plugins(const std::string& name, bool markdown, const femto::LoadOptions
             }
             fmt::print("| parameter | type | default | description |\n|---|---|---|---|\n");
             for (const auto& p : d.params)
-                fmt::print("| `{}` | {} | {} | {} |\n", p.name, p.type,
-                           *p.default_value ? fmt::format("`{}`", p.default_value) : "", p.doc);
+                fmt::print("| `{}` | {} | {} | {}{} |\n", p.name, p.type,
+                           *p.default_value ? fmt::format("`{}`", p.default_value) : "", p.doc,
+                           p.inherited_from ? fmt::format(" *(from {})*", p.inherited_from) : "");
             fmt::print("\n");
         } else {
             fmt::print("<{} type=\"{}\">: {}\n", kind_heading(d.kind), d.type_name, d.description);
             for (const auto& p : d.params)
-                fmt::print("  {:<22} {:<16} default {:<12} {}\n", p.name, p.type,
-                           *p.default_value ? p.default_value : "-", p.doc);
+                fmt::print("  {:<22} {:<16} default {:<12} {}{}\n", p.name, p.type,
+                           *p.default_value ? p.default_value : "-", p.doc,
+                           p.inherited_from ? fmt::format(" (from {})", p.inherited_from) : "");
         }
     };
     if (!name.empty()) {

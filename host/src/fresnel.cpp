@@ -230,9 +230,13 @@ std::string conductor_preset_names() {
 }
 
 /// Reads an index of refraction given as a positive number or a name known to lookup_ior()
-/// (case-insensitive); `def` when absent.
-float read_ior(const Properties& props, const std::string& name, float def) {
-    if (!props.has(name)) return def;
+/// (case-insensitive); `def` (a number or a name) when absent.
+float read_ior(const Properties& props, const std::string& name, const std::string& def) {
+    if (!props.has(name)) {
+        props.note_default(name, def);
+        if (const std::optional<float> ior = lookup_ior(def)) return *ior;
+        return std::stof(def);
+    }
     if (props.type(name) == Properties::Type::String) {
         const std::string value = props.get_string(name);
         if (const std::optional<float> ior = lookup_ior(value)) return *ior;
@@ -249,7 +253,7 @@ float read_ior(const Properties& props, const std::string& name, float def) {
 /// of a preset, but not together with one.
 ConductorIor read_conductor_ior(const Properties& props) {
     const std::string material = props.get_string("material", "none");
-    const float ext_eta = read_ior(props, "ext_eta", 1.f);
+    const float ext_eta = read_ior(props, "ext_eta", "1");
     ConductorIor ior;
     if (material == "none") {
         ior.perfect = !props.has("eta") && !props.has("k");

@@ -1,7 +1,10 @@
 #include "femto/properties.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 
+#include "femto/plugin.h"
 #include "femto/texture.h"
 
 namespace femto {
@@ -28,6 +31,18 @@ constexpr struct {
     {PluginKind::Connection, "connection"},
     {PluginKind::Angular, "angular"},
 };
+std::string default_text(bool v) { return v ? "true" : "false"; }
+std::string default_text(int64_t v) { return std::to_string(v); }
+std::string default_text(double v) { return fmt::format("{}", v); }
+std::string default_text(const std::string& v) { return v; }
+std::string default_text(const Vec3& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); }
+std::string default_text(const Color& c) {
+    return c.r == c.g && c.g == c.b ? fmt::format("{}", c.r)
+                                    : fmt::format("({}, {}, {})", c.r, c.g, c.b);
+}
+std::string default_text(const Transform& t) {
+    return t.is_identity() ? "identity" : "(a transform other than identity)";
+}
 }  // namespace
 
 const char* kind_tag(PluginKind kind) {
@@ -124,13 +139,17 @@ bool Properties::get_bool(const std::string& name) const {
     return std::get<bool>(require(name, Type::Bool).value);
 }
 bool Properties::get_bool(const std::string& name, bool def) const {
-    return has(name) ? get_bool(name) : def;
+    if (has(name)) return get_bool(name);
+    note_default(name, default_text(def));
+    return def;
 }
 int64_t Properties::get_int(const std::string& name) const {
     return std::get<int64_t>(require(name, Type::Integer).value);
 }
 int64_t Properties::get_int(const std::string& name, int64_t def) const {
-    return has(name) ? get_int(name) : def;
+    if (has(name)) return get_int(name);
+    note_default(name, default_text(def));
+    return def;
 }
 double Properties::get_float(const std::string& name) const {
     const Entry& e = require(name, Type::Float);
@@ -140,25 +159,33 @@ double Properties::get_float(const std::string& name) const {
     return v;
 }
 double Properties::get_float(const std::string& name, double def) const {
-    return has(name) ? get_float(name) : def;
+    if (has(name)) return get_float(name);
+    note_default(name, default_text(def));
+    return def;
 }
 std::string Properties::get_string(const std::string& name) const {
     return std::get<std::string>(require(name, Type::String).value);
 }
 std::string Properties::get_string(const std::string& name, const std::string& def) const {
-    return has(name) ? get_string(name) : def;
+    if (has(name)) return get_string(name);
+    note_default(name, default_text(def));
+    return def;
 }
 Vec3 Properties::get_point(const std::string& name) const {
     return std::get<Vec3>(require(name, Type::Point).value);
 }
 Vec3 Properties::get_point(const std::string& name, const Vec3& def) const {
-    return has(name) ? get_point(name) : def;
+    if (has(name)) return get_point(name);
+    note_default(name, default_text(def));
+    return def;
 }
 Vec3 Properties::get_vector(const std::string& name) const {
     return std::get<Vec3>(require(name, Type::Vector).value);
 }
 Vec3 Properties::get_vector(const std::string& name, const Vec3& def) const {
-    return has(name) ? get_vector(name) : def;
+    if (has(name)) return get_vector(name);
+    note_default(name, default_text(def));
+    return def;
 }
 Color Properties::get_color(const std::string& name) const {
     const Entry& e = require(name, Type::Color);
@@ -170,13 +197,17 @@ Color Properties::get_color(const std::string& name) const {
     return Color(static_cast<float>(get_float(name)));
 }
 Color Properties::get_color(const std::string& name, const Color& def) const {
-    return has(name) ? get_color(name) : def;
+    if (has(name)) return get_color(name);
+    note_default(name, default_text(def));
+    return def;
 }
 Transform Properties::get_transform(const std::string& name) const {
     return std::get<Transform>(require(name, Type::Transform).value);
 }
 Transform Properties::get_transform(const std::string& name, const Transform& def) const {
-    return has(name) ? get_transform(name) : def;
+    if (has(name)) return get_transform(name);
+    note_default(name, default_text(def));
+    return def;
 }
 
 ObjectPtr Properties::get_object(const std::string& name, PluginKind kind) const {
@@ -202,6 +233,34 @@ std::vector<ObjectPtr> Properties::objects(PluginKind kind) const {
     return out;
 }
 
+ObjectPtr Properties::child(PluginKind kind) const {
+    const Entry* first = nullptr;
+    for (const auto& e : entries_)
+        if (e.type == Type::Object) {
+            const ObjectPtr& obj = std::get<ObjectPtr>(e.value);
+            if (!obj || obj->kind() != kind) continue;
+            e.read = true;
+            if (first) {
+                const std::string where =
+                    plugin_type_.empty() ? std::string() : "\"" + plugin_type_ + "\": ";
+                throw SceneError(e.location.file.empty() ? location_ : e.location,
+                                 where + "give at most one <" + kind_tag(kind) + ">");
+            }
+            first = &e;
+        }
+    return first ? std::get<ObjectPtr>(first->value) : nullptr;
+}
+
+ObjectPtr Properties::child(PluginKind kind, const std::string& default_type) const {
+    if (ObjectPtr obj = child(kind)) return obj;
+    note_default(kind_tag(kind), default_type);
+    return create_default_object(kind, default_type, location_);
+}
+
+void Properties::note_default(const std::string& name, std::string value) const {
+    defaults_used_.push_back(DefaultUse{name, std::move(value)});
+}
+
 std::vector<const Properties::Entry*> Properties::unread() const {
     std::vector<const Entry*> out;
     for (const auto& e : entries_)
@@ -211,7 +270,10 @@ std::vector<const Properties::Entry*> Properties::unread() const {
 
 std::shared_ptr<Texture> get_texture(const Properties& props, const std::string& name,
                                      const Color& def) {
-    if (!props.has(name)) return std::make_shared<ConstantTexture>(def);
+    if (!props.has(name)) {
+        props.note_default(name, default_text(def));
+        return std::make_shared<ConstantTexture>(def);
+    }
     if (props.type(name) == Properties::Type::Object) {
         auto obj = props.get_object(name, PluginKind::Texture);
         return std::static_pointer_cast<Texture>(obj);

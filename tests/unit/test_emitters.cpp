@@ -68,11 +68,11 @@ TEST(EmitterSchema, ParametersAreDocumented) {
         {"collimated", {"radius", "irradiance", "power", "to_world"}},
     };
     // Every emitter also takes the pulse parameters (design section 4) and the medium it sits
-    // in, listed last.
+    // in: the Emitter base class reads them, and they come first.
     const std::vector<std::string> pulse = {"pulse", "pulse_width", "pulse_sigma", "time_offset",
                                             "medium"};
     for (auto [type, names] : expected) {
-        names.insert(names.end(), pulse.begin(), pulse.end());
+        names.insert(names.begin(), pulse.begin(), pulse.end());
         const femto::PluginDescriptor& d = femto::find_plugin(PluginKind::Emitter, type);
         EXPECT_EQ(d.kind, PluginKind::Emitter);
         ASSERT_EQ(d.params.size(), names.size()) << type;

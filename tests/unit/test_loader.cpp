@@ -136,6 +136,23 @@ TEST(Loader, StrictParameters) {
     EXPECT_NE(msg.find("does not use the nested object"), std::string::npos) << msg;
 }
 
+TEST(Loader, AtMostOneChildOfAKind) {
+    // Properties::child(): located at the second child, naming the tag.
+    std::string msg = load_error(scene_xml(
+        "<shape type=\"rectangle\">\n<bsdf type=\"diffuse\"/>\n<bsdf type=\"null\"/></shape>"));
+    EXPECT_NE(msg.find("<string>:5:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("\"rectangle\": give at most one <bsdf>"), std::string::npos) << msg;
+    msg =
+        load_error(scene_xml("<sensor type=\"perspective\"><film type=\"hdrfilm\"/><film "
+                             "type=\"hdrfilm\"/></sensor>" +
+                             std::string(kRect)));
+    EXPECT_NE(msg.find("give at most one <film>"), std::string::npos) << msg;
+    msg =
+        load_error(scene_xml("<medium type=\"homogeneous\" id=\"m\"><phase type=\"hg\"/>"
+                             "<phase type=\"isotropic\"/></medium>"));
+    EXPECT_NE(msg.find("give at most one <phase>"), std::string::npos) << msg;
+}
+
 TEST(Loader, BadValues) {
     auto film = [](const std::string& w) {
         return scene_xml(

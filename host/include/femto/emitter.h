@@ -63,25 +63,16 @@ public:
     /// area emitters, their shape's media apply instead.
     const Medium* medium() const { return medium_.get(); }
 
+    /// The pulse parameters and the medium: what the constructor reads, for the schemas.
+    static std::vector<ParamSpec> inherited_params();
+
 protected:
-    /// Reads the pulse parameters; list FEMTO_PULSE_PARAMS in the plugin's schema.
+    /// Reads the pulse parameters and the medium (inherited_params()).
     explicit Emitter(const Properties& props);
 
     const Shape* shape_ = nullptr;
     PulseProfile pulse_;
     std::shared_ptr<class Medium> medium_;
 };
-
-/// The pulse and medium parameters (read by the Emitter base class), to append to every
-/// emitter's FEMTO_PLUGIN schema list.
-#define FEMTO_PULSE_PARAMS                                                                   \
-    {"pulse", "string", "delta", "emission profile in time: delta, box or gaussian"},        \
-        {"pulse_width", "float", "", "box pulse length (optical path length, scene units)"}, \
-        {"pulse_sigma", "float", "", "gaussian pulse deviation (optical path length)"},      \
-        {"time_offset", "float", "0",                                                        \
-         "emission start (delta/box) or mean (gaussian), same units"},                       \
-    {                                                                                        \
-        "medium", "medium", "", "medium the emitter sits in (nested <medium> or <ref>)"      \
-    }
 
 }  // namespace femto

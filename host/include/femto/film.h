@@ -126,6 +126,9 @@ public:
     virtual std::vector<std::string> write(const std::string& out_base,
                                            const RenderInfo& info) const = 0;
 
+    /// `width`, `height` and `rfilter`: what the constructor reads, for the plugin schemas.
+    static std::vector<ParamSpec> inherited_params();
+
 protected:
     /// Reads `width`, `height` and the <rfilter> child (default `gaussian`); validates sizes.
     explicit Film(const class Properties& props);

@@ -57,6 +57,9 @@ public:
     /// from `sampler`) otherwise.
     virtual Color transmittance(const Ray& ray, double distance, Sampler& sampler) const = 0;
 
+    /// `eta` and `phase`: what the constructor reads, for the plugin schemas.
+    static std::vector<ParamSpec> inherited_params();
+
 protected:
     /// Reads `eta` (default 1) and the nested <phase> (default isotropic).
     explicit Medium(const class Properties& props);

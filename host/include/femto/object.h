@@ -3,6 +3,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace femto {
 
@@ -31,9 +32,57 @@ const char* kind_tag(PluginKind kind);
 /// Inverse of kind_tag(); returns false for an unknown tag.
 bool kind_from_tag(const std::string& tag, PluginKind& kind);
 
+/// One documented parameter of a plugin schema. `type` is free text for the docs ("float",
+/// "color|texture", "transform", "bsdf" for a child object, ...). A name "*" in the schema
+/// accepts any entry (for plugins that forward parameters).
+struct ParamSpec {
+    const char* name;
+    const char* type;
+    const char* default_value;  ///< "" when required / none
+    const char* doc;
+    /// The base class whose constructor reads the parameter ("Film", "Shape", ...), or
+    /// nullptr for the plugin's own parameters. Set by inherit_params().
+    const char* inherited_from = nullptr;
+};
+
+/// `base` followed by `own`, each of `own` tagged as declared by `owner`: how a base class
+/// extends its base's inherited_params() with what its own constructor reads.
+inline std::vector<ParamSpec> inherit_params(std::vector<ParamSpec> base, const char* owner,
+                                             std::vector<ParamSpec> own) {
+    for (ParamSpec& p : own) {
+        p.inherited_from = owner;
+        base.push_back(p);
+    }
+    return base;
+}
+
+/// A plugin's schema: `inherited` (its base classes' parameters, in their order) with each
+/// entry of `own` that has the same name put in its place (so a plugin can change a default
+/// or a description), then the rest of `own` in order. FEMTO_PLUGIN calls this.
+inline std::vector<ParamSpec> merge_params(std::vector<ParamSpec> inherited,
+                                           const std::vector<ParamSpec>& own) {
+    std::vector<ParamSpec> rest;
+    for (const ParamSpec& p : own) {
+        bool replaced = false;
+        for (ParamSpec& q : inherited)
+            if (std::string(q.name) == p.name) {
+                q = p;
+                replaced = true;
+            }
+        if (!replaced) rest.push_back(p);
+    }
+    inherited.insert(inherited.end(), rest.begin(), rest.end());
+    return inherited;
+}
+
 class Object {
 public:
     virtual ~Object() = default;
+    /// The parameters this class's constructor reads, for the plugin schemas. Every base class
+    /// whose constructor reads Properties hides this with its base's list plus its own reads
+    /// (see inherit_params()), defined next to that constructor; FEMTO_PLUGIN puts
+    /// `CLASS::inherited_params()` before the plugin's own list.
+    static std::vector<ParamSpec> inherited_params() { return {}; }
     virtual PluginKind kind() const = 0;
     /// The id given in the scene (`id="..."`), or empty.
     const std::string& id() const { return id_; }

@@ -3,6 +3,10 @@
 // A plugin library exports exactly one C symbol, `femto_plugin_descriptor`, returning a
 // PluginDescriptor. Use FEMTO_PLUGIN below rather than writing it by hand:
 //
+// The schema lists the plugin's own parameters only: those its base classes read (a film's
+// width and height, a shape's bsdf, ...) come from CLASS::inherited_params() and are put first.
+// An own entry with an inherited name replaces it (to change its default or description).
+//
 //     class AmbientOcclusion : public femto::Integrator { ... };
 //     FEMTO_PLUGIN(AmbientOcclusion, femto::PluginKind::Integrator, "ao",
 //                  "Ambient occlusion (fraction of unoccluded hemisphere)",
@@ -19,23 +23,16 @@
 namespace femto {
 
 /// Bumped whenever a public header changes in a way that breaks compiled plugins.
-inline constexpr uint32_t kPluginAbiVersion = 5;
-
-/// One documented parameter. `type` is free text for the docs ("float", "color|texture",
-/// "transform", "bsdf" for a child object, ...). A name "*" in the schema accepts any entry
-/// (for plugins that forward parameters).
-struct ParamSpec {
-    const char* name;
-    const char* type;
-    const char* default_value;  ///< "" when required / none
-    const char* doc;
-};
+/// (6: schemas carry the base classes' parameters, ParamSpec::inherited_from.)
+inline constexpr uint32_t kPluginAbiVersion = 6;
 
 struct PluginDescriptor {
     uint32_t abi_version;
     PluginKind kind;
     const char* type_name;
     const char* description;
+    /// The base classes' parameters (CLASS::inherited_params()) merged with the plugin's own
+    /// list by merge_params().
     std::vector<ParamSpec> params;
     /// Builds the object; throws SceneError on bad parameters.
     Object* (*create)(const Properties& props);
@@ -60,8 +57,8 @@ typedef const femto::PluginDescriptor* (*femto_plugin_descriptor_fn)();
             KIND,                                                                               \
             TYPE_NAME,                                                                          \
             DESCRIPTION,                                                                        \
-            std::vector<femto::ParamSpec>                                                       \
-                __VA_ARGS__,                                                                    \
+            femto::merge_params(CLASS::inherited_params(),                                      \
+                                std::vector<femto::ParamSpec> __VA_ARGS__),                     \
             [](const femto::Properties& props) -> femto::Object* { return new CLASS(props); }}; \
         return &descriptor;                                                                     \
     }

@@ -87,6 +87,28 @@ public:
     ObjectPtr get_object(const std::string& name, PluginKind kind) const;
     /// All child objects of a kind, named or not, in document order; marks them read.
     std::vector<ObjectPtr> objects(PluginKind kind) const;
+    /// The one child object of `kind` (named or not), or nullptr when there is none; a
+    /// SceneError "give at most one <tag>", located at the second, when there are several.
+    ObjectPtr child(PluginKind kind) const;
+    /// As child(kind), but builds plugin `default_type` with default parameters when no child
+    /// is given (recorded as the default of the entry named after the kind's tag).
+    ObjectPtr child(PluginKind kind, const std::string& default_type) const;
+
+    // -- defaults used ---------------------------------------------------------------------
+    /// A default a getter returned for an absent entry: the entry name and the default as
+    /// text ("0.5", "1e+30", "true", "(0, 0, 1)" for a non-grey colour or a point,
+    /// "identity", a plugin type for a default child).
+    struct DefaultUse {
+        std::string name;
+        std::string value;
+    };
+    /// Every default used so far, in call order. It exists so that a plugin's schema (the
+    /// defaults it documents) can be checked against what its constructor really does
+    /// (tests/unit/test_plugin_schemas.cpp).
+    const std::vector<DefaultUse>& defaults_used() const { return defaults_used_; }
+    /// Records a default used for absent entry `name`; for helpers that read an entry their
+    /// own way (get_texture(), read_ior(), ...). The getters above record theirs themselves.
+    void note_default(const std::string& name, std::string value) const;
 
     /// Throws a SceneError located at entry `name` (or at the object when it is absent).
     [[noreturn]] void fail(const std::string& name, const std::string& message) const;
@@ -105,6 +127,7 @@ private:
     SourceLocation location_;
     std::string id_;
     std::vector<Entry> entries_;
+    mutable std::vector<DefaultUse> defaults_used_;
 };
 
 }  // namespace femto

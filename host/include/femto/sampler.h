@@ -26,6 +26,9 @@ public:
     uint32_t sample_count() const { return sample_count_; }
     void set_sample_count(uint32_t n) { sample_count_ = n; }
 
+    /// `sample_count` and `seed`: what the constructor reads, for the plugin schemas.
+    static std::vector<ParamSpec> inherited_params();
+
 protected:
     Sampler() = default;
     /// Reads the parameters every sampler takes: `sample_count` (a positive integer below

@@ -28,8 +28,11 @@ public:
     /// The medium the sensor sits in (a nested <medium> or <ref>), or nullptr (vacuum).
     const Medium* medium() const { return medium_.get(); }
 
+    /// The parameters the constructor reads, for the plugin schemas.
+    static std::vector<ParamSpec> inherited_params();
+
 protected:
-    /// Reads `to_world` and the film and sampler children.
+    /// Reads `to_world`, the film and sampler children and the medium.
     explicit Sensor(const Properties& props);
 
     Transform to_world_;

@@ -88,15 +88,21 @@ public:
     /// Uniform point on the surface (area measure, pdf = 1/area).
     ShapeSample sample_area(Vec2 u) const;
 
+    /// The parameters the constructor reads, for the plugin schemas.
+    static std::vector<ParamSpec> inherited_params();
+
 protected:
-    /// Reads the parameters common to all shapes (`flip_normals`, the bsdf and emitter
-    /// children, the `interior` / `exterior` media). A shape without a bsdf gets a diffuse
-    /// one, as in Mitsuba.
+    /// Reads the parameters common to all shapes (`to_world`, `flip_normals`, the bsdf and
+    /// emitter children, the `interior` / `exterior` media). A shape without a bsdf gets a
+    /// diffuse one, as in Mitsuba.
     explicit Shape(const Properties& props);
     /// Sets the geometry; call exactly once from the plugin's constructor. Throws a located
     /// SceneError for empty or non-finite geometry.
     void set_mesh(TriangleMesh mesh);
     void set_sphere(const Vec3& center, float radius);
+
+    /// The shape's `to_world` (identity by default; never degenerate).
+    Transform to_world_;
 
 private:
     void finish_setup();
@@ -128,11 +134,5 @@ void mesh_to_world(TriangleMesh& mesh, const std::vector<uint32_t>& position_ids
 
 /// Reads a `to_world` transform, rejecting degenerate (singular) ones with a located error.
 Transform read_to_world(const Properties& props);
-
-/// The medium parameters every shape takes, to append to a shape plugin's FEMTO_PLUGIN schema.
-#define FEMTO_SHAPE_MEDIUM_PARAMS                                                                \
-    {"interior", "medium", "", "medium inside the shape (nested or <ref name=\"interior\">)"}, { \
-        "exterior", "medium", "", "medium outside the shape"                                     \
-    }
 
 }  // namespace femto

@@ -60,9 +60,6 @@ public:
     virtual void end_pilot() {}
 };
 
-/// The nested <tfilter> of a film's properties, or a histogram when there is none.
-std::shared_ptr<TemporalFilter> read_temporal_filter(const Properties& props);
-
 /// Reconstructs one camera sample's contributions in time for one film pixel: calls
 /// add(bin, value) for every (contribution, bin) pair, value = radiance x bin weight.
 /// Returns the energy the filter moved across the window's edges (kernel mass of in-window
@@ -205,6 +202,10 @@ public:
     bool world_time() const { return grid_.frame == TimeFrame::World; }
     /// Camera samples rejected so far for a NaN or infinite radiance (TimeResolvedBlock).
     uint64_t rejected_samples() const { return rejected_; }
+
+    /// Film's parameters, the time window (time_grid_params()), `world_time`, `exposure` and
+    /// the <tfilter> child (default `histogram`): what the constructor reads.
+    static std::vector<ParamSpec> inherited_params();
 
 protected:
     explicit TimeResolvedFilm(const Properties& props);

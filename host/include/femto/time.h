@@ -77,14 +77,7 @@ inline double recorded_time(double path_length, double sensor_distance, bool wor
 /// films read `world_time` themselves). Throws located SceneErrors.
 TimeGrid read_time_grid(const Properties& props);
 
-/// The time-window parameters, to append to a transient film's FEMTO_PLUGIN schema list.
-#define FEMTO_TIME_GRID_PARAMS                                                                 \
-    {"start", "float", "0", "start of the time window (optical path length, scene units)"},    \
-        {"bin_width", "float", "", "width of a time bin (scene units); or give bin_width_ps"}, \
-        {"bins", "integer", "", "number of time bins"},                                        \
-        {"start_ps", "float", "", "start of the window in picoseconds (needs length_unit)"},   \
-        {"bin_width_ps", "float", "", "bin width in picoseconds (needs length_unit)"}, {       \
-        "length_unit", "string", "", "what one scene unit is: m, cm, mm, um, nm or km"         \
-    }
+/// The parameters read_time_grid() reads, for the schema of the film that calls it.
+std::vector<ParamSpec> time_grid_params();
 
 }  // namespace femto

@@ -1,5 +1,5 @@
-// Shared parts of temporal reconstruction: reading a film's <tfilter>, the pilot pass, and the
-// base of the time-resolved films.
+// Shared parts of temporal reconstruction: the pilot pass and the base of the time-resolved
+// films (which reads the <tfilter>).
 #include "femto/tfilter.h"
 
 #include <fmt/format.h>
@@ -13,15 +13,6 @@
 #include "femto/properties.h"
 
 namespace femto {
-
-std::shared_ptr<TemporalFilter> read_temporal_filter(const Properties& props) {
-    auto filters = props.objects(PluginKind::TemporalFilter);
-    if (filters.size() > 1) props.fail("tfilter", "a film takes at most one <tfilter>");
-    return std::static_pointer_cast<TemporalFilter>(
-        filters.empty()
-            ? create_default_object(PluginKind::TemporalFilter, "histogram", props.location())
-            : filters[0]);
-}
 
 PilotBlock::PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time)
     : x0_(x0),
@@ -54,11 +45,22 @@ void PilotBlock::deliver(TemporalFilter& filter) const {
         }
 }
 
+std::vector<ParamSpec> TimeResolvedFilm::inherited_params() {
+    return inherit_params(
+        inherit_params(Film::inherited_params(), "TimeResolvedFilm", time_grid_params()),
+        "TimeResolvedFilm",
+        {{"world_time", "boolean", "false",
+          "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
+         {"exposure", "float", "0", "exposure of the PNG preview(s), in stops"},
+         {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}});
+}
+
 TimeResolvedFilm::TimeResolvedFilm(const Properties& props)
     : Film(props), grid_(read_time_grid(props)) {
     if (props.get_bool("world_time", false)) grid_.frame = TimeFrame::World;
     exposure_ = float(props.get_float("exposure", 0.0));
-    tfilter_ = read_temporal_filter(props);
+    tfilter_ = std::static_pointer_cast<TemporalFilter>(
+        props.child(PluginKind::TemporalFilter, "histogram"));
     tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
 }
 

@@ -60,10 +60,18 @@ double PulseProfile::earliest() const {
 
 double PulseProfile::mean() const { return shape == Shape::Box ? offset + 0.5 * width : offset; }
 
+std::vector<ParamSpec> Emitter::inherited_params() {
+    return inherit_params(
+        Object::inherited_params(), "Emitter",
+        {{"pulse", "string", "delta", "emission profile in time: delta, box or gaussian"},
+         {"pulse_width", "float", "", "box pulse length (optical path length, scene units)"},
+         {"pulse_sigma", "float", "", "gaussian pulse deviation (optical path length)"},
+         {"time_offset", "float", "0", "emission start (delta/box) or mean (gaussian), same units"},
+         {"medium", "medium", "", "medium the emitter sits in (nested <medium> or <ref>)"}});
+}
+
 Emitter::Emitter(const Properties& props) {
-    auto media = props.objects(PluginKind::Medium);
-    if (media.size() > 1) props.fail("medium", "an emitter sits in at most one <medium>");
-    if (!media.empty()) medium_ = std::static_pointer_cast<Medium>(media[0]);
+    medium_ = std::static_pointer_cast<Medium>(props.child(PluginKind::Medium));
     const std::string shape = props.get_string("pulse", "delta");
     pulse_.offset = props.get_float("time_offset", 0.0);
     if (shape == "delta") {

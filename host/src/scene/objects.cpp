@@ -6,7 +6,6 @@
 #include "femto/sampler.h"
 #include "femto/sensor.h"
 #include "femto/shape.h"
-#include "scene/loader.h"
 
 namespace femto {
 
@@ -22,22 +21,26 @@ Transform read_to_world(const Properties& props) {
     return t;
 }
 
+std::vector<ParamSpec> Sensor::inherited_params() {
+    return inherit_params(
+        Object::inherited_params(), "Sensor",
+        {{"to_world", "transform", "identity", "camera-to-world transform"},
+         {"film", "film", "hdrfilm", "the film (nested)"},
+         {"sampler", "sampler", "independent", "the sampler (nested)"},
+         {"medium", "medium", "", "medium the sensor sits in (nested <medium> or <ref>)"}});
+}
+
 Sensor::Sensor(const Properties& props) {
     to_world_ = read_to_world(props);
-    auto films = props.objects(PluginKind::Film);
-    auto samplers = props.objects(PluginKind::Sampler);
-    if (films.size() > 1) props.fail("film", "a sensor takes at most one <film>");
-    if (samplers.size() > 1) props.fail("sampler", "a sensor takes at most one <sampler>");
-    film_ = std::static_pointer_cast<Film>(
-        films.empty() ? detail::create_default(PluginKind::Film, "hdrfilm", props.location())
-                      : films[0]);
-    sampler_ = std::static_pointer_cast<Sampler>(
-        samplers.empty()
-            ? detail::create_default(PluginKind::Sampler, "independent", props.location())
-            : samplers[0]);
-    auto media = props.objects(PluginKind::Medium);
-    if (media.size() > 1) props.fail("medium", "a sensor sits in at most one <medium>");
-    if (!media.empty()) medium_ = std::static_pointer_cast<Medium>(media[0]);
+    film_ = std::static_pointer_cast<Film>(props.child(PluginKind::Film, "hdrfilm"));
+    sampler_ = std::static_pointer_cast<Sampler>(props.child(PluginKind::Sampler, "independent"));
+    medium_ = std::static_pointer_cast<Medium>(props.child(PluginKind::Medium));
+}
+
+std::vector<ParamSpec> Sampler::inherited_params() {
+    return inherit_params(Object::inherited_params(), "Sampler",
+                          {{"sample_count", "integer", "4", "samples per pixel (> 0)"},
+                           {"seed", "integer", "0", "seed offset, combined with the render seed"}});
 }
 
 Sampler::Sampler(const Properties& props) {
@@ -47,6 +50,13 @@ Sampler::Sampler(const Properties& props) {
                                        std::to_string(count));
     sample_count_ = uint32_t(count);
     seed_ = uint64_t(props.get_int("seed", 0));
+}
+
+std::vector<ParamSpec> Film::inherited_params() {
+    return inherit_params(Object::inherited_params(), "Film",
+                          {{"width", "integer", "768", "image width in pixels"},
+                           {"height", "integer", "576", "image height in pixels"},
+                           {"rfilter", "rfilter", "gaussian", "reconstruction filter (nested)"}});
 }
 
 Film::Film(const Properties& props) {
@@ -60,12 +70,8 @@ Film::Film(const Properties& props) {
                    fmt::format("{}x{} pixels is more than femto's limit of 2^26 pixels", w, h));
     width_ = int(w);
     height_ = int(h);
-    auto filters = props.objects(PluginKind::ReconstructionFilter);
-    if (filters.size() > 1) props.fail("rfilter", "a film takes at most one <rfilter>");
     rfilter_ = std::static_pointer_cast<ReconstructionFilter>(
-        filters.empty()
-            ? detail::create_default(PluginKind::ReconstructionFilter, "gaussian", props.location())
-            : filters[0]);
+        props.child(PluginKind::ReconstructionFilter, "gaussian"));
 }
 
 double Film::max_path_length() const { return std::numeric_limits<double>::infinity(); }

@@ -8,7 +8,6 @@
 #include "femto/emitter.h"
 #include "femto/medium.h"
 #include "femto/warp.h"
-#include "scene/loader.h"
 
 namespace femto {
 
@@ -20,13 +19,21 @@ Ray Hit::spawn_to(const Vec3& target) const {
     return Ray{o, d / dist, 0.f, dist * (1.f - 1e-4f)};
 }
 
+std::vector<ParamSpec> Shape::inherited_params() {
+    return inherit_params(
+        Object::inherited_params(), "Shape",
+        {{"to_world", "transform", "identity", "object-to-world transform"},
+         {"flip_normals", "boolean", "false", "make the inside the outside"},
+         {"bsdf", "bsdf", "diffuse", "material of the surface"},
+         {"emitter", "emitter", "", "area emitter attached to the surface"},
+         {"interior", "medium", "", "medium inside the shape (nested or <ref name=\"interior\">)"},
+         {"exterior", "medium", "", "medium outside the shape"}});
+}
+
 Shape::Shape(const Properties& props) : location_(props.location()) {
+    to_world_ = read_to_world(props);
     flip_normals_ = props.get_bool("flip_normals", false);
-    auto bsdfs = props.objects(PluginKind::Bsdf);
-    if (bsdfs.size() > 1) props.fail("bsdf", "a shape takes at most one <bsdf>");
-    bsdf_ = bsdfs.empty() ? std::static_pointer_cast<Bsdf>(detail::create_default(
-                                PluginKind::Bsdf, "diffuse", props.location()))
-                          : std::static_pointer_cast<Bsdf>(bsdfs[0]);
+    bsdf_ = std::static_pointer_cast<Bsdf>(props.child(PluginKind::Bsdf, "diffuse"));
     interior_ = std::static_pointer_cast<Medium>(props.get_object("interior", PluginKind::Medium));
     exterior_ = std::static_pointer_cast<Medium>(props.get_object("exterior", PluginKind::Medium));
     for (const ObjectPtr& m : props.objects(PluginKind::Medium))
@@ -34,10 +41,8 @@ Shape::Shape(const Properties& props) : location_(props.location()) {
             throw SceneError(props.location(),
                              "a <medium> inside a shape must be named \"interior\" or "
                              "\"exterior\" (e.g. <ref name=\"interior\" id=\"fog\"/>)");
-    auto emitters = props.objects(PluginKind::Emitter);
-    if (emitters.size() > 1) props.fail("emitter", "a shape takes at most one <emitter>");
-    if (!emitters.empty()) {
-        emitter_ = std::static_pointer_cast<Emitter>(emitters[0]);
+    emitter_ = std::static_pointer_cast<Emitter>(props.child(PluginKind::Emitter));
+    if (emitter_) {
         if (emitter_->is_delta())
             throw SceneError(props.location(),
                              "only area emitters can be attached to a shape; put "

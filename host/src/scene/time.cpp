@@ -50,6 +50,15 @@ double TimeGrid::from_picoseconds(double ps) const {
     return ps * 1e-12 * kSpeedOfLight / m;
 }
 
+std::vector<ParamSpec> time_grid_params() {
+    return {{"start", "float", "0", "start of the time window (optical path length, scene units)"},
+            {"bin_width", "float", "", "width of a time bin (scene units); or give bin_width_ps"},
+            {"bins", "integer", "", "number of time bins"},
+            {"start_ps", "float", "", "start of the window in picoseconds (needs length_unit)"},
+            {"bin_width_ps", "float", "", "bin width in picoseconds (needs length_unit)"},
+            {"length_unit", "string", "", "what one scene unit is: m, cm, mm, um, nm or km"}};
+}
+
 TimeGrid read_time_grid(const Properties& props) {
     TimeGrid g;
     g.length_unit = props.get_string("length_unit", "");

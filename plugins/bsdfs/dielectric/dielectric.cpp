@@ -32,8 +32,8 @@ public:
     explicit Dielectric(const Properties& props)
         : specular_reflectance_(get_texture(props, "specular_reflectance", Color(1.f))),
           specular_transmittance_(get_texture(props, "specular_transmittance", Color(1.f))) {
-        const float int_ior = read_ior(props, "int_ior", 1.5046f);    // bk7
-        const float ext_ior = read_ior(props, "ext_ior", 1.000277f);  // air
+        const float int_ior = read_ior(props, "int_ior", "bk7");
+        const float ext_ior = read_ior(props, "ext_ior", "air");
         eta_ = int_ior / ext_ior;
     }
 

@@ -81,8 +81,8 @@ public:
         : diffuse_reflectance_(get_texture(props, "diffuse_reflectance", Color(0.5f))),
           specular_reflectance_(get_texture(props, "specular_reflectance", Color(1.f))),
           nonlinear_(props.get_bool("nonlinear", false)) {
-        const float int_ior = read_ior(props, "int_ior", 1.49f);      // polypropylene
-        const float ext_ior = read_ior(props, "ext_ior", 1.000277f);  // air
+        const float int_ior = read_ior(props, "int_ior", "polypropylene");
+        const float ext_ior = read_ior(props, "ext_ior", "air");
         eta_ = int_ior / ext_ior;
         inv_eta2_ = 1.f / (eta_ * eta_);
         fdr_int_ = static_cast<float>(fresnel_diffuse_reflectance(1.0 / eta_));

@@ -264,7 +264,7 @@ Microfacet read_microfacet(const Properties& props) {
     else
         props.fail("distribution",
                    "unknown microfacet distribution \"" + dist + "\"; valid: beckmann, ggx");
-    double au = 0.1, av = 0.1;
+    double au, av;
     const bool has_u = props.has("alpha_u"), has_v = props.has("alpha_v");
     if (props.has("alpha")) {
         if (has_u || has_v)
@@ -280,6 +280,8 @@ Microfacet read_microfacet(const Properties& props) {
         av = props.get_float("alpha_v");
         if (!(au > 0.0)) props.fail("alpha_u", "\"alpha_u\" must be positive");
         if (!(av > 0.0)) props.fail("alpha_v", "\"alpha_v\" must be positive");
+    } else {
+        au = av = props.get_float("alpha", 0.1);
     }
     const bool visible = props.get_bool("sample_visible", true);
     return Microfacet(type, static_cast<float>(std::max(au, 1e-4)),
@@ -348,8 +350,10 @@ FEMTO_PLUGIN(RoughConductor, femto::PluginKind::Bsdf, "roughconductor",
              "Rough conductor: Beckmann/GGX microfacet model with complex Fresnel reflectance",
              {{"distribution", "string", "beckmann", "microfacet distribution: beckmann or ggx"},
               {"alpha", "float", "0.1", "isotropic roughness (RMS slope for beckmann)"},
-              {"alpha_u", "float", "0.1", "anisotropic roughness along the tangent"},
-              {"alpha_v", "float", "0.1", "anisotropic roughness along the bitangent"},
+              {"alpha_u", "float", "",
+               "anisotropic roughness along the tangent (with alpha_v, instead of alpha)"},
+              {"alpha_v", "float", "",
+               "anisotropic roughness along the bitangent (with alpha_u, instead of alpha)"},
               {"sample_visible", "boolean", "true",
                "sample the visible normals (else the full distribution)"},
               {"material", "string", "none",

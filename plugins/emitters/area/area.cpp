@@ -60,5 +60,4 @@ private:
 
 FEMTO_PLUGIN(femto::AreaEmitter, femto::PluginKind::Emitter, "area",
              "Diffuse area light: uniform radiance from the front side of its shape",
-             {{"radiance", "color", "1", "emitted radiance (W / (m^2 sr) per channel)"},
-              FEMTO_PULSE_PARAMS})
+             {{"radiance", "color", "1", "emitted radiance (W / (m^2 sr) per channel)"}})

@@ -90,5 +90,4 @@ FEMTO_PLUGIN(femto::CollimatedEmitter, femto::PluginKind::Emitter, "collimated",
                "irradiance inside the beam on a surface perpendicular to it (W/m^2)"},
               {"power", "color", "", "beam power (W); irradiance = power / (pi radius^2)"},
               {"to_world", "transform", "identity",
-               "beam frame: starts at to_world(0, 0, 0), points along local +z"},
-              FEMTO_PULSE_PARAMS})
+               "beam frame: starts at to_world(0, 0, 0), points along local +z"}})

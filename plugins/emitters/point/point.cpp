@@ -53,6 +53,5 @@ private:
 FEMTO_PLUGIN(femto::PointEmitter, femto::PluginKind::Emitter, "point", "Isotropic point light",
              {{"intensity", "color", "1", "radiant intensity (W/sr per channel)"},
               {"position", "point", "(0, 0, 0)", "location (alternative to to_world)"},
-              {"to_world", "transform", "identity",
-               "places the light at to_world(0, 0, 0) (alternative to position)"},
-              FEMTO_PULSE_PARAMS})
+              {"to_world", "transform", "",
+               "places the light at to_world(0, 0, 0) (alternative to position)"}})

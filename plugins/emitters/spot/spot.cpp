@@ -27,7 +27,9 @@ public:
         if (!(cutoff_deg > 0 && cutoff_deg <= 180))
             props.fail("cutoff_angle", "cutoff_angle must be in (0, 180] degrees, but " +
                                            std::to_string(cutoff_deg) + " was given");
-        double beam_deg = props.get_float("beam_width", cutoff_deg * 0.75);
+        // The default is a formula, "3/4 cutoff_angle" in the schema.
+        double beam_deg =
+            props.has("beam_width") ? props.get_float("beam_width") : cutoff_deg * 0.75;
         if (!(beam_deg >= 0))
             props.fail("beam_width", "beam_width must be in [0, cutoff_angle] degrees, but " +
                                          std::to_string(beam_deg) + " was given");
@@ -99,5 +101,4 @@ FEMTO_PLUGIN(femto::SpotEmitter, femto::PluginKind::Emitter, "spot",
               {"beam_width", "float", "3/4 cutoff_angle",
                "angle (degrees) within which the full intensity is emitted"},
               {"to_world", "transform", "identity",
-               "light frame: at to_world(0, 0, 0), shining along local +z"},
-              FEMTO_PULSE_PARAMS})
+               "light frame: at to_world(0, 0, 0), shining along local +z"}})

@@ -138,10 +138,7 @@ private:
 
 FEMTO_PLUGIN(HdrFilm, femto::PluginKind::Film, "hdrfilm",
              "Steady-state RGB film: name.exr (float) plus a name.png preview",
-             {{"width", "integer", "768", "image width in pixels"},
-              {"height", "integer", "576", "image height in pixels"},
-              {"rfilter", "rfilter", "gaussian", "reconstruction filter (nested)"},
-              {"exposure", "float", "0", "exposure of the PNG preview, in stops"},
+             {{"exposure", "float", "0", "exposure of the PNG preview, in stops"},
               {"pixel_format", "string", "rgb", "accepted for Mitsuba compatibility; only rgb"},
               {"file_format", "string", "openexr",
                "accepted for Mitsuba compatibility; EXR and PNG are always written"},

@@ -230,13 +230,5 @@ StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h)
 
 FEMTO_PLUGIN(StreakFilm, femto::PluginKind::Film, "streak",
              "Streak camera (ch. 4.3): x-t images of chosen rows, one EXR + PNG per row",
-             {{"width", "integer", "768", "image width in pixels"},
-              {"height", "integer", "576", "image height in pixels"},
-              {"rows", "string", "", "rows to record, comma-separated (e.g. \"64, 100\")"},
-              {"row", "integer", "", "the row to record (instead of rows)"},
-              FEMTO_TIME_GRID_PARAMS,
-              {"world_time", "boolean", "false",
-               "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
-              {"exposure", "float", "0", "exposure of the PNG previews, in stops"},
-              {"rfilter", "rfilter", "gaussian", "spatial reconstruction filter (nested)"},
-              {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}})
+             {{"rows", "string", "", "rows to record, comma-separated (e.g. \"64, 100\")"},
+              {"row", "integer", "", "the row to record (instead of rows)"}})

@@ -326,15 +326,7 @@ CubeBlock::~CubeBlock() {
 FEMTO_PLUGIN(
     TransientFilm, femto::PluginKind::Film, "transient",
     "Time-resolved film: an x-y-t cube of radiance, one EXR part per time bin",
-    {{"width", "integer", "768", "image width in pixels"},
-     {"height", "integer", "576", "image height in pixels"},
-     FEMTO_TIME_GRID_PARAMS,
-     {"world_time", "boolean", "false",
-      "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
-     {"aovs", "string", "",
+    {{"aovs", "string", "",
       "comma-separated: \"count\" writes OUTBASE_count.npy (contributions per pixel and bin), "
       "\"variance\" OUTBASE_variance.npy (variance of each pixel-bin estimate, by the "
-      "formula for independent samples: it overstates the error of ldsampler renders)"},
-     {"exposure", "float", "0", "exposure of the PNG preview, in stops"},
-     {"rfilter", "rfilter", "gaussian", "spatial reconstruction filter (nested)"},
-     {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}})
+      "formula for independent samples: it overstates the error of ldsampler renders)"}})

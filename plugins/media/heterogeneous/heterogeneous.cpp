@@ -358,6 +358,4 @@ FEMTO_PLUGIN(HeterogeneousMedium, femto::PluginKind::Medium, "heterogeneous",
               {"albedo", "color", "0.75", "single-scattering albedo sigma_s / sigma_t, in [0, 1]"},
               {"scale", "float", "1", "factor applied to the densities: sigma_t = scale * density"},
               {"to_world", "transform", "identity",
-               "places the grid's bounding box (file coordinates) in the scene"},
-              {"eta", "float", "1", "index of refraction: light travels at c / eta inside"},
-              {"phase", "phase", "isotropic", "phase function"}})
+               "places the grid's bounding box (file coordinates) in the scene"}})

@@ -75,6 +75,4 @@ FEMTO_PLUGIN(Homogeneous, femto::PluginKind::Medium, "homogeneous",
               {"sigma_t", "color", "1",
                "extinction coefficient, with albedo (instead of the above)"},
               {"albedo", "color", "0.75", "single-scattering albedo sigma_s / sigma_t"},
-              {"scale", "float", "1", "multiplies the coefficients (0.x: densityMultiplier)"},
-              {"eta", "float", "1", "index of refraction: light travels at c / eta inside"},
-              {"phase", "phase", "isotropic", "phase function (nested <phase>)"}})
+              {"scale", "float", "1", "multiplies the coefficients (0.x: densityMultiplier)"}})

@@ -44,6 +44,4 @@ private:
 }  // namespace
 
 FEMTO_PLUGIN(IndependentSampler, femto::PluginKind::Sampler, "independent",
-             "Independent uniform random numbers (PCG32 seeded per pixel and sample)",
-             {{"sample_count", "integer", "4", "samples per pixel (> 0)"},
-              {"seed", "integer", "0", "seed offset, combined with the render seed"}})
+             "Independent uniform random numbers (PCG32 seeded per pixel and sample)", {})

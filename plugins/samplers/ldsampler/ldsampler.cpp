@@ -158,5 +158,4 @@ FEMTO_PLUGIN(LowDiscrepancySampler, femto::PluginKind::Sampler, "ldsampler",
              "Padded, shuffled and Owen-scrambled (0,2)-sequence (Sobol dimensions 0 and 1 per "
              "pair); Mitsuba's `sobol` maps here",
              {{"sample_count", "integer", "4",
-               "samples per pixel (> 0; a power of two gives complete (0,2)-nets)"},
-              {"seed", "integer", "0", "seed offset, combined with the render seed"}})
+               "samples per pixel (> 0; a power of two gives complete (0,2)-nets)"}})

@@ -36,9 +36,5 @@ private:
 
 FEMTO_PLUGIN(Orthographic, femto::PluginKind::Sensor, "orthographic",
              "Orthographic camera; to_world's scale sets the visible extent",
-             {{"to_world", "transform", "identity", "camera-to-world transform"},
-              {"near_clip", "float", "0.01", "near clipping distance"},
-              {"far_clip", "float", "10000", "far clipping distance"},
-              {"film", "film", "hdrfilm", "the film (nested)"},
-              {"sampler", "sampler", "independent", "the sampler (nested)"},
-              {"medium", "medium", "", "medium the sensor sits in (nested <medium> or <ref>)"}})
+             {{"near_clip", "float", "0.01", "near clipping distance"},
+              {"far_clip", "float", "10000", "far clipping distance"}})

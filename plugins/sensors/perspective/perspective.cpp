@@ -76,13 +76,9 @@ private:
 
 FEMTO_PLUGIN(Perspective, femto::PluginKind::Sensor, "perspective",
              "Pinhole perspective camera (Mitsuba conventions)",
-             {{"to_world", "transform", "identity", "camera-to-world transform (use <lookat>)"},
-              {"fov", "float", "", "field of view in degrees, along fov_axis"},
+             {{"fov", "float", "", "field of view in degrees, along fov_axis"},
               {"fov_axis", "string", "x", "x, y, diagonal, smaller or larger"},
               {"focal_length", "string", "50mm",
                "35 mm-equivalent focal length, when fov is absent"},
               {"near_clip", "float", "0.01", "near clipping distance"},
-              {"far_clip", "float", "10000", "far clipping distance"},
-              {"film", "film", "hdrfilm", "the film (nested)"},
-              {"sampler", "sampler", "independent", "the sampler (nested)"},
-              {"medium", "medium", "", "medium the sensor sits in (nested <medium> or <ref>)"}})
+              {"far_clip", "float", "10000", "far clipping distance"}})

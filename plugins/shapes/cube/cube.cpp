@@ -31,7 +31,7 @@ constexpr uint32_t kTriangles[12][3] = {{0, 1, 2},    {3, 0, 2},    {4, 5, 6},  
 class CubeShape final : public Shape {
 public:
     explicit CubeShape(const Properties& props) : Shape(props) {
-        const Transform to_world = read_to_world(props);
+        const Transform& to_world = to_world_;
 
         TriangleMesh mesh;
         for (int i = 0; i < 24; ++i) {
@@ -58,9 +58,4 @@ public:
 }  // namespace femto
 
 FEMTO_PLUGIN(femto::CubeShape, femto::PluginKind::Shape, "cube",
-             "Cube [-1,1]^3 (Mitsuba convention): 12 triangles, flat faces, outward normals",
-             {{"to_world", "transform", "identity", "object-to-world transform"},
-              {"flip_normals", "boolean", "false", "make the inside the outside"},
-              {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"},
-              FEMTO_SHAPE_MEDIUM_PARAMS})
+             "Cube [-1,1]^3 (Mitsuba convention): 12 triangles, flat faces, outward normals", {})

@@ -31,7 +31,7 @@ constexpr uint32_t kSegments = 256;
 class DiskShape final : public Shape {
 public:
     explicit DiskShape(const Properties& props) : Shape(props) {
-        const Transform to_world = read_to_world(props);
+        const Transform& to_world = to_world_;
 
         constexpr double kTwoPi = 2.0 * M_PI;
         constexpr double n_seg = kSegments;
@@ -74,8 +74,4 @@ public:
 FEMTO_PLUGIN(femto::DiskShape, femto::PluginKind::Shape, "disk",
              "Unit disk at z=0 with normal +z (Mitsuba convention), an area-preserving "
              "256-triangle fan",
-             {{"to_world", "transform", "identity", "object-to-world transform"},
-              {"flip_normals", "boolean", "false", "make the back side (-z) the outside"},
-              {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"},
-              FEMTO_SHAPE_MEDIUM_PARAMS})
+             {})

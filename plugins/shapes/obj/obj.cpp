@@ -45,7 +45,7 @@ public:
         const std::string filename = props.get_string("filename");
         const bool face_normals = props.get_bool("face_normals", false);
         const bool flip_tex_coords = props.get_bool("flip_tex_coords", true);
-        const Transform to_world = read_to_world(props);
+        const Transform& to_world = to_world_;
         const std::string quoted = "\"" + filename + "\"";
 
         std::error_code ec;
@@ -184,9 +184,4 @@ FEMTO_PLUGIN(femto::ObjShape, femto::PluginKind::Shape, "obj",
              {{"filename", "string", "", "path of the .obj file (relative to the scene file)"},
               {"face_normals", "boolean", "false",
                "ignore vertex normals and shade with the flat face normals"},
-              {"flip_tex_coords", "boolean", "true", "use v -> 1 - v (Mitsuba's default)"},
-              {"to_world", "transform", "identity", "object-to-world transform"},
-              {"flip_normals", "boolean", "false", "make the inside the outside"},
-              {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"},
-              FEMTO_SHAPE_MEDIUM_PARAMS})
+              {"flip_tex_coords", "boolean", "true", "use v -> 1 - v (Mitsuba's default)"}})

@@ -515,7 +515,7 @@ public:
     explicit PlyShape(const Properties& props) : Shape(props) {
         const std::string filename = props.get_string("filename");
         const bool face_normals = props.get_bool("face_normals", false);
-        const Transform to_world = read_to_world(props);
+        const Transform& to_world = to_world_;
 
         TriangleMesh mesh = PlyReader(props, filename).read();
         std::vector<uint32_t> ids(mesh.positions.size());
@@ -532,9 +532,4 @@ FEMTO_PLUGIN(femto::PlyShape, femto::PluginKind::Shape, "ply",
              "Stanford PLY triangle mesh (ascii and binary; polygons triangulated)",
              {{"filename", "string", "", "path of the .ply file (relative to the scene file)"},
               {"face_normals", "boolean", "false",
-               "ignore vertex normals and shade with the flat face normals"},
-              {"to_world", "transform", "identity", "object-to-world transform"},
-              {"flip_normals", "boolean", "false", "make the inside the outside"},
-              {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"},
-              FEMTO_SHAPE_MEDIUM_PARAMS})
+               "ignore vertex normals and shade with the flat face normals"}})

@@ -14,7 +14,7 @@ namespace {
 class RectangleShape final : public Shape {
 public:
     explicit RectangleShape(const Properties& props) : Shape(props) {
-        const Transform to_world = read_to_world(props);
+        const Transform& to_world = to_world_;
 
         const Vec3 corners[4] = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
         // Normals go through the inverse transpose, so they stay perpendicular to the plane
@@ -40,9 +40,4 @@ public:
 }  // namespace femto
 
 FEMTO_PLUGIN(femto::RectangleShape, femto::PluginKind::Shape, "rectangle",
-             "Rectangle [-1,1]^2 at z=0 with normal +z (Mitsuba convention), two triangles",
-             {{"to_world", "transform", "identity", "object-to-world transform"},
-              {"flip_normals", "boolean", "false", "make the back side (-z) the outside"},
-              {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"},
-              FEMTO_SHAPE_MEDIUM_PARAMS})
+             "Rectangle [-1,1]^2 at z=0 with normal +z (Mitsuba convention), two triangles", {})

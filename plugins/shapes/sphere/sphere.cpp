@@ -54,11 +54,8 @@ public:
         if (!(radius > 0))
             props.fail("radius",
                        "the radius must be positive, but " + std::to_string(radius) + " was given");
-        if (props.has("to_world")) {
-            const Transform to_world = read_to_world(props);
-            radius *= uniform_scale(props, to_world);
-            center = to_world.point(center);
-        }
+        radius *= uniform_scale(props, to_world_);
+        center = to_world_.point(center);
         set_sphere(center, static_cast<float>(radius));
     }
 };
@@ -71,8 +68,4 @@ FEMTO_PLUGIN(femto::SphereShape, femto::PluginKind::Shape, "sphere",
              {{"center", "point", "(0, 0, 0)", "center in object space"},
               {"radius", "float", "1", "radius in object space (> 0)"},
               {"to_world", "transform", "identity",
-               "object-to-world transform: translation, rotation and uniform scale only"},
-              {"flip_normals", "boolean", "false", "make the inside the outside"},
-              {"bsdf", "bsdf", "diffuse", "material of the surface"},
-              {"emitter", "emitter", "", "area emitter attached to the surface"},
-              FEMTO_SHAPE_MEDIUM_PARAMS})
+               "object-to-world transform: translation, rotation and uniform scale only"}})
