@@ -15,7 +15,8 @@ using namespace femto;
 
 class MiniPath final : public MonteCarloIntegrator {
 public:
-    // max_depth, rr_depth (default 0: the film's window ends paths) and hide_emitters.
+    // max_depth, rr_depth (default 0 here: the film's window ends paths) and hide_emitters,
+    // declared by MonteCarloIntegrator; the schema below only changes rr_depth's default.
     explicit MiniPath(const Properties& props) : MonteCarloIntegrator(props, 0) {}
 
     void preprocess(const Scene& scene) override {
@@ -88,6 +89,4 @@ public:
 
 FEMTO_PLUGIN(MiniPath, femto::PluginKind::Integrator, "mini_path",
              "A transient path tracer without media (example plugin built with the femto SDK)",
-             {{"max_depth", "integer", "-1", "longest path in segments; -1 = unbounded"},
-              {"rr_depth", "integer", "0", "depth at which Russian roulette starts; 0 = never"},
-              {"hide_emitters", "boolean", "false", "hide directly visible emitters"}})
+             {{"rr_depth", "integer", "0", "depth at which Russian roulette starts; 0 = never"}})

@@ -123,13 +123,8 @@ const std::set<std::string> kComputedDefaults = {
 
 // Known disagreements in files this change leaves alone; each must still disagree (remove it
 // here when it is fixed, or the test fails to say so).
-const std::set<std::string> kKnownMismatches = {
-    // The integrator reads its strategy children with props.objects() and builds the default
-    // without recording it; Properties::child(kind, default_type) would record it.
-    "integrator transient_path: distance",
-    "integrator transient_path: connection",
-    "integrator transient_path: angular",
-};
+// Schema entries known to disagree with their constructors (none today).
+const std::set<std::string> kKnownMismatches = {};
 
 std::vector<std::string> check_plugin(const femto::PluginDescriptor& d, const Inputs& in) {
     const std::string key = std::string(femto::kind_tag(d.kind)) + " " + d.type_name;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "femto/film.h"
 #include "femto/math.h"
@@ -28,6 +29,9 @@ public:
 /// the same way.
 class MonteCarloIntegrator : public Integrator {
 public:
+    /// max_depth, rr_depth (default 5; a plugin lists its own entry to change that) and
+    /// hide_emitters.
+    static std::vector<ParamSpec> inherited_params();
     /// Longest path in segments (1 = emitters seen directly, 2 = direct light); -1 = none.
     int64_t max_depth() const { return max_depth_; }
     /// Depth from which Russian roulette may end paths; 0 = never.

@@ -8,6 +8,16 @@
 
 namespace femto {
 
+std::vector<ParamSpec> MonteCarloIntegrator::inherited_params() {
+    return inherit_params(
+        Integrator::inherited_params(), "MonteCarloIntegrator",
+        {{"max_depth", "integer", "-1",
+          "longest path in segments (1 = emitters seen directly, 2 = direct light; -1 = no "
+          "limit)"},
+         {"rr_depth", "integer", "5", "path depth at which Russian roulette starts; 0 = never"},
+         {"hide_emitters", "boolean", "false", "hide emitters the camera sees directly"}});
+}
+
 MonteCarloIntegrator::MonteCarloIntegrator(const Properties& props, int64_t default_rr_depth)
     : max_depth_(props.get_int("max_depth", -1)),
       rr_depth_(props.get_int("rr_depth", default_rr_depth)),

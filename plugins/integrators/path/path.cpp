@@ -21,8 +21,6 @@
 //
 // Time: PathClock (femto/path_clock.h) owns every time rule; the pieces this file is built
 // from are in femto/transport.h and femto/mis.h.
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -79,9 +77,13 @@ class PathIntegrator : public MonteCarloIntegrator {
 public:
     PathIntegrator(const Properties& props, int64_t default_rr_depth)
         : MonteCarloIntegrator(props, default_rr_depth) {
-        distance_ = strategy<DistanceSampler>(props, PluginKind::Distance, "distance");
-        connection_ = strategy<ConnectionSampler>(props, PluginKind::Connection, "connection");
-        angular_ = strategy<AngularSampler>(props, PluginKind::Angular, "angular");
+        // The nested strategies; the defaults are the steady ones.
+        distance_ = std::static_pointer_cast<DistanceSampler>(
+            props.child(PluginKind::Distance, "mean_free_path"));
+        connection_ = std::static_pointer_cast<ConnectionSampler>(
+            props.child(PluginKind::Connection, "deterministic"));
+        angular_ =
+            std::static_pointer_cast<AngularSampler>(props.child(PluginKind::Angular, "phase"));
         mis_ = props.get_bool("mis", false);
         connecting_ = connection_ && connection_->places_vertex();
         steady_angular_ = !angular_ || angular_->steady();
@@ -330,14 +332,6 @@ private:
         return light;
     }
 
-    // The nested strategy of `kind`, or null when none is given (the steady default).
-    template <class T>
-    static std::shared_ptr<T> strategy(const Properties& props, PluginKind kind, const char* tag) {
-        auto objects = props.objects(kind);
-        if (objects.size() > 1) props.fail(tag, fmt::format("give at most one <{}> strategy", tag));
-        return objects.empty() ? nullptr : std::static_pointer_cast<T>(objects[0]);
-    }
-
     std::shared_ptr<DistanceSampler> distance_;
     std::shared_ptr<ConnectionSampler> connection_;
     std::shared_ptr<AngularSampler> angular_;
@@ -365,8 +359,8 @@ public:
     {"distance", "distance", "mean_free_path",                                                     \
      "distance sampling in media (nested <distance>): mean_free_path or exponential"},             \
         {"connection", "connection", "deterministic",                                              \
-         "light connections in media (nested <connection>): deterministic, line_to_point or "      \
-         "equiangular"},                                                                           \
+         "light connections in media (nested <connection>): deterministic, line_to_point "         \
+         "or equiangular"},                                                                        \
         {"angular", "angular", "phase",                                                            \
          "directions at medium vertices (nested <angular>): phase or time"},                       \
     {                                                                                              \
@@ -377,19 +371,11 @@ public:
 FEMTO_PLUGIN(TransientPath, femto::PluginKind::Integrator, "transient_path",
              "Transient path tracer: NEE + MIS, each contribution at its own time; the time "
              "window, not roulette, ends paths",
-             {{"max_depth", "integer", "-1",
-               "longest path in segments; -1 = until the film's time window ends"},
-              {"rr_depth", "integer", "0",
+             {{"rr_depth", "integer", "0",
                "path depth at which Russian roulette starts; 0 = never (the window ends paths)"},
-              {"hide_emitters", "boolean", "false", "hide directly visible emitters"},
               FEMTO_PATH_STRATEGY_PARAMS})
 #else
 FEMTO_PLUGIN(Path, femto::PluginKind::Integrator, "path",
              "Unidirectional path tracer with next-event estimation and MIS",
-             {{"max_depth", "integer", "-1",
-               "longest path (1 = visible emitters only, 2 = direct light; -1 = unbounded)"},
-              {"rr_depth", "integer", "5",
-               "path depth at which Russian roulette starts; 0 = never"},
-              {"hide_emitters", "boolean", "false", "hide directly visible emitters"},
-              FEMTO_PATH_STRATEGY_PARAMS})
+             {FEMTO_PATH_STRATEGY_PARAMS})
 #endif
