@@ -458,7 +458,7 @@ TEST(TimeStrategies, BadStrategiesAreLocatedSceneErrors) {
     const std::string twice =
         error_of("<connection type=\"line_to_point\"/><connection type=\"equiangular\"/>");
     EXPECT_NE(twice.find("at most one <connection>"), std::string::npos) << twice;
-    EXPECT_NE(twice.find(":3:"), std::string::npos) << twice;  // the integrator's line
+    EXPECT_NE(twice.find(":4:"), std::string::npos) << twice;  // the second <connection>
     const std::string two_angular = error_of("<angular type=\"time\"/><angular type=\"phase\"/>");
     EXPECT_NE(two_angular.find("at most one <angular>"), std::string::npos) << two_angular;
     // An angular plugin under <connection>, and a name that is no plugin at all.

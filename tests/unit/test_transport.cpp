@@ -95,8 +95,8 @@ TEST(PathClock, WindowCutAndEmissionTime) {
     for (int i = 0; i < 100; ++i) c2.record(Color(1.f), *scene->emitters()[0], s, 0.5);
     ASSERT_EQ(list.items().size(), 100u);
     for (const Contribution& c : list.items()) {
-        EXPECT_GE(c.path_length, 1.5 + earliest - 1e-12);
-        EXPECT_LE(c.path_length, 1.5 + earliest + 0.5 + 1e-12);
+        EXPECT_GE(c.time, 1.5 + earliest - 1e-12);
+        EXPECT_LE(c.time, 1.5 + earliest + 0.5 + 1e-12);
     }
 }
 
@@ -111,7 +111,7 @@ TEST(PathClock, ADeltaPulseDrawsNoNumber) {
     clock.record(Color(1.f), *scene->emitters()[0], sa, 2.0);
     EXPECT_EQ(sa.next_1d(), sb.next_1d());
     ASSERT_EQ(out.items().size(), 1u);
-    EXPECT_DOUBLE_EQ(out.items()[0].path_length, 2.0);
+    EXPECT_DOUBLE_EQ(out.items()[0].time, 2.0);
 }
 
 TEST(Throughput, DiagonalTransfersStayPerChannelAndMatricesMixChannels) {

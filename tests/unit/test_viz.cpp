@@ -727,7 +727,7 @@ TEST(StreakFilm, SkipsRowsOutsideTheFootprint) {
     EXPECT_TRUE(wide->sensor().film().row_active(12));
     EXPECT_FALSE(wide->sensor().film().row_active(5));
     EXPECT_FALSE(wide->sensor().film().row_active(15));
-    EXPECT_EQ(f.max_path_length(), 6.5 + 4.0);
+    EXPECT_EQ(f.max_time(), 6.5 + 4.0);
 }
 
 TEST(StreakFilm, RejectsBadRows) {

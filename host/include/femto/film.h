@@ -16,18 +16,19 @@
 
 namespace femto {
 
-/// One radiance contribution of a camera sample, with the optical path length (time x c, in
-/// scene units) of the path that carried it. Steady films ignore the time.
+/// One radiance contribution of a camera sample and its time: the optical path length (time x
+/// c, in scene units) of the path that carried it, plus emission time and vertex delays, as
+/// PathClock computes it. Steady films ignore the time.
 struct Contribution {
     Color radiance;
-    double path_length = 0.0;
+    double time = 0.0;
 };
 
 /// What the integrator reports for one camera sample.
 class ContributionList {
 public:
-    void add(const Color& radiance, double path_length) {
-        if (!radiance.is_black()) items_.push_back({radiance, path_length});
+    void add(const Color& radiance, double time) {
+        if (!radiance.is_black()) items_.push_back({radiance, time});
     }
     void clear() {
         items_.clear();
@@ -115,7 +116,7 @@ public:
     virtual void begin_pilot() {}
     virtual void end_pilot() {}
     /// Latest path length (scene units) this film records; paths beyond it may stop.
-    virtual double max_path_length() const;
+    virtual double max_time() const;
     /// Whether pixel row y receives any sample (a streak film records only a few rows);
     /// the renderer skips the others.
     virtual bool row_active(int /*y*/) const { return true; }

@@ -64,7 +64,7 @@ public:
     /// The film's time window as paths see it (PathClock reads it). The renderer refreshes it
     /// before every pass, since a temporal filter's reach may change after its pilot pass.
     const TimeWindow& time_window() const { return time_window_; }
-    /// Re-reads the film's window (Film::max_path_length()); called by the renderer.
+    /// Re-reads the film's window (Film::max_time()); called by the renderer.
     void refresh_time_window();
     /// True when a shape bounds a medium or the sensor or an emitter sits in one: integrators
     /// then track media along paths (volumetric path tracing).

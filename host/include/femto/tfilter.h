@@ -72,7 +72,7 @@ Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t 
     if (filter.is_histogram()) {
         for (const Contribution& c : sample.items()) {
             const int bin =
-                grid.bin_of(recorded_time(c.path_length, sample.sensor_distance(), world_time));
+                grid.bin_of(recorded_time(c.time, sample.sensor_distance(), world_time));
             if (bin >= 0) add(bin, c.radiance);
         }
         return Color(0.f);
@@ -80,7 +80,7 @@ Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t 
     const bool spreads = filter.max_radius() > 0;
     Color spill(0.f);
     for (const Contribution& c : sample.items()) {
-        const double t = recorded_time(c.path_length, sample.sensor_distance(), world_time);
+        const double t = recorded_time(c.time, sample.sensor_distance(), world_time);
         scratch.clear();
         filter.splat(grid, pixel, sample.sample_index(), t, scratch);
         float inside = 0.f;
@@ -194,7 +194,7 @@ public:
     void end_pilot() override;
     /// The grid's end plus the filter's reach in camera time; unbounded in world time (the
     /// sensor segment is subtracted after the path ends, so the integrator cannot cut it).
-    double max_path_length() const override;
+    double max_time() const override;
 
     const TimeGrid& grid() const { return grid_; }
     const TemporalFilter& tfilter() const { return *tfilter_; }

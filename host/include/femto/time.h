@@ -46,8 +46,9 @@ struct TimeGrid {
     double bin_centre(int bin) const { return start + (bin + 0.5) * bin_width; }
     /// Metres per scene unit for length_unit, or 0 when it is unknown.
     double metres_per_unit() const;
-    /// Path length (scene units) <-> picoseconds, given length_unit (throws if unknown).
-    double to_picoseconds(double path_length) const;
+    /// Time (scene units of optical length) <-> picoseconds, given length_unit (throws if
+    /// unknown).
+    double to_picoseconds(double time) const;
     double from_picoseconds(double ps) const;
 };
 
@@ -65,11 +66,11 @@ struct TimeWindow {
     double path_cut() const { return end - earliest_emission; }
 };
 
-/// The time a film records for a contribution of optical path length `path_length`: camera
+/// The time a film records for a contribution that arrives at camera time `time`: camera
 /// time is the whole path; world time (eq. 4.1) removes the sensor segment (the camera
 /// sample's sensor distance; nothing is removed when the camera ray escaped, distance < 0).
-inline double recorded_time(double path_length, double sensor_distance, bool world_time) {
-    return world_time && sensor_distance > 0 ? path_length - sensor_distance : path_length;
+inline double recorded_time(double time, double sensor_distance, bool world_time) {
+    return world_time && sensor_distance > 0 ? time - sensor_distance : time;
 }
 
 /// Reads a film's time window: `start`, `bin_width`, `bins` in scene units, or `start_ps` and

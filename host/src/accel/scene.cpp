@@ -104,7 +104,7 @@ uint64_t Scene::rays_traced() const {
 }
 
 void Scene::refresh_time_window() {
-    time_window_.end = sensor_->film().max_path_length();
+    time_window_.end = sensor_->film().max_time();
     time_window_.earliest_emission = earliest_emission_;
 }
 

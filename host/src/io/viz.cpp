@@ -415,8 +415,10 @@ std::vector<float> streak_slice(const io::Cube& cube, int y) {
     return out;
 }
 
-UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, bool keep_window) {
-    const TimeFrame target = to_world ? TimeFrame::World : TimeFrame::Camera;
+namespace {
+
+// Refuses cubes that cannot be unwarped to `target`, saying why.
+void check_unwarpable(const io::Cube& cube, const TimeGrid& grid, TimeFrame target) {
     if (cube.depth.empty())
         throw SceneError(
             is_streak(cube)
@@ -432,47 +434,45 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
     if (grid.frame == TimeFrame::Unknown)
         throw SceneError(
             "the cube does not say whether it holds camera or world time (femto:time)");
-    const size_t pixels = size_t(cube.width) * size_t(cube.height), T = size_t(cube.bins);
-    const double bw = grid.bin_width;
-    // Shift of each pixel in bins: new time = old time + shift * bw.
-    std::vector<double> shift(pixels, 0.0);
-    double smin = 0, smax = 0;
+}
+
+constexpr double kSnap = 1e-6;  // whole-bin shifts up to rounding stay exact
+double snapped_floor(double v) {
+    const double r = std::round(v);
+    return std::abs(v - r) < kSnap ? r : std::floor(v);
+}
+double snapped_ceil(double v) {
+    const double r = std::round(v);
+    return std::abs(v - r) < kSnap ? r : std::ceil(v);
+}
+
+// Each pixel's shift in bins (new time = old time + shift * bin width) and the range of the
+// shifts of the pixels that have a depth.
+struct PixelShifts {
+    std::vector<double> shift;
+    double min = 0, max = 0;
     bool any = false;
-    for (size_t p = 0; p < pixels; ++p) {
+};
+PixelShifts pixel_shifts(const io::Cube& cube, double bin_width, bool to_world) {
+    PixelShifts s;
+    s.shift.assign(size_t(cube.width) * size_t(cube.height), 0.0);
+    for (size_t p = 0; p < s.shift.size(); ++p) {
         const float d = cube.depth[p];
         if (!(d > 0) || !std::isfinite(d)) continue;
-        shift[p] = (to_world ? -double(d) : double(d)) / bw;
-        smin = any ? std::min(smin, shift[p]) : shift[p];
-        smax = any ? std::max(smax, shift[p]) : shift[p];
-        any = true;
+        s.shift[p] = (to_world ? -double(d) : double(d)) / bin_width;
+        s.min = s.any ? std::min(s.min, s.shift[p]) : s.shift[p];
+        s.max = s.any ? std::max(s.max, s.shift[p]) : s.shift[p];
+        s.any = true;
     }
-    constexpr double kSnap = 1e-6;  // whole-bin shifts up to rounding stay exact
-    auto snapped_floor = [&](double v) {
-        const double r = std::round(v);
-        return std::abs(v - r) < kSnap ? r : std::floor(v);
-    };
-    auto snapped_ceil = [&](double v) {
-        const double r = std::round(v);
-        return std::abs(v - r) < kSnap ? r : std::ceil(v);
-    };
-    int64_t k_lo = 0, k_hi = 0;
-    if (!keep_window && any) {
-        k_lo = std::min<int64_t>(0, int64_t(snapped_floor(smin)));
-        k_hi = std::max<int64_t>(0, int64_t(snapped_ceil(smax)));
-    }
-    const int64_t new_bins = int64_t(T) + k_hi - k_lo;
-    if (new_bins > (int64_t(1) << 20) ||
-        double(pixels) * double(new_bins) * 3 * sizeof(float) > double(int64_t(1) << 36))
-        throw SceneError(fmt::format("the unwarped cube would need {} bins: too large", new_bins));
-    UnwarpResult result;
-    io::Cube& out = result.cube;
-    out.width = cube.width;
-    out.height = cube.height;
-    out.bins = int(new_bins);
-    out.depth = cube.depth;
-    // Part names and types are the writer's business (read_exr_cube returns part 0's).
-    for (const auto& [k, v] : cube.attributes)
-        if (k != "name" && k != "type") out.attributes.emplace_back(k, v);
+    return s;
+}
+
+// Resamples every pixel's time profile into out.data (out.bins bins, starting k_lo bins after
+// the old start) by linear interpolation; returns the share of the energy that fell outside.
+double resample_profiles(const io::Cube& cube, const std::vector<double>& shift, int64_t k_lo,
+                         io::Cube& out) {
+    const size_t pixels = shift.size(), T = size_t(cube.bins);
+    const int64_t new_bins = out.bins;
     out.data.assign(pixels * size_t(new_bins) * 3, 0.f);
     double total = 0, kept = 0;
     for (size_t p = 0; p < pixels; ++p) {
@@ -496,32 +496,43 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
         for (size_t i = 0; i < T * 3; ++i) total += in[i];
         for (size_t i = 0; i < size_t(new_bins) * 3; ++i) kept += o[i];
     }
-    result.dropped = total > 0 ? std::max(0.0, 1.0 - kept / total) : 0.0;
-    if (!keep_window) {
-        // Trim the grown window to the bins that hold energy (keeping the grid alignment).
-        int64_t first = new_bins, last = -1;
-        for (size_t p = 0; p < pixels; ++p)
-            for (int64_t j = 0; j < new_bins; ++j) {
-                const float* v = &out.data[(p * size_t(new_bins) + size_t(j)) * 3];
-                if (v[0] != 0 || v[1] != 0 || v[2] != 0) {
-                    first = std::min(first, j);
-                    last = std::max(last, j);
-                }
+    return total > 0 ? std::max(0.0, 1.0 - kept / total) : 0.0;
+}
+
+// Trims the cube's bins to those that hold energy (keeping the grid alignment); returns how
+// many bins were cut from the front.
+int64_t crop_to_energy(io::Cube& out) {
+    const size_t pixels = size_t(out.width) * size_t(out.height);
+    const int64_t n = out.bins;
+    int64_t first = n, last = -1;
+    for (size_t p = 0; p < pixels; ++p)
+        for (int64_t j = 0; j < n; ++j) {
+            const float* v = &out.data[(p * size_t(n) + size_t(j)) * 3];
+            if (v[0] != 0 || v[1] != 0 || v[2] != 0) {
+                first = std::min(first, j);
+                last = std::max(last, j);
             }
-        if (last >= first && (first > 0 || last < new_bins - 1)) {
-            const int64_t bins = last - first + 1;
-            std::vector<float> cropped(pixels * size_t(bins) * 3);
-            for (size_t p = 0; p < pixels; ++p)
-                std::copy_n(&out.data[(p * size_t(new_bins) + size_t(first)) * 3], size_t(bins) * 3,
-                            &cropped[p * size_t(bins) * 3]);
-            out.data = std::move(cropped);
-            out.bins = int(bins);
-            k_lo += first;
         }
-    }
-    const double new_start = grid.start + double(k_lo) * bw;
-    set_attribute(out.attributes, "femto:time", time_frame_name(target));
-    set_attribute(out.attributes, "femto:start", fmt::format("{:.17g}", new_start));
+    if (!(last >= first && (first > 0 || last < n - 1))) return 0;
+    const int64_t bins = last - first + 1;
+    std::vector<float> cropped(pixels * size_t(bins) * 3);
+    for (size_t p = 0; p < pixels; ++p)
+        std::copy_n(&out.data[(p * size_t(n) + size_t(first)) * 3], size_t(bins) * 3,
+                    &cropped[p * size_t(bins) * 3]);
+    out.data = std::move(cropped);
+    out.bins = int(bins);
+    return first;
+}
+
+// The unwarped cube's time attributes: its frame, window (k_lo bins after the old start) and
+// where it came from.
+void set_unwarped_attributes(io::Cube& out, const io::Cube& cube, const TimeGrid& grid,
+                             int64_t k_lo, bool to_world) {
+    const double bw = grid.bin_width;
+    set_attribute(out.attributes, "femto:time",
+                  time_frame_name(to_world ? TimeFrame::World : TimeFrame::Camera));
+    set_attribute(out.attributes, "femto:start",
+                  fmt::format("{:.17g}", grid.start + double(k_lo) * bw));
     set_attribute(out.attributes, "femto:bin_width", fmt::format("{:.17g}", bw));
     set_attribute(out.attributes, "femto:bins", std::to_string(out.bins));
     double start_ps = 0, bw_ps = 0;
@@ -532,6 +543,35 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
                       fmt::format("{:.17g}", start_ps + double(k_lo) * bw_ps));
     set_attribute(out.attributes, "femto:unwarped",
                   to_world ? "camera -> world (eq. 4.1)" : "world -> camera (eq. 4.1)");
+}
+
+}  // namespace
+
+UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, bool keep_window) {
+    check_unwarpable(cube, grid, to_world ? TimeFrame::World : TimeFrame::Camera);
+    const size_t pixels = size_t(cube.width) * size_t(cube.height);
+    const PixelShifts shifts = pixel_shifts(cube, grid.bin_width, to_world);
+    int64_t k_lo = 0, k_hi = 0;  // the window grows by these many bins (unless kept)
+    if (!keep_window && shifts.any) {
+        k_lo = std::min<int64_t>(0, int64_t(snapped_floor(shifts.min)));
+        k_hi = std::max<int64_t>(0, int64_t(snapped_ceil(shifts.max)));
+    }
+    const int64_t new_bins = int64_t(cube.bins) + k_hi - k_lo;
+    if (new_bins > (int64_t(1) << 20) ||
+        double(pixels) * double(new_bins) * 3 * sizeof(float) > double(int64_t(1) << 36))
+        throw SceneError(fmt::format("the unwarped cube would need {} bins: too large", new_bins));
+    UnwarpResult result;
+    io::Cube& out = result.cube;
+    out.width = cube.width;
+    out.height = cube.height;
+    out.bins = int(new_bins);
+    out.depth = cube.depth;
+    // Part names and types are the writer's business (read_exr_cube returns part 0's).
+    for (const auto& [k, v] : cube.attributes)
+        if (k != "name" && k != "type") out.attributes.emplace_back(k, v);
+    result.dropped = resample_profiles(cube, shifts.shift, k_lo, out);
+    if (!keep_window) k_lo += crop_to_energy(out);
+    set_unwarped_attributes(out, cube, grid, k_lo, to_world);
     return result;
 }
 

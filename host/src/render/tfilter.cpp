@@ -30,8 +30,8 @@ void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
     if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) return;
     auto& arrivals = arrivals_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
     for (const Contribution& c : sample.items())
-        if (c.radiance.is_finite() && std::isfinite(c.path_length))
-            arrivals.push_back({recorded_time(c.path_length, sample.sensor_distance(), world_time_),
+        if (c.radiance.is_finite() && std::isfinite(c.time))
+            arrivals.push_back({recorded_time(c.time, sample.sensor_distance(), world_time_),
                                 std::max(0.f, (c.radiance.r + c.radiance.g + c.radiance.b) / 3.f)});
 }
 
@@ -69,7 +69,7 @@ void TimeResolvedFilm::end_pilot() {
     pilot_ = false;
 }
 
-double TimeResolvedFilm::max_path_length() const {
+double TimeResolvedFilm::max_time() const {
     return world_time() ? std::numeric_limits<double>::infinity()
                         : grid_.end() + tfilter_->max_radius();
 }

@@ -74,6 +74,6 @@ Film::Film(const Properties& props) {
         props.child(PluginKind::ReconstructionFilter, "gaussian"));
 }
 
-double Film::max_path_length() const { return std::numeric_limits<double>::infinity(); }
+double Film::max_time() const { return std::numeric_limits<double>::infinity(); }
 
 }  // namespace femto

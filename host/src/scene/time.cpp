@@ -38,10 +38,10 @@ double TimeGrid::metres_per_unit() const {
     return 0.0;
 }
 
-double TimeGrid::to_picoseconds(double path_length) const {
+double TimeGrid::to_picoseconds(double time) const {
     const double m = metres_per_unit();
     if (!(m > 0)) throw SceneError("picoseconds need the film's length_unit");
-    return path_length * m / kSpeedOfLight * 1e12;
+    return time * m / kSpeedOfLight * 1e12;
 }
 
 double TimeGrid::from_picoseconds(double ps) const {
