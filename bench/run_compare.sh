@@ -3,9 +3,12 @@
 # detached worktree) and the working tree with the benchmarks, then alternates their
 # femto_bench_rays (Cornell box, ray rate and its ratio to Embree's raw rate) and
 # femto_bench_transient (throughput mode: transient/steady sample-rate ratio) ROUNDS times,
-# swapping which goes first every round so that drift in the machine's load hits both.
+# swapping which goes first every round so that drift in the machine's load hits both. When
+# valgrind is installed it also counts the instructions of femto::render() for both builds
+# (callgrind; deterministic, unlike seconds on a shared machine).
 #   bench/run_compare.sh REV [ROUNDS]        e.g. bench/run_compare.sh 4a3e41b 5
-# Results: bench/results/compare_{rays,transient,summary}.csv, compare.png, compare_run.log.
+# Results: bench/results/compare_{rays,transient,summary,instructions}.csv, compare.png,
+# compare_run.log.
 set -euo pipefail
 
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -15,7 +18,7 @@ base="$root/build-bench-compare"
 before_src="$base/src-$rev"
 before_build="$base/build-$rev"
 
-bench_build femto_bench_rays femto_bench_transient
+bench_build femto_bench_rays femto_bench_transient femto_cli
 if [[ ! -d "$before_src" ]]; then
     mkdir -p "$base"
     git -C "$root" worktree add --detach "$before_src" "$rev" >/dev/null
@@ -24,7 +27,7 @@ if [[ ! -f "$before_build/build.ninja" ]]; then
     cmake -S "$before_src" -B "$before_build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
         -DFEMTO_BENCH=ON -DFEMTO_TESTS=OFF >/dev/null
 fi
-ninja -C "$before_build" femto_bench_rays femto_bench_transient
+ninja -C "$before_build" femto_bench_rays femto_bench_transient femto_cli
 
 log="$results/compare_run.log"
 bench_log_header "$log"
@@ -61,3 +64,24 @@ for ((r = 0; r < rounds; r++)); do
 done
 echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$log"
 /usr/bin/python3 "$root/bench/plot_compare.py" "$results" | tee -a "$log"
+
+# Instructions executed by femto::render() (1 thread, 32x32 px, 16 spp), both builds.
+if command -v valgrind >/dev/null; then
+    ins="$results/compare_instructions.csv"
+    echo "scene,before_render_instructions,after_render_instructions,after_over_before" >"$ins"
+    for scene in cornell-box fog-object; do
+        counts=()
+        for pair in "$before_build:$before_src" "$build:$root"; do
+            dir=${pair%%:*} src=${pair#*:}
+            valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" "$dir/bin/femto" render \
+                "$src/scenes/$scene/scene.xml" -D res=32 -D spp=16 --threads 1 --quiet \
+                -o "$tmp/cg" >/dev/null 2>&1
+            counts+=("$(callgrind_annotate --inclusive=yes "$tmp/cg.out" 2>/dev/null |
+                grep -F 'femto::render(femto::Scene&, femto::RenderOptions const&) [' |
+                awk '{gsub(",", "", $1); print $1}')")
+        done
+        awk -v s="$scene" -v a="${counts[0]}" -v b="${counts[1]}" \
+            'BEGIN { printf "%s,%s,%s,%.4f\n", s, a, b, b / a }' >>"$ins"
+    done
+    column -t -s, "$ins" | tee -a "$log"
+fi
