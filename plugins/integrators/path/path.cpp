@@ -85,13 +85,13 @@ public:
         angular_ =
             std::static_pointer_cast<AngularSampler>(props.child(PluginKind::Angular, "phase"));
         mis_ = props.get_bool("mis", false);
-        connecting_ = connection_ && connection_->places_vertex();
-        steady_angular_ = !angular_ || angular_->steady();
+        connecting_ = connection_->places_vertex();
+        steady_angular_ = angular_->steady();
     }
 
     void preprocess(const Scene& scene) override {
         MonteCarloIntegrator::preprocess(scene);
-        if (distance_) distance_->prepare({scene.time_window().end});
+        distance_->prepare({scene.time_window().end});
     }
 
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
