@@ -9,7 +9,8 @@
 
 namespace femto {
 
-/// When an emitter's light leaves it (design §4), in optical path length (scene units, time x c).
+/// When an emitter's light leaves it (docs/architecture.md §4), in optical path length (scene
+/// units, time x c).
 /// `delta`: all at `offset` (default 0); `box`: uniform in [offset, offset + width] (a long box
 /// is continuous emission); `gaussian`: normal with mean `offset` and deviation `sigma`.
 struct PulseProfile {
