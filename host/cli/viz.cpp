@@ -64,9 +64,9 @@ io::Attributes time_attributes(const io::Cube& cube) {
     io::Attributes attrs;
     for (const auto& [k, v] : cube.attributes)
         if (k.rfind("femto:", 0) == 0) attrs.emplace_back(k, v);
-    if (g_opts.start) attrs.emplace_back("femto:start", fmt::format("{:.17g}", *g_opts.start));
+    if (g_opts.start) attrs.emplace_back("femto:start", fmt::format("{}", *g_opts.start));
     if (g_opts.bin_width)
-        attrs.emplace_back("femto:bin_width", fmt::format("{:.17g}", *g_opts.bin_width));
+        attrs.emplace_back("femto:bin_width", fmt::format("{}", *g_opts.bin_width));
     attrs.emplace_back("femto:source", g_opts.cube);
     return attrs;
 }

@@ -749,3 +749,22 @@ TEST(StreakFilm, RejectsBadRows) {
                   .find("not both"),
               std::string::npos);
 }
+
+TEST(VizAttributes, NumbersAreWrittenShortestRoundTrip) {
+    // 0.05 is written "0.05", not "0.050000000000000003", and reads back to the same double.
+    TimeGrid grid;
+    grid.start = 0.05;
+    grid.bin_width = 0.1;
+    grid.bins = 7;
+    grid.length_unit = "mm";
+    const io::Attributes attrs = io::time_resolved_attributes(grid, RenderInfo{}, "histogram");
+    auto value = [&](const std::string& name) {
+        for (const auto& [k, v] : attrs)
+            if (k == name) return v;
+        ADD_FAILURE() << name << " missing";
+        return std::string();
+    };
+    EXPECT_EQ(value("femto:start"), "0.05");
+    EXPECT_EQ(value("femto:bin_width"), "0.1");
+    EXPECT_EQ(std::stod(value("femto:start_ps")), grid.to_picoseconds(0.05));
+}

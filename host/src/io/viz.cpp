@@ -41,8 +41,8 @@ Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info
                                     const std::string& tfilter) {
     Attributes attrs = render_attributes(info);
     const Attributes time = {
-        {"femto:start", fmt::format("{:.17g}", grid.start)},
-        {"femto:bin_width", fmt::format("{:.17g}", grid.bin_width)},
+        {"femto:start", fmt::format("{}", grid.start)},
+        {"femto:bin_width", fmt::format("{}", grid.bin_width)},
         {"femto:bins", std::to_string(grid.bins)},
         {"femto:units", "optical path length in scene units (time x c)"},
         {"femto:length_unit", grid.length_unit},
@@ -51,10 +51,9 @@ Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info
     };
     attrs.insert(attrs.end(), time.begin(), time.end());
     if (grid.metres_per_unit() > 0) {
+        attrs.push_back({"femto:start_ps", fmt::format("{}", grid.to_picoseconds(grid.start))});
         attrs.push_back(
-            {"femto:start_ps", fmt::format("{:.17g}", grid.to_picoseconds(grid.start))});
-        attrs.push_back(
-            {"femto:bin_width_ps", fmt::format("{:.17g}", grid.to_picoseconds(grid.bin_width))});
+            {"femto:bin_width_ps", fmt::format("{}", grid.to_picoseconds(grid.bin_width))});
     }
     return attrs;
 }
@@ -531,16 +530,15 @@ void set_unwarped_attributes(io::Cube& out, const io::Cube& cube, const TimeGrid
     const double bw = grid.bin_width;
     set_attribute(out.attributes, "femto:time",
                   time_frame_name(to_world ? TimeFrame::World : TimeFrame::Camera));
-    set_attribute(out.attributes, "femto:start",
-                  fmt::format("{:.17g}", grid.start + double(k_lo) * bw));
-    set_attribute(out.attributes, "femto:bin_width", fmt::format("{:.17g}", bw));
+    set_attribute(out.attributes, "femto:start", fmt::format("{}", grid.start + double(k_lo) * bw));
+    set_attribute(out.attributes, "femto:bin_width", fmt::format("{}", bw));
     set_attribute(out.attributes, "femto:bins", std::to_string(out.bins));
     double start_ps = 0, bw_ps = 0;
     const std::string* sps = cube.attribute("femto:start_ps");
     const std::string* wps = cube.attribute("femto:bin_width_ps");
     if (sps && wps && parse_double(*sps, start_ps) && parse_double(*wps, bw_ps))
         set_attribute(out.attributes, "femto:start_ps",
-                      fmt::format("{:.17g}", start_ps + double(k_lo) * bw_ps));
+                      fmt::format("{}", start_ps + double(k_lo) * bw_ps));
     set_attribute(out.attributes, "femto:unwarped",
                   to_world ? "camera -> world (eq. 4.1)" : "world -> camera (eq. 4.1)");
 }
