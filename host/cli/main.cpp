@@ -4,9 +4,11 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <charconv>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 
 #include "femto/host.h"
@@ -122,11 +124,35 @@ int cmd_plugins(const std::string& name, bool markdown, const femto::LoadOptions
     return kExitOk;
 }
 
+// A CLI11 check that an option is a whole number in [lo, hi], with a plain message (CLI11's
+// own range check prints its bounds as 300-digit doubles and lets "-1" wrap around).
+CLI::Validator whole_number_in(uint64_t lo, uint64_t hi) {
+    return CLI::Validator(
+        [lo, hi](std::string& text) -> std::string {
+            uint64_t v = 0;
+            const char* end = text.data() + text.size();
+            const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+            if (text.empty() || ec != std::errc() || ptr != end || v < lo || v > hi)
+                return fmt::format("expected a whole number from {} to {}, got \"{}\"", lo, hi,
+                                   text);
+            return {};
+        },
+        fmt::format("INT in [{}, {}]", lo, hi));
+}
+
+// The output base without an image extension the user may have given (-o out/name.exr).
+std::string strip_output_extension(std::string out_base) {
+    const std::string ext = fs::path(out_base).extension().string();
+    if (ext == ".exr" || ext == ".png" || ext == ".npy") out_base.resize(out_base.size() - 4);
+    return out_base;
+}
+
 int cmd_render(const std::string& scene_path, std::string out_base,
                const std::vector<std::string>& defines, uint32_t spp, int threads, uint64_t seed,
                bool quiet, bool npy, femto::LoadOptions opts) {
     for (const auto& d : defines) opts.defines.push_back(parse_define(d));
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
+    out_base = strip_output_extension(out_base);
     prepare_output(out_base);
     // From here on Ctrl-C means "stop after the current pass and write what was rendered".
     std::signal(SIGINT, on_sigint);
@@ -170,13 +196,15 @@ int main(int argc, char** argv) {
     bool quiet = false, npy = false;
     render->add_option("scene", scene_path, "Scene file (Mitsuba 0.6 / 3.x XML)")->required();
     render->add_option("-o,--output", out_base,
-                       "Output path without extension (default: scene name)");
+                       "Output path, without extension or with .exr/.png/.npy (default: scene "
+                       "name)");
     render->add_option("-D", defines, "Set a scene parameter: -D name=value (repeatable)");
     render->add_option("--spp", spp, "Samples per pixel (overrides the sampler)")
-        ->check(CLI::PositiveNumber);
+        ->check(whole_number_in(1, std::numeric_limits<uint32_t>::max()));
     render->add_option("--threads", threads, "Worker threads (default: all cores)")
-        ->check(CLI::PositiveNumber);
-    render->add_option("--seed", seed, "Random seed");
+        ->check(whole_number_in(1, 4096));
+    render->add_option("--seed", seed, "Random seed")
+        ->check(whole_number_in(0, std::numeric_limits<uint64_t>::max()));
     render->add_option("--plugin-dir", opts.plugin_dirs, "Extra plugin folder (repeatable)");
     render->add_flag("--lenient", opts.lenient,
                      "Warn about unknown/unused parameters instead of failing");
@@ -197,7 +225,8 @@ int main(int argc, char** argv) {
     } catch (const CLI::Success& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        app.exit(e);
+        // Usage errors read like every other femto error; the help text stays one --help away.
+        std::fprintf(stderr, "femto: error: %s (see femto --help)\n", e.what());
         return kExitBadInput;
     }
     try {

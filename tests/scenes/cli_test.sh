@@ -91,12 +91,18 @@ unwritable_output)
   ls -A ro | grep -q . && fail "something was written";
   true;;
 bad_spp)
-  expect_exit 2 'spp' -- "$femto" render "$scene" --spp 0 -q
-  expect_exit 2 'spp' -- "$femto" render "$scene" --spp -3 -q
+  expect_exit 2 '^femto: error: --spp: expected a whole number from 1 to 4294967295, got "0"' -- "$femto" render "$scene" --spp 0 -q
+  expect_exit 2 '^femto: error: --spp: expected a whole number .*got "-3"' -- "$femto" render "$scene" --spp -3 -q
   expect_exit 2 'spp' -- "$femto" render "$scene" --spp abc -q
+  expect_exit 2 '^femto: error: --seed: expected a whole number from 0 to 18446744073709551615, got "-1"' -- "$femto" render "$scene" --seed -1 -q
   expect_exit 2 'sample_count' -- "$femto" render "$scene" -D spp=0 -o out/s -q;;
 bad_threads)
-  expect_exit 2 'threads' -- "$femto" render "$scene" --threads 0 -q;;
+  expect_exit 2 '^femto: error: --threads: expected a whole number from 1 to 4096, got "0"' -- "$femto" render "$scene" --threads 0 -q;;
+output_extension)
+  # -o name.exr names the outputs name.exr, name.png, ... (not name.exr.exr).
+  "$femto" render "$scene" -o out/named.exr -D spp=1 -D res=8 -q || fail "render failed"
+  [ -f out/named.exr ] && [ -f out/named.png ] || fail "expected out/named.exr and out/named.png"
+  [ ! -e out/named.exr.exr ] || fail "wrote out/named.exr.exr";;
 bad_define)
   expect_exit 2 'expected name=value' -- "$femto" render "$scene" -D novalue -q
   expect_exit 2 'width must be in' -- "$femto" render "$scene" -D res=-1 -o out/d -q
