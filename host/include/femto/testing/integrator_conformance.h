@@ -76,7 +76,8 @@ protected:
     /// Loads `body` (everything but the integrator) with $max_depth = depth.
     std::unique_ptr<Scene> load(const std::string& body, int depth) const {
         LoadOptions options;
-        options.defines = {{"max_depth", std::to_string(depth)}};
+        if (GetParam().parameters.find("$max_depth") != std::string::npos)
+            options.defines = {{"max_depth", std::to_string(depth)}};
         return load_scene_string("<scene version=\"3.0.0\">" + integrator() + body + "</scene>",
                                  options);
     }
