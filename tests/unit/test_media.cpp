@@ -37,38 +37,20 @@
 #include "femto/host.h"
 #include "femto/medium.h"
 #include "femto/random.h"
+#include "femto/testing/media.h"
 #include "femto/time_sampling.h"
 #include "scene_util.h"
 
 using namespace femto;
 using femto::test::Cube;
+using femto::testing::expect_bins;
+using femto::testing::Fog;
+using femto::testing::single_scattering;
+using V3 = femto::testing::Point3;
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-struct V3 {
-    double x, y, z;
-};
-
-struct Fog {
-    double sigma_a = 0.1, sigma_s = 0.5, eta = 1.0, g = 0.0;
-    double sigma_t() const { return sigma_a + sigma_s; }
-    std::string xml() const {
-        std::ostringstream s;
-        s << "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_a\" value=\"" << sigma_a
-          << "\"/><float name=\"sigma_s\" value=\"" << sigma_s << "\"/><float name=\"eta\" value=\""
-          << eta << "\"/>";
-        if (g != 0) s << "<phase type=\"hg\"><float name=\"g\" value=\"" << g << "\"/></phase>";
-        s << "</medium>";
-        return s.str();
-    }
-    double phase(double cos_theta) const {  // cos_theta between propagation directions
-        if (g == 0) return 1.0 / (4 * kPi);
-        const double denom = 1 + g * g - 2 * g * cos_theta;
-        return (1 - g * g) / (4 * kPi * denom * std::sqrt(denom));
-    }
-};
 
 // An orthographic 1x1-pixel camera (footprint 0.002 wide) at `origin` looking at `target`,
 // inside the fog (or not), with a transient film of `bins` bins from `start`.
@@ -96,45 +78,6 @@ std::string point_light(const std::string& position, double intensity) {
     s << "<emitter type=\"point\"><point name=\"position\" value=\"" << position
       << "\"/><float name=\"intensity\" value=\"" << intensity << "\"/></emitter>";
     return s.str();
-}
-
-// Single scattering along the ray o + s d, s in [s0, s1), binned by time (see the header).
-std::vector<double> single_scattering(const Fog& fog, const V3& o, const V3& d, const V3& light,
-                                      double intensity, double s0, double s1, double start,
-                                      double width, int bins) {
-    std::vector<double> out(size_t(bins), 0.0);
-    constexpr int kSteps = 400000;
-    const double h = (s1 - s0) / kSteps;
-    for (int i = 0; i < kSteps; ++i) {
-        const double s = s0 + (i + 0.5) * h;
-        const V3 x{o.x + s * d.x, o.y + s * d.y, o.z + s * d.z};
-        const V3 to{light.x - x.x, light.y - x.y, light.z - x.z};
-        const double r = std::sqrt(to.x * to.x + to.y * to.y + to.z * to.z);
-        // Light travels along -to/r toward x, then along -d toward the camera.
-        const double cos_theta = (to.x * d.x + to.y * d.y + to.z * d.z) / r;
-        const double value = fog.sigma_s * fog.phase(cos_theta) * intensity *
-                             std::exp(-fog.sigma_t() * (s + r)) / (r * r);
-        const double t = fog.eta * (s + r);
-        const int b = int(std::floor((t - start) / width));
-        if (b >= 0 && b < bins) out[size_t(b)] += value * h;
-    }
-    return out;
-}
-
-// Compares every bin (channel 0; the media are grey) with `expected` within 4 SE + 1e-4
-// relative; returns the number of bins that carry signal.
-int expect_bins(const Cube& cube, const Cube& variance, const std::vector<double>& expected) {
-    int signal = 0, bad = 0;
-    for (int t = 0; t < cube.T; ++t) {
-        const double got = cube.at(0, 0, t, 0), se = std::sqrt(double(variance.at(0, 0, t, 0)));
-        const double want = expected[size_t(t)];
-        if (want > 0) ++signal;
-        if (std::abs(got - want) > 4 * se + 1e-4 * std::abs(want) + 1e-12 && ++bad <= 10)
-            ADD_FAILURE() << "bin " << t << ": rendered " << got << " +- " << se << ", expected "
-                          << want;
-    }
-    EXPECT_EQ(bad, 0);
-    return signal;
 }
 
 void check_single_scattering(const Fog& fog, const std::string& strategies = "") {

@@ -7,29 +7,12 @@
 
 #include "femto/integrator.h"
 #include "femto/sensor.h"
+#include "femto/testing/render.h"
 #include "scene_util.h"
 
 using namespace femto;
 
 namespace {
-
-struct Stats {
-    double mean = 0, standard_error = 0;
-};
-
-// Mean over pixels (all of which have the same expectation) and its standard error from the
-// spread of the independent per-pixel estimates.
-Stats pixel_stats(const std::vector<float>& rgb, int channel) {
-    const size_t n = rgb.size() / 3;
-    double sum = 0, sum2 = 0;
-    for (size_t i = 0; i < n; ++i) {
-        sum += rgb[3 * i + channel];
-        sum2 += double(rgb[3 * i + channel]) * rgb[3 * i + channel];
-    }
-    const double mean = sum / double(n);
-    const double var = (sum2 - double(n) * mean * mean) / double(n - 1);
-    return {mean, std::sqrt(std::max(0.0, var) / double(n))};
-}
 
 std::string furnace_scene(double albedo, double radiance, const std::string& integrator) {
     return "<scene version=\"3.0.0\">" + integrator +
@@ -60,7 +43,8 @@ TEST(Render, FurnaceMatchesGeometricSeries) {
         RenderOptions opt;
         opt.seed = 7;
         render(*scene, opt);
-        const Stats s = pixel_stats(scene->sensor().film().steady_image(), 1);
+        const femto::testing::MeanAndError s =
+            femto::testing::pixel_mean(scene->sensor().film().steady_image(), 1);
         const double expected = 1.0 / (1.0 - rho);
         EXPECT_GT(s.standard_error, 0.0);
         EXPECT_NEAR(s.mean, expected, 3 * s.standard_error + 1e-6 * expected)

@@ -43,6 +43,8 @@ using femto::test::Cube;
 using femto::test::read_npy;
 using femto::test::render_cube;
 using femto::testing::bin_of;
+using femto::testing::mean_arrival;
+using femto::testing::MeanAndError;
 using femto::testing::render_steady;
 
 namespace {
@@ -400,42 +402,6 @@ const std::string kFluorescentBsdf =
     "name=\"lifetime\" value=\"" +
     std::to_string(kTau) + "\"/></bsdf>";
 
-struct MeanTime {
-    double mean = 0, standard_error = 0;
-};
-
-// Energy-weighted mean of the bin centres over the whole image, counting channel `channel`
-// (-1: all channels). It is a ratio of sums over pixels, m = sum A_p / sum B_p, of independent
-// per-pixel estimates (A_p = sum_t c_t E_pt, B_p = sum_t E_pt); its standard error by the delta
-// method is sqrt(n / (n - 1) * sum_p (A_p - m B_p)^2) / sum_p B_p.
-MeanTime mean_time(const Cube& cube, int channel) {
-    std::vector<double> A, B;
-    for (int y = 0; y < cube.H; ++y)
-        for (int x = 0; x < cube.W; ++x) {
-            double a = 0, b = 0;
-            for (int t = 0; t < cube.T; ++t) {
-                const double e = channel < 0 ? cube.energy(y, x, t) : cube.at(y, x, t, channel);
-                a += (kStart + (t + 0.5) * kWidth) * e;
-                b += e;
-            }
-            A.push_back(a);
-            B.push_back(b);
-        }
-    double sa = 0, sb = 0;
-    for (size_t i = 0; i < A.size(); ++i) {
-        sa += A[i];
-        sb += B[i];
-    }
-    MeanTime m;
-    if (!(sb > 0)) return m;
-    m.mean = sa / sb;
-    double r2 = 0;
-    for (size_t i = 0; i < A.size(); ++i) r2 += (A[i] - m.mean * B[i]) * (A[i] - m.mean * B[i]);
-    const double n = double(A.size());
-    m.standard_error = std::sqrt(n / (n - 1) * r2) / sb;
-    return m;
-}
-
 // Expected mean bin centre of t0 + D, D ~ Exp(tau), on the window (the captured part only).
 double expected_binned_mean(double t0, double tau) {
     double num = 0, den = 0;
@@ -470,14 +436,14 @@ TEST(Transient, FluorescenceArrivesOneLifetimeLater) {
             for (int t = 0; t < kBins; ++t)
                 for (int c = 0; c < 3; ++c)
                     EXPECT_NEAR(ref.at(y, x, t, c), t == b0 ? L : 0.0, 1e-5 * L);
-    const MeanTime r = mean_time(ref, -1);
+    const MeanAndError r = mean_arrival(ref, kStart, kWidth);
     EXPECT_NEAR(r.mean, kStart + (b0 + 0.5) * kWidth, 1e-9);
 
     // The fluorescent sphere: the same energy (blue absorbed, efficiency 1; the importance of
     // all three channels summed), spread after t0 as an exponential of mean tau. The expected
     // mean of the bin centres is computed for this window (t0 + tau up to the binning and
     // the truncation at the window's end).
-    const MeanTime m = mean_time(fl, -1);
+    const MeanAndError m = mean_arrival(fl, kStart, kWidth);
     const double expected = expected_binned_mean(t0, kTau);
     EXPECT_NEAR(expected, t0 + kTau, kWidth);  // what the window does to the mean
     EXPECT_GT(m.standard_error, 0.0);
@@ -608,9 +574,9 @@ TEST(Transient, ElasticReflectionArrivesAtOnceFluorescenceOneLifetimeLater) {
 
     // Timing: the elastic part at t0 exactly, the fluorescent part's mean arrival t0 + tau (up
     // to binning and the window, expected_binned_mean), within 4 standard errors of the ratio
-    // estimator (mean_time).
-    EXPECT_NEAR(mean_time(cube, 1).mean, kStart + (b0 + 0.5) * kWidth, 1e-9);
-    const MeanTime m = mean_time(cube, 0);
+    // estimator (mean_arrival).
+    EXPECT_NEAR(mean_arrival(cube, kStart, kWidth, 1).mean, kStart + (b0 + 0.5) * kWidth, 1e-9);
+    const MeanAndError m = mean_arrival(cube, kStart, kWidth, 0);
     EXPECT_GT(m.standard_error, 0.0);
     EXPECT_NEAR(m.mean, expected_binned_mean(t0, kTau), 4 * m.standard_error)
         << "fluorescent mean arrival " << m.mean << ", elastic " << t0 << ", lifetime " << kTau;

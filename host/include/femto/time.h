@@ -32,7 +32,7 @@ struct TimeGrid {
     std::string length_unit;  ///< "m", "cm", "mm", "um", "nm", "km" or "" (unknown)
     TimeFrame frame = TimeFrame::Camera;
     /// False when only bin indices are known (a cube read from a .npy without its start and
-    /// bin width): start and bin_width are then placeholders.
+    /// bin width): start and bin_width then keep their defaults and the axis counts bins.
     bool known = true;
 
     double end() const { return start + bin_width * bins; }

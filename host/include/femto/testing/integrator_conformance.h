@@ -38,6 +38,7 @@
 
 #include "femto/host.h"
 #include "femto/sensor.h"
+#include "femto/testing/media.h"
 #include "femto/testing/render.h"
 
 namespace femto::testing {
@@ -126,45 +127,6 @@ inline std::string camera_above(double height, double half, int spp, const std::
 inline std::string point_light(const std::string& position, double intensity) {
     return "<emitter type=\"point\"><point name=\"position\" value=\"" + position +
            "\"/><float name=\"intensity\" value=\"" + num(intensity) + "\"/></emitter>";
-}
-
-/// Mean and standard error of one channel's pixel values (independent pixels).
-struct PixelMean {
-    double mean = 0, standard_error = 0;
-};
-inline PixelMean pixel_mean(const std::vector<float>& rgb, int channel) {
-    const size_t n = rgb.size() / 3;
-    double s = 0, s2 = 0;
-    for (size_t i = 0; i < n; ++i) {
-        const double v = rgb[3 * i + size_t(channel)];
-        s += v;
-        s2 += v * v;
-    }
-    const double mean = s / double(n), var = (s2 / double(n) - mean * mean) * n / (n - 1.0);
-    return {mean, std::sqrt(std::max(0.0, var) / double(n))};
-}
-
-/// Energy-weighted mean bin centre over the image (all channels) and its standard error: a
-/// ratio of sums over independent pixels, m = sum A_p / sum B_p, whose standard error by the
-/// delta method is sqrt(n / (n - 1) sum_p (A_p - m B_p)^2) / sum_p B_p.
-inline PixelMean mean_arrival(const Cube& cube, double start, double width) {
-    std::vector<double> A, B;
-    double sa = 0, sb = 0;
-    for (int y = 0; y < cube.H; ++y)
-        for (int x = 0; x < cube.W; ++x) {
-            double a = 0, b = 0;
-            for (int t = 0; t < cube.T; ++t) {
-                a += (start + (t + 0.5) * width) * cube.energy(y, x, t);
-                b += cube.energy(y, x, t);
-            }
-            A.push_back(a), B.push_back(b), sa += a, sb += b;
-        }
-    if (!(sb > 0)) return {};
-    const double m = sa / sb;
-    double r2 = 0;
-    for (size_t i = 0; i < A.size(); ++i) r2 += (A[i] - m * B[i]) * (A[i] - m * B[i]);
-    const double n = double(A.size());
-    return {m, std::sqrt(n / (n - 1) * r2) / sb};
 }
 
 }  // namespace conformance
@@ -344,7 +306,7 @@ TEST_P(IntegratorConformance, FurnaceIsAGeometricSeries) {
             num(albedo) + "\"/></bsdf><emitter type=\"area\"><float name=\"radiance\" value=\"" +
             num(Le) + "\"/></emitter></shape>",
         D);
-    const PixelMean m = pixel_mean(render_steady(*scene, 7), 1);
+    const MeanAndError m = pixel_mean(render_steady(*scene, 7), 1);
     // 4 SE, plus a known systematic floor: today's fixed ray-origin offset (1e-4 max(1, |p|))
     // moves the hit points of grazing BSDF samples, so their MIS weights and the light
     // samples' no longer sum to exactly 1 (measured -0.7e-4 relative for direct lighting,
@@ -381,7 +343,8 @@ TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
     // Per pixel, the green the fluorescent plane sends minus the blue the white one sends: a
     // paired difference whose mean over pixels must vanish within 4 of its standard errors
     // (1e-4 relative for float rounding when both renders draw the same numbers).
-    double red = 0, blue = 0, ref_total = 0, d_sum = 0, d_sum2 = 0;
+    double red = 0, blue = 0, ref_total = 0;
+    std::vector<double> difference;  // per pixel
     for (int y = 0; y < res; ++y)
         for (int x = 0; x < res; ++x) {
             double green = 0, ref_blue = 0;
@@ -389,18 +352,18 @@ TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
                 red += std::abs(fl.at(y, x, t, 0)), blue += std::abs(fl.at(y, x, t, 2));
                 green += fl.at(y, x, t, 1), ref_blue += ref.at(y, x, t, 2);
             }
-            d_sum += green - ref_blue, d_sum2 += (green - ref_blue) * (green - ref_blue);
+            difference.push_back(green - ref_blue);
             ref_total += ref_blue;
         }
     EXPECT_EQ(red, 0.0);
     EXPECT_EQ(blue, 0.0);
-    const double n = double(res) * res, d_mean = d_sum / n;
-    const double d_se = std::sqrt(std::max(0.0, d_sum2 / n - d_mean * d_mean) / (n - 1));
+    const double n = double(res) * res;
+    const MeanAndError d = mean_and_error(difference);
     EXPECT_GT(ref_total, 0.0);
-    EXPECT_NEAR(d_mean, 0.0, 4 * d_se + 1e-4 * ref_total / n)
-        << "green re-emitted " << (d_sum + ref_total) / n << " per pixel, blue absorbed "
+    EXPECT_NEAR(d.mean, 0.0, 4 * d.standard_error + 1e-4 * ref_total / n)
+        << "green re-emitted " << d.mean + ref_total / n << " per pixel, blue absorbed "
         << ref_total / n;
-    const PixelMean a = mean_arrival(ref, start, width), b = mean_arrival(fl, start, width);
+    const MeanAndError a = mean_arrival(ref, start, width), b = mean_arrival(fl, start, width);
     // Binning: each arrival's bin centre is within width / 2 of it.
     EXPECT_NEAR(b.mean - a.mean, tau, 4 * std::hypot(a.standard_error, b.standard_error) + width)
         << "mean arrival " << b.mean << " against " << a.mean << " without fluorescence";
@@ -459,50 +422,31 @@ TEST_P(IntegratorConformance, GlassSlabDelay) {
 TEST_P(IntegratorConformance, SingleScatteringInAMedium) {
     using namespace conformance;
     // A 1-pixel orthographic camera at the origin looks along +x through fog (sigma_a 0.1,
-    // sigma_s 0.5, isotropic) lit by a point light of intensity I at (2, 1, 0). Paths of two
-    // segments carry single scattering only:
-    //   L(t) = integral ds sigma_s / (4 pi) I e^(-sigma_t (s + r(s))) / r(s)^2 delta(t - s - r(s))
-    // with r(s) the distance from the light; each bin is checked against a midpoint-rule
-    // quadrature within 4 SE (the film's variance AOV) + 1e-4 relative.
+    // sigma_s 0.5, isotropic) lit by a point light of intensity 3 at (2, 1, 0). Paths of two
+    // segments carry single scattering only: each bin against single_scattering()
+    // (femto/testing/media.h) within 4 SE (the film's variance AOV) + 1e-4 relative.
     if (!GetParam().media) GTEST_SKIP() << "does not render participating media";
     const int D = depth(2);
     if (D != 2) GTEST_SKIP() << "needs paths of exactly 2 segments (single scattering)";
-    const double sigma_a = 0.1, sigma_s = 0.5, sigma_t = sigma_a + sigma_s, I = 3;
-    const double start = 2.2, width = 0.05;
+    const Fog fog;
+    const double start = 2.2, width = 0.05, intensity = 3;
     const int bins = 80;
-    auto scene = load(
-        "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_a\" value=\"" + num(sigma_a) +
-            "\"/><float name=\"sigma_s\" value=\"" + num(sigma_s) +
-            "\"/></medium><sensor type=\"orthographic\"><float name=\"near_clip\" "
-            "value=\"0\"/><transform name=\"to_world\"><scale x=\"0.001\" y=\"0.001\"/><lookat "
-            "origin=\"0,0,0\" target=\"1,0,0\" up=\"0,0,1\"/></transform><ref id=\"fog\"/>" +
-            sampler(20000) +
-            transient_film(1, start, width, bins, false,
-                           "<string name=\"aovs\" value=\"variance\"/>") +
-            "</sensor>" + point_light("2,1,0", I),
-        D);
+    auto scene =
+        load(fog.xml() +
+                 "<sensor type=\"orthographic\"><float name=\"near_clip\" value=\"0\"/><transform "
+                 "name=\"to_world\"><scale x=\"0.001\" y=\"0.001\"/><lookat origin=\"0,0,0\" "
+                 "target=\"1,0,0\" up=\"0,0,1\"/></transform><ref id=\"fog\"/>" +
+                 sampler(20000) +
+                 transient_film(1, start, width, bins, false,
+                                "<string name=\"aovs\" value=\"variance\"/>") +
+                 "</sensor>" + point_light("2,1,0", intensity),
+             D);
     const auto [cube, variance] = render_cube_and_variance(*scene, 5, "single");
     ASSERT_EQ(cube.T, bins);
-    std::vector<double> expected(size_t(bins), 0.0);
-    constexpr int kSteps = 400000;
-    const double s1 = start + bins * width, h = s1 / kSteps;  // s + r(s) >= s
-    for (int i = 0; i < kSteps; ++i) {
-        const double s = (i + 0.5) * h, r = std::hypot(2 - s, 1.0);
-        const int b = bin_of(start, width, bins, s + r);
-        if (b >= 0)
-            expected[size_t(b)] +=
-                sigma_s / (4 * M_PI) * I * std::exp(-sigma_t * (s + r)) / (r * r) * h;
-    }
-    int signal = 0, bad = 0;
-    for (int t = 0; t < bins; ++t) {
-        const double got = cube.at(0, 0, t, 0), se = std::sqrt(double(variance.at(0, 0, t, 0)));
-        const double want = expected[size_t(t)];
-        signal += want > 0;
-        if (std::abs(got - want) > 4 * se + 1e-4 * want + 1e-12 && ++bad <= 10)
-            ADD_FAILURE() << "bin " << t << ": " << got << " +- " << se << ", expected " << want;
-    }
-    EXPECT_EQ(bad, 0);
-    EXPECT_GT(signal, 60);
+    // s + r(s) >= s, so no s past the window's end can arrive inside it.
+    const auto expected = single_scattering(fog, {0, 0, 0}, {1, 0, 0}, {2, 1, 0}, intensity, 0.0,
+                                            (start + bins * width) / fog.eta, start, width, bins);
+    EXPECT_GT(expect_bins(cube, variance, expected), 60);
 }
 
 }  // namespace femto::testing

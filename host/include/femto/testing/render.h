@@ -132,6 +132,54 @@ inline std::vector<float> render_steady(Scene& scene, uint64_t seed) {
     return scene.sensor().film().steady_image();
 }
 
+/// A Monte Carlo mean and its standard error.
+struct MeanAndError {
+    double mean = 0, standard_error = 0;
+};
+
+/// Mean of independent estimates of the same expectation and its standard error from their
+/// spread.
+inline MeanAndError mean_and_error(const std::vector<double>& values) {
+    const double n = double(values.size());
+    double sum = 0, sum2 = 0;
+    for (const double v : values) sum += v, sum2 += v * v;
+    const double mean = sum / n, var = (sum2 - n * mean * mean) / (n - 1);
+    return {mean, std::sqrt(std::max(0.0, var) / n)};
+}
+
+/// mean_and_error() of one channel of an RGB image's pixels (independent pixels of equal
+/// expectation, e.g. a furnace).
+inline MeanAndError pixel_mean(const std::vector<float>& rgb, int channel) {
+    std::vector<double> values(rgb.size() / 3);
+    for (size_t i = 0; i < values.size(); ++i) values[i] = rgb[3 * i + size_t(channel)];
+    return mean_and_error(values);
+}
+
+/// Energy-weighted mean bin centre of a cube with window start `start` and bin width `width`,
+/// counting channel `channel` (-1: all), and its standard error. It is a ratio of sums over
+/// independent pixels, m = sum A_p / sum B_p (A_p = sum_t c_t E_pt, B_p = sum_t E_pt), whose
+/// standard error by the delta method is sqrt(n / (n - 1) sum_p (A_p - m B_p)^2) / sum_p B_p.
+inline MeanAndError mean_arrival(const Cube& cube, double start, double width, int channel = -1) {
+    std::vector<double> A, B;
+    double sa = 0, sb = 0;
+    for (int y = 0; y < cube.H; ++y)
+        for (int x = 0; x < cube.W; ++x) {
+            double a = 0, b = 0;
+            for (int t = 0; t < cube.T; ++t) {
+                const double e = channel < 0 ? cube.energy(y, x, t) : cube.at(y, x, t, channel);
+                a += (start + (t + 0.5) * width) * e;
+                b += e;
+            }
+            A.push_back(a), B.push_back(b), sa += a, sb += b;
+        }
+    if (!(sb > 0)) return {};
+    const double m = sa / sb;
+    double r2 = 0;
+    for (size_t i = 0; i < A.size(); ++i) r2 += (A[i] - m * B[i]) * (A[i] - m * B[i]);
+    const double n = double(A.size());
+    return {m, std::sqrt(n / (n - 1) * r2) / sb};
+}
+
 /// Expects two RGB images rendered from the same random numbers to agree up to the float
 /// rounding of their accumulations (1e-4 relative, 1e-6 absolute for dark values), naming up
 /// to 10 differing values; and the second not to be black (the comparison is not vacuous).
