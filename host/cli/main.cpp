@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <charconv>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -25,19 +26,45 @@ constexpr int kExitOk = 0;
 constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInterrupted = 130;
+constexpr int kExitSignalBase = 128;  // the shell convention: 128 + signal number
 
+// Ctrl-C (SIGINT) and SIGTERM (batch schedulers send it before a time limit) stop the render
+// after the current pass; what was rendered is written and femto exits 128 + the signal. While
+// the outputs are being written, further signals only say so: stopping then would lose the
+// render and leave a half-written set.
 std::atomic<bool> g_stop{false};
+std::atomic<bool> g_writing{false};
+std::atomic<int> g_first_signal{0};
 
-extern "C" void on_sigint(int) {
-    if (g_stop.load()) {  // second Ctrl-C: stop now
-        std::signal(SIGINT, SIG_DFL);
-        std::raise(SIGINT);
+void say(const char* msg, size_t size) {
+    [[maybe_unused]] auto n = write(STDERR_FILENO, msg, size);
+}
+
+extern "C" void on_stop_signal(int sig) {
+    int none = 0;
+    g_first_signal.compare_exchange_strong(none, sig);
+    if (g_writing.load()) {
+        g_stop.store(true);
+        static const char msg[] =
+            "\nfemto: still writing the outputs; femto stops as soon as they are complete "
+            "(stopping now would lose the render)\n";
+        say(msg, sizeof(msg) - 1);
+        return;
+    }
+    if (g_stop.load()) {  // a second signal while rendering: stop now, nothing written yet
+        std::signal(sig, SIG_DFL);
+        std::raise(sig);
         return;
     }
     g_stop.store(true);
     static const char msg[] =
-        "\nfemto: interrupted, finishing the current pass (Ctrl-C again to abort)\n";
-    [[maybe_unused]] auto n = write(STDERR_FILENO, msg, sizeof(msg) - 1);
+        "\nfemto: interrupted, finishing the current pass and writing what was rendered "
+        "(Ctrl-C again to abort without writing)\n";
+    say(msg, sizeof(msg) - 1);
+}
+
+void handle_stop_signals(bool on) {
+    for (int sig : {SIGINT, SIGTERM}) std::signal(sig, on ? on_stop_signal : SIG_DFL);
 }
 
 // Creates the output folder and checks it is writable, before spending time on a render.
@@ -155,7 +182,7 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     out_base = strip_output_extension(out_base);
     prepare_output(out_base);
     // From here on Ctrl-C means "stop after the current pass and write what was rendered".
-    std::signal(SIGINT, on_sigint);
+    handle_stop_signals(true);
     auto scene = femto::load_scene(scene_path, opts);
     femto::RenderOptions ro;
     ro.spp = spp;
@@ -165,17 +192,23 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     ro.scene_file = scene_path;
     ro.stop = &g_stop;
     const femto::RenderStats stats = femto::render(*scene, ro);
+    g_writing.store(true);
     femto::RenderInfo info = femto::make_render_info(*scene, ro, stats);
     info.write_npy = npy;
-    const auto files = scene->sensor().film().write(out_base, info);
-    std::signal(SIGINT, SIG_DFL);
-    if (!quiet) {
-        fmt::print(stderr, "{} {} of {} spp in {:.2f} s ({:.2f} M rays/s)\n",
+    if (!quiet)
+        fmt::print(stderr, "{} {} of {} spp in {:.2f} s ({:.2f} M rays/s); writing {}.* ...\n",
                    stats.interrupted ? "Interrupted after" : "Rendered", stats.spp_done,
                    stats.spp_requested, stats.seconds,
-                   stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0);
+                   stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0, out_base);
+    const auto write_start = std::chrono::steady_clock::now();
+    const auto files = scene->sensor().film().write(out_base, info);
+    handle_stop_signals(false);
+    if (!quiet) {
+        const std::chrono::duration<double> took = std::chrono::steady_clock::now() - write_start;
         for (const auto& f : files) fmt::print(stderr, "wrote {}\n", f);
+        fmt::print(stderr, "({} files in {:.2f} s)\n", files.size(), took.count());
     }
+    if (const int sig = g_first_signal.load()) return kExitSignalBase + sig;
     return stats.interrupted ? kExitInterrupted : kExitOk;
 }
 

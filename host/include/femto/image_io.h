@@ -1,8 +1,9 @@
 // femto public API (libfemto_io): image output shared by the film plugins. Every write goes
 // to a temporary file in the destination folder and is renamed into place, so a reader never
-// sees a half-written file.
+// sees a half-written file; an OutputSet makes a render's files appear together.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,21 +37,62 @@ struct Cube {
     const std::string* attribute(const std::string& name) const;
 };
 
-/// Writes a cube as a multi-part OpenEXR file: one RGB part per time bin (named t00000, ...),
-/// plus a part "depth" (channel Z) when `depth` is given. Every part carries `attributes`.
-/// With `pixel_scale` ([height][width]) every value is multiplied by its pixel's scale while
-/// streaming, one part at a time, so a film can normalise without a second copy of its cube.
+/// How write_exr_cube stores the cube: the OpenEXR compression and OpenEXR's own thread pool.
+/// The defaults are what bench/write.cpp measured fastest for transient cubes (docs/outputs.md).
+struct ExrCubeOptions {
+    enum class Compression { none, rle, zips, zip, piz };
+    Compression compression = Compression::rle;
+    int zip_level = 1;  ///< 1 (fastest) ... 9 (smallest), for zips and zip
+    int threads = 0;    ///< OpenEXR's thread pool: 0 = one per core, 1 = write on this thread
+};
+/// Parses "none", "rle", "zips", "zip" or "piz"; false for anything else.
+bool parse_exr_compression(const std::string& name, ExrCubeOptions::Compression& out);
+
+/// Writes a cube as an OpenEXR file with two parts. Part "frames" is the film's frames stacked
+/// top to bottom: an RGB float image `width` wide and `height * bins` tall whose rows
+/// [t * height, (t + 1) * height) are time bin t (any EXR tool reads a frame as a crop, e.g.
+/// `oiiotool cube.exr --cut WxH+0+{t*H}`). Part "depth" (channel Z) holds `depth` when given.
+/// `attributes` go into the frames part; values that read as numbers are stored as int or
+/// double attributes. With `pixel_scale` ([height][width]) every value is multiplied by its
+/// pixel's scale. The cube is transposed a few frames at a time: writing allocates at most
+/// about 1/16 of the cube beyond it, whatever the number of bins.
 void write_exr_cube(const std::string& path, int width, int height, int bins, const float* data,
                     const float* depth, const Attributes& attributes,
-                    const float* pixel_scale = nullptr);
-/// Reads what write_exr_cube wrote; throws SceneError for other files.
+                    const float* pixel_scale = nullptr, const ExrCubeOptions& options = {});
+/// Reads what write_exr_cube wrote (also the older layout with one part per bin, named
+/// t00000, ...); throws SceneError for other files.
 Cube read_exr_cube(const std::string& path);
 /// Writes a float32 NumPy .npy file of the given shape (C order).
 /// With `pixel_scale`, the leading two dimensions are pixels: each pixel's values are scaled.
 void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data,
                const float* pixel_scale = nullptr);
+/// Writes a float32 .npy file whose leading two dimensions are pixels, one pixel at a time:
+/// fill_pixel(p, out) writes pixel p's values (the product of shape[2...]) to out. For outputs
+/// computed from the film's sums, so that no second cube is ever allocated.
+void write_npy_pixels(const std::string& path, const std::vector<size_t>& shape,
+                      const std::function<void(size_t pixel, float* out)>& fill_pixel);
 /// Reads a float32 .npy file; returns the data and sets `shape`.
 std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape);
+
+/// A render's output files, made visible together. Write each file to the path add() returns
+/// (a hidden temporary name in the destination folder); commit() then renames them all into
+/// place. Until commit() the previous outputs stay untouched, and files of a set that is never
+/// committed (an error while writing one of them) are removed, so a failed write never leaves
+/// a new EXR beside an old .npy. If a rename fails, the error names the files already replaced.
+class OutputSet {
+public:
+    OutputSet() = default;
+    OutputSet(const OutputSet&) = delete;
+    OutputSet& operator=(const OutputSet&) = delete;
+    ~OutputSet();
+    /// Registers `path` and returns the temporary path to write it to.
+    std::string add(const std::string& path);
+    /// Renames every file into place; returns the final paths in the order they were added.
+    std::vector<std::string> commit();
+
+private:
+    std::vector<std::pair<std::string, std::string>> files_;  // {temporary, final}
+};
 
 /// Path of the OpenColorIO config in use ($FEMTO_OCIO_CONFIG, else the one shipped).
 std::string ocio_config_path();

@@ -2,16 +2,21 @@
 
 #include <OpenColorIO/OpenColorIO.h>
 #include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfDoubleAttribute.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIntAttribute.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenImageIO/imageio.h>
 #include <dlfcn.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -72,6 +77,27 @@ namespace {
 
 void commit(const std::string& tmp, const std::string& path) { detail::commit_file(tmp, path); }
 
+// Header values that read as numbers are stored typed (int, double), so EXR tools show numbers
+// and scripts need not parse text. Integers beyond int32 stay text: a double would round them.
+void insert_attribute(Imf::Header& header, const std::string& key, const std::string& value) {
+    const char* first = value.data();
+    const char* last = first + value.size();
+    int i = 0;
+    if (auto [p, ec] = std::from_chars(first, last, i); ec == std::errc() && p == last) {
+        header.insert(key, Imf::IntAttribute(i));
+        return;
+    }
+    const bool integer_text =
+        !value.empty() && value.find_first_not_of("+-0123456789") == std::string::npos;
+    double d = 0;
+    if (auto [p, ec] = std::from_chars(first, last, d);
+        !integer_text && ec == std::errc() && p == last && std::isfinite(d)) {
+        header.insert(key, Imf::DoubleAttribute(d));
+        return;
+    }
+    header.insert(key, Imf::StringAttribute(value));
+}
+
 std::string exe_relative_config() {
     Dl_info info{};
     if (dladdr(reinterpret_cast<void*>(&ocio_config_path), &info) && info.dli_fname) {
@@ -103,7 +129,7 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
         header.compression() = Imf::ZIP_COMPRESSION;
         for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
         if (depth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
-        for (const auto& [k, v] : attributes) header.insert(k, Imf::StringAttribute(v));
+        for (const auto& [k, v] : attributes) insert_attribute(header, k, v);
         Imf::FrameBuffer fb;
         const size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
         char* base = reinterpret_cast<char*>(const_cast<float*>(rgb));
@@ -179,14 +205,18 @@ std::vector<float> read_image_rgb(const std::string& path, int& width, int& heig
 
 // ---- time-resolved images ---------------------------------------------------------------
 
+#include <OpenEXR/ImfFloatAttribute.h>
 #include <OpenEXR/ImfInputPart.h>
 #include <OpenEXR/ImfMultiPartInputFile.h>
 #include <OpenEXR/ImfMultiPartOutputFile.h>
 #include <OpenEXR/ImfOutputPart.h>
 #include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfThreading.h>
 
 #include <cstring>
 #include <fstream>
+#include <limits>
+#include <thread>
 
 namespace femto::io {
 
@@ -197,55 +227,180 @@ const std::string* Cube::attribute(const std::string& name) const {
 }
 
 namespace {
-std::string part_name(int bin) { return fmt::format("t{:05}", bin); }
+
+// The header's text attributes and femto's numbers; not OpenEXR's own (pixelAspectRatio, ...),
+// which belong to this file's layout rather than to the render.
+Attributes read_attributes(const Imf::Header& header) {
+    Attributes out;
+    for (auto it = header.begin(); it != header.end(); ++it) {
+        const Imf::Attribute& a = it.attribute();
+        const std::string name = it.name();
+        if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&a)) {
+            if (name != "name" && name != "type") out.emplace_back(name, s->value());
+        } else if (name.rfind("femto:", 0) != 0) {
+            continue;
+        } else if (const auto* i = dynamic_cast<const Imf::IntAttribute*>(&a))
+            out.emplace_back(it.name(), std::to_string(i->value()));
+        else if (const auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&a))
+            out.emplace_back(it.name(), fmt::format("{}", d->value()));
+        else if (const auto* f = dynamic_cast<const Imf::FloatAttribute*>(&a))
+            out.emplace_back(it.name(), fmt::format("{}", f->value()));
+    }
+    return out;
+}
+
+Imf::Compression exr_compression(ExrCubeOptions::Compression c) {
+    using C = ExrCubeOptions::Compression;
+    switch (c) {
+        case C::none:
+            return Imf::NO_COMPRESSION;
+        case C::rle:
+            return Imf::RLE_COMPRESSION;
+        case C::zips:
+            return Imf::ZIPS_COMPRESSION;
+        case C::zip:
+            return Imf::ZIP_COMPRESSION;
+        case C::piz:
+            return Imf::PIZ_COMPRESSION;
+    }
+    return Imf::RLE_COMPRESSION;
+}
+
+// OpenEXR compresses line buffers on its own global thread pool.
+void set_exr_threads(int threads) {
+    const int n = threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency()));
+    if (Imf::globalThreadCount() != (n > 1 ? n : 0)) Imf::setGlobalThreadCount(n > 1 ? n : 0);
+}
+
+void insert_rgb(Imf::FrameBuffer& fb, const float* first, Imath::V2i origin, int w, int h,
+                size_t xs, size_t ys) {
+    const char* base = reinterpret_cast<const char*>(first);
+    const char* names[] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c)
+        fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, base + size_t(c) * sizeof(float), origin,
+                                             w, h, xs, ys));
+}
+
+// The frames part is transposed from the cube ([pixel][bin][3]) a batch of frame rows at a
+// time: `frames` whole frames when several bins are written together (each pixel's bins are
+// contiguous, so one batch reads the cube in cache-line-sized runs), or `rows` rows of one
+// frame. A batch is at most ~1/16 of the cube whatever its shape.
+struct FrameBatches {
+    int frames = 1, rows = 0;
+    FrameBatches(int height, int bins)
+        : frames(std::clamp(bins / 16, 1, 16)),
+          rows(frames > 1 ? height : std::clamp(int(int64_t(height) * bins / 16), 1, height)) {}
+};
+
+struct CubeView {
+    int width, height, bins;
+    size_t pixels() const { return size_t(width) * size_t(height); }
+    // Element (pixel, bin, 0) of a [pixel][bin][3] cube.
+    size_t at(size_t pixel, int bin) const { return (pixel * size_t(bins) + size_t(bin)) * 3; }
+};
+
+// Copies frames [t0, t0 + n) restricted to rows [y0, y0 + rows) into out ([t][y][x][3]).
+void gather_frames(const CubeView& v, const float* data, const float* pixel_scale, int t0, int n,
+                   int y0, int rows, float* out) {
+    const size_t row_pixels = size_t(v.width), batch_pixels = size_t(rows) * row_pixels;
+    for (size_t local = 0; local < batch_pixels; ++local) {
+        const size_t pixel = size_t(y0) * row_pixels + local;
+        const float* src = data + v.at(pixel, t0);
+        const float s = pixel_scale ? pixel_scale[pixel] : 1.f;
+        for (int k = 0; k < n; ++k)
+            for (int c = 0; c < 3; ++c)
+                out[(size_t(k) * batch_pixels + local) * 3 + size_t(c)] = src[k * 3 + c] * s;
+    }
+}
+
+// The inverse of gather_frames (reading): frames [t0, t0 + n), whole frames, into the cube.
+void scatter_frames(const CubeView& v, const float* in, int t0, int n, float* data) {
+    const size_t pixels = v.pixels();
+    for (size_t pixel = 0; pixel < pixels; ++pixel) {
+        float* dst = data + v.at(pixel, t0);
+        for (int k = 0; k < n; ++k)
+            for (int c = 0; c < 3; ++c) dst[k * 3 + c] = in[(size_t(k) * pixels + pixel) * 3 + c];
+    }
+}
+
+// Parts of one file must share a display window: both parts use the frames' (the whole
+// strip), the depth part's data window being its first frame's place.
+Imf::Header cube_part_header(const std::string& name, int width, int rows, int strip_rows,
+                             const ExrCubeOptions& options) {
+    Imf::Header h(Imath::Box2i({0, 0}, {width - 1, strip_rows - 1}),
+                  Imath::Box2i({0, 0}, {width - 1, rows - 1}));
+    h.setName(name);
+    h.setType(Imf::SCANLINEIMAGE);
+    h.compression() = exr_compression(options.compression);
+    h.zipCompressionLevel() = std::clamp(options.zip_level, 1, 9);
+    return h;
+}
+
+void write_frames_part(Imf::MultiPartOutputFile& file, const CubeView& v, const float* data,
+                       const float* pixel_scale) {
+    Imf::OutputPart part(file, 0);
+    const FrameBatches batch(v.height, v.bins);
+    const size_t xs = 3 * sizeof(float), ys = xs * size_t(v.width);
+    std::vector<float> buffer(size_t(batch.frames) * size_t(batch.rows) * size_t(v.width) * 3);
+    for (int t0 = 0; t0 < v.bins; t0 += batch.frames) {
+        const int n = std::min(batch.frames, v.bins - t0);
+        for (int y0 = 0; y0 < v.height; y0 += batch.rows) {
+            const int rows = std::min(batch.rows, v.height - y0);
+            gather_frames(v, data, pixel_scale, t0, n, y0, rows, buffer.data());
+            const int first_row = t0 * v.height + y0, row_count = n > 1 ? n * v.height : rows;
+            Imf::FrameBuffer fb;
+            insert_rgb(fb, buffer.data(), Imath::V2i(0, first_row), v.width, row_count, xs, ys);
+            part.setFrameBuffer(fb);
+            part.writePixels(row_count);
+        }
+    }
+}
+
 }  // namespace
 
+bool parse_exr_compression(const std::string& name, ExrCubeOptions::Compression& out) {
+    using C = ExrCubeOptions::Compression;
+    static const std::pair<const char*, C> names[] = {
+        {"none", C::none}, {"rle", C::rle}, {"zips", C::zips}, {"zip", C::zip}, {"piz", C::piz}};
+    for (const auto& [n, c] : names)
+        if (name == n) {
+            out = c;
+            return true;
+        }
+    return false;
+}
+
 void write_exr_cube(const std::string& path, int width, int height, int bins, const float* data,
-                    const float* depth, const Attributes& attributes, const float* pixel_scale) {
+                    const float* depth, const Attributes& attributes, const float* pixel_scale,
+                    const ExrCubeOptions& options) {
+    if (int64_t(height) * bins > std::numeric_limits<int>::max())
+        throw SceneError(
+            fmt::format("cannot write \"{}\": {} rows x {} bins exceed an EXR image's {} rows",
+                        path, height, bins, std::numeric_limits<int>::max()));
     const std::string tmp = temp_path_for(path);
     try {
+        set_exr_threads(options.threads);
         std::vector<Imf::Header> headers;
-        const int parts = bins + (depth ? 1 : 0);
-        headers.reserve(size_t(parts));
-        for (int p = 0; p < parts; ++p) {
-            Imf::Header h(width, height);
-            h.compression() = Imf::ZIPS_COMPRESSION;  // one-line buffers: a cube has a part per bin
-            h.setName(p < bins ? part_name(p) : "depth");
-            h.setType(Imf::SCANLINEIMAGE);
-            if (p < bins)
-                for (const char* c : {"R", "G", "B"})
-                    h.channels().insert(c, Imf::Channel(Imf::FLOAT));
-            else
-                h.channels().insert("Z", Imf::Channel(Imf::FLOAT));
-            for (const auto& [k, v] : attributes) h.insert(k, Imf::StringAttribute(v));
-            headers.push_back(std::move(h));
+        headers.push_back(cube_part_header("frames", width, height * bins, height * bins, options));
+        for (const char* c : {"R", "G", "B"})
+            headers[0].channels().insert(c, Imf::Channel(Imf::FLOAT));
+        for (const auto& [k, v] : attributes) insert_attribute(headers[0], k, v);
+        insert_attribute(headers[0], "femto:frame_height", std::to_string(height));
+        headers[0].insert("femto:layout",
+                          Imf::StringAttribute("frames stacked top to bottom: bin t is rows "
+                                               "[t * femto:frame_height, (t + 1) * "
+                                               "femto:frame_height)"));
+        if (depth) {
+            headers.push_back(cube_part_header("depth", width, height, height * bins, options));
+            headers[1].channels().insert("Z", Imf::Channel(Imf::FLOAT));
         }
-        Imf::MultiPartOutputFile file(tmp.c_str(), headers.data(), parts);
-        size_t xs = size_t(bins) * 3 * sizeof(float), ys = xs * size_t(width);
-        const size_t pixels = size_t(width) * size_t(height);
-        std::vector<float> frame(pixel_scale ? pixels * 3 : 0);  // one scaled bin at a time
-        if (pixel_scale) xs = 3 * sizeof(float), ys = xs * size_t(width);
-        for (int p = 0; p < parts; ++p) {
-            Imf::OutputPart part(file, p);
+        Imf::MultiPartOutputFile file(tmp.c_str(), headers.data(), int(headers.size()));
+        write_frames_part(file, CubeView{width, height, bins}, data, pixel_scale);
+        if (depth) {
+            Imf::OutputPart part(file, 1);
             Imf::FrameBuffer fb;
-            if (p < bins) {
-                const float* src = data + size_t(p) * 3;
-                if (pixel_scale) {
-                    for (size_t i = 0; i < pixels; ++i)
-                        for (int c = 0; c < 3; ++c)
-                            frame[3 * i + c] =
-                                src[i * size_t(bins) * 3 + size_t(c)] * pixel_scale[i];
-                    src = frame.data();
-                }
-                char* base = reinterpret_cast<char*>(const_cast<float*>(src));
-                fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
-                fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
-                fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
-            } else {
-                char* base = reinterpret_cast<char*>(const_cast<float*>(depth));
-                fb.insert("Z", Imf::Slice(Imf::FLOAT, base, sizeof(float),
-                                          sizeof(float) * size_t(width)));
-            }
+            fb.insert("Z", Imf::Slice::Make(Imf::FLOAT, depth, Imath::V2i(0, 0), width, height,
+                                            sizeof(float), sizeof(float) * size_t(width)));
             part.setFrameBuffer(fb);
             part.writePixels(height);
         }
@@ -257,57 +412,124 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
     commit(tmp, path);
 }
 
+namespace {
+
+Imath::Box2i checked_window(const Imf::Header& h, int width, int height) {
+    const Imath::Box2i w = h.dataWindow();
+    if (int64_t(w.max.x) - w.min.x + 1 != width || int64_t(w.max.y) - w.min.y + 1 != height)
+        throw std::runtime_error(fmt::format("part \"{}\" is not {}x{} pixels",
+                                             h.hasName() ? h.name() : "", width, height));
+    return w;
+}
+
+void read_depth_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
+    const Imath::Box2i w = checked_window(file.header(p), cube.width, cube.height);
+    cube.depth.assign(size_t(cube.width) * size_t(cube.height), -1.f);
+    Imf::InputPart part(file, p);
+    Imf::FrameBuffer fb;
+    fb.insert("Z", Imf::Slice::Make(Imf::FLOAT, cube.depth.data(), w.min, cube.width, cube.height,
+                                    sizeof(float), sizeof(float) * size_t(cube.width)));
+    part.setFrameBuffer(fb);
+    part.readPixels(w.min.y, w.max.y);
+}
+
+// The stacked-frames layout (part "frames"), read back a batch of whole frames at a time.
+void read_frames_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
+    const CubeView v{cube.width, cube.height, cube.bins};
+    const Imath::Box2i w = checked_window(file.header(p), cube.width, cube.height * cube.bins);
+    const int frames = std::clamp(cube.bins / 16, 1, 16);
+    std::vector<float> buffer(size_t(frames) * v.pixels() * 3);
+    const size_t xs = 3 * sizeof(float), ys = xs * size_t(cube.width);
+    Imf::InputPart part(file, p);
+    for (int t0 = 0; t0 < cube.bins; t0 += frames) {
+        const int n = std::min(frames, cube.bins - t0);
+        const int first = w.min.y + t0 * cube.height;
+        Imf::FrameBuffer fb;
+        insert_rgb(fb, buffer.data(), Imath::V2i(w.min.x, first), cube.width, n * cube.height, xs,
+                   ys);
+        part.setFrameBuffer(fb);
+        part.readPixels(first, first + n * cube.height - 1);
+        scatter_frames(v, buffer.data(), t0, n, cube.data.data());
+    }
+}
+
+// The layout of femto before the stacked frames: one RGB part per bin, named t00000, ...
+void read_legacy_bin_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
+    const std::string name = file.header(p).name();
+    const int bin = std::stoi(name.substr(1));
+    if (bin < 0 || bin >= cube.bins)
+        throw std::runtime_error("a part name is out of range: " + name);
+    const Imath::Box2i w = checked_window(file.header(p), cube.width, cube.height);
+    const size_t xs = size_t(cube.bins) * 3 * sizeof(float), ys = xs * size_t(cube.width);
+    Imf::InputPart part(file, p);
+    Imf::FrameBuffer fb;
+    insert_rgb(fb, cube.data.data() + size_t(bin) * 3, w.min, cube.width, cube.height, xs, ys);
+    part.setFrameBuffer(fb);
+    part.readPixels(w.min.y, w.max.y);
+}
+
+bool is_legacy_bin_part(const Imf::Header& h) {
+    return h.hasName() && h.name().size() == 6 && h.name()[0] == 't' &&
+           h.name().find_first_not_of("0123456789", 1) == std::string::npos;
+}
+
+int int_attribute(const Attributes& attributes, const std::string& name) {
+    for (const auto& [k, v] : attributes)
+        if (k == name) {
+            int value = 0;
+            auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), value);
+            if (ec == std::errc() && p == v.data() + v.size() && value > 0) return value;
+            throw std::runtime_error(fmt::format("attribute {} is \"{}\"", name, v));
+        }
+    throw std::runtime_error(fmt::format("attribute {} is missing", name));
+}
+
+}  // namespace
+
 Cube read_exr_cube(const std::string& path) {
     Cube cube;
     try {
         Imf::MultiPartInputFile file(path.c_str());
         const int parts = file.parts();
-        const Imath::Box2i dw = file.header(0).dataWindow();
+        int frames_part = -1, depth_part = -1, legacy_bins = 0;
+        for (int p = 0; p < parts; ++p) {
+            const Imf::Header& h = file.header(p);
+            if ((h.hasName() && h.name() == "frames") ||
+                h.findTypedAttribute<Imf::IntAttribute>("femto:frame_height"))
+                frames_part = p;
+            if (h.hasName() && h.name() == "depth") depth_part = p;
+            if (is_legacy_bin_part(h)) ++legacy_bins;
+        }
+        if (frames_part < 0 && legacy_bins == 0)
+            throw std::runtime_error("it is not a femto transient cube (no part named \"frames\")");
+        const Imf::Header& first = file.header(frames_part >= 0 ? frames_part : 0);
+        cube.attributes = read_attributes(first);
+        const Imath::Box2i dw = first.dataWindow();
         cube.width = dw.max.x - dw.min.x + 1;
-        cube.height = dw.max.y - dw.min.y + 1;
-        for (auto it = file.header(0).begin(); it != file.header(0).end(); ++it)
-            if (const auto* a = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
-                cube.attributes.emplace_back(it.name(), a->value());
-        for (int p = 0; p < parts; ++p) {
-            const std::string name = file.header(p).hasName() ? file.header(p).name() : "";
-            if (name.size() == 6 && name[0] == 't') ++cube.bins;
+        if (frames_part >= 0) {
+            cube.height = int_attribute(cube.attributes, "femto:frame_height");
+            cube.bins = int_attribute(cube.attributes, "femto:bins");
+            // They describe this file's layout, not the render: outputs made from the cube
+            // (a peak-time image, an unwarped cube) must not inherit them.
+            std::erase_if(cube.attributes, [](const auto& a) {
+                return a.first == "femto:frame_height" || a.first == "femto:layout";
+            });
+        } else {
+            cube.height = dw.max.y - dw.min.y + 1;
+            cube.bins = legacy_bins;
         }
-        if (cube.bins == 0)
-            throw std::runtime_error(
-                "it is not a femto transient cube (no parts named t00000, ...)");
-        const size_t w = size_t(cube.width), h = size_t(cube.height), T = size_t(cube.bins);
-        cube.data.assign(w * h * T * 3, 0.f);
-        const size_t xs = T * 3 * sizeof(float), ys = xs * w;
-        for (int p = 0; p < parts; ++p) {
-            const Imf::Header& hd = file.header(p);
-            const Imath::Box2i pw = hd.dataWindow();
-            if (pw.max.x - pw.min.x + 1 != cube.width || pw.max.y - pw.min.y + 1 != cube.height)
-                throw std::runtime_error("its parts have different sizes");
-            const std::string name = hd.hasName() ? hd.name() : "";
-            Imf::InputPart part(file, p);
-            Imf::FrameBuffer fb;
-            const ptrdiff_t origin =
-                -(ptrdiff_t(pw.min.y) * ptrdiff_t(ys) + ptrdiff_t(pw.min.x) * ptrdiff_t(xs));
-            if (name == "depth") {
-                cube.depth.assign(w * h, -1.f);
-                char* base =
-                    reinterpret_cast<char*>(cube.depth.data()) -
-                    (ptrdiff_t(pw.min.y) * ptrdiff_t(w) + pw.min.x) * ptrdiff_t(sizeof(float));
-                fb.insert("Z", Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * w));
-            } else if (name.size() == 6 && name[0] == 't') {
-                const int bin = std::stoi(name.substr(1));
-                if (bin < 0 || bin >= cube.bins)
-                    throw std::runtime_error("a part name is out of range: " + name);
-                char* base = reinterpret_cast<char*>(cube.data.data() + size_t(bin) * 3) + origin;
-                fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
-                fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
-                fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
-            } else {
-                continue;
-            }
-            part.setFrameBuffer(fb);
-            part.readPixels(pw.min.y, pw.max.y);
-        }
+        const uint64_t values =
+            uint64_t(cube.width) * uint64_t(cube.height) * 3 * uint64_t(cube.bins);
+        if (cube.width <= 0 || values > (uint64_t(1) << 34))
+            throw std::runtime_error(fmt::format("its size {}x{}x{} is out of range", cube.width,
+                                                 cube.height, cube.bins));
+        cube.data.assign(values, 0.f);
+        if (frames_part >= 0)
+            read_frames_part(file, frames_part, cube);
+        else
+            for (int p = 0; p < parts; ++p)
+                if (is_legacy_bin_part(file.header(p))) read_legacy_bin_part(file, p, cube);
+        if (depth_part >= 0) read_depth_part(file, depth_part, cube);
     } catch (const SceneError&) {
         throw;
     } catch (const std::exception& e) {
@@ -318,14 +540,11 @@ Cube read_exr_cube(const std::string& path) {
 
 // The .npy format (version 1.0) is a 10-byte preamble, a Python-dict header padded to a
 // multiple of 64 bytes, and the raw little-endian data; small enough that no library is needed.
-void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data,
-               const float* pixel_scale) {
+namespace {
+
+std::string npy_header(const std::vector<size_t>& shape) {
     std::string dims;
-    size_t count = 1;
-    for (size_t d : shape) {
-        dims += std::to_string(d) + ", ";
-        count *= d;
-    }
+    for (size_t d : shape) dims += std::to_string(d) + ", ";
     if (shape.size() > 1)
         dims.erase(dims.size() - 2);  // "(3,)" keeps its comma for 1-D
     else if (!dims.empty())
@@ -334,34 +553,69 @@ void write_npy(const std::string& path, const std::vector<size_t>& shape, const 
     const size_t total = 10 + header.size() + 1;
     header.append((64 - total % 64) % 64, ' ');
     header += '\n';
+    const unsigned char magic[8] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0};
+    const uint16_t len = uint16_t(header.size());
+    return std::string(reinterpret_cast<const char*>(magic), 8) + char(len & 0xff) +
+           char(len >> 8) + header;
+}
+
+// Writes the header, then body(out) the data; atomic like every other writer.
+void write_npy_file(const std::string& path, const std::vector<size_t>& shape,
+                    const std::function<void(std::ofstream&)>& body) {
     const std::string tmp = temp_path_for(path);
     {
         std::ofstream out(tmp, std::ios::binary);
-        const unsigned char magic[8] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0};
-        out.write(reinterpret_cast<const char*>(magic), 8);
-        const uint16_t len = uint16_t(header.size());
-        const char le[2] = {char(len & 0xff), char(len >> 8)};
-        out.write(le, 2);
-        out << header;
-        if (pixel_scale && shape.size() >= 2 && shape[0] * shape[1] > 0) {
-            const size_t pixels = shape[0] * shape[1], per_pixel = count / pixels;
-            std::vector<float> buf(per_pixel);
-            for (size_t i = 0; i < pixels && out; ++i) {
-                for (size_t k = 0; k < per_pixel; ++k)
-                    buf[k] = data[i * per_pixel + k] * pixel_scale[i];
-                out.write(reinterpret_cast<const char*>(buf.data()),
-                          std::streamsize(per_pixel * sizeof(float)));
-            }
-        } else {
-            out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(float)));
-        }
-        if (!out) {
+        errno = 0;
+        out << npy_header(shape);
+        if (out) body(out);
+        out.close();  // a full disk often shows only when the last buffer is flushed
+        if (out.fail()) {
+            const int err = errno;
             std::error_code ec;
             fs::remove(tmp, ec);
-            throw SceneError(fmt::format("cannot write \"{}\"", path));
+            throw SceneError(fmt::format("cannot write \"{}\": {}", path,
+                                         err ? std::strerror(err) : "write error"));
         }
     }
     commit(tmp, path);
+}
+
+size_t product(const std::vector<size_t>& shape, size_t from) {
+    size_t n = 1;
+    for (size_t i = from; i < shape.size(); ++i) n *= shape[i];
+    return n;
+}
+
+}  // namespace
+
+void write_npy_pixels(const std::string& path, const std::vector<size_t>& shape,
+                      const std::function<void(size_t pixel, float* out)>& fill_pixel) {
+    if (shape.size() < 2) throw std::invalid_argument("write_npy_pixels: shape needs 2 pixel axes");
+    const size_t pixels = shape[0] * shape[1], per_pixel = product(shape, 2);
+    write_npy_file(path, shape, [&](std::ofstream& out) {
+        std::vector<float> buf(per_pixel);
+        for (size_t p = 0; p < pixels && out; ++p) {
+            fill_pixel(p, buf.data());
+            out.write(reinterpret_cast<const char*>(buf.data()),
+                      std::streamsize(per_pixel * sizeof(float)));
+        }
+    });
+}
+
+void write_npy(const std::string& path, const std::vector<size_t>& shape, const float* data,
+               const float* pixel_scale) {
+    if (pixel_scale && shape.size() >= 2) {
+        const size_t per_pixel = product(shape, 2);
+        write_npy_pixels(path, shape, [&](size_t p, float* out) {
+            for (size_t k = 0; k < per_pixel; ++k)
+                out[k] = data[p * per_pixel + k] * pixel_scale[p];
+        });
+        return;
+    }
+    write_npy_file(path, shape, [&](std::ofstream& out) {
+        out.write(reinterpret_cast<const char*>(data),
+                  std::streamsize(product(shape, 0) * sizeof(float)));
+    });
 }
 
 std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape) {
@@ -403,6 +657,36 @@ std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape)
     if (!in.read(reinterpret_cast<char*>(data.data()), std::streamsize(count * sizeof(float))))
         throw SceneError(fmt::format("\"{}\" is truncated", path));
     return data;
+}
+
+// ---- output sets --------------------------------------------------------------------------
+
+std::string OutputSet::add(const std::string& path) {
+    files_.emplace_back(temp_path_for(path), path);
+    return files_.back().first;
+}
+
+std::vector<std::string> OutputSet::commit() {
+    std::vector<std::string> done;
+    for (size_t i = 0; i < files_.size(); ++i) {
+        std::error_code ec;
+        fs::rename(files_[i].first, files_[i].second, ec);
+        if (ec) {
+            const std::string replaced =
+                done.empty() ? "none" : fmt::format("\"{}\"", fmt::join(done, "\", \""));
+            throw SceneError(fmt::format("cannot write \"{}\": {} (outputs already replaced: {})",
+                                         files_[i].second, ec.message(), replaced));
+        }
+        done.push_back(files_[i].second);
+    }
+    return done;
+}
+
+OutputSet::~OutputSet() {
+    for (const auto& [tmp, path] : files_) {
+        std::error_code ec;
+        fs::remove(tmp, ec);  // nothing there once committed
+    }
 }
 
 }  // namespace femto::io

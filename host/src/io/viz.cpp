@@ -111,6 +111,16 @@ constexpr const char* kStreakLayout = "streak image: x to the right, time downwa
 
 bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
 
+// A header value as femto's attributes hold it: numbers (written typed) shortest round-trip.
+std::optional<std::string> attribute_text(const OIIO::ParamValue& p) {
+    if (p.type() == OIIO::TypeString) return std::string(p.get_string());
+    if (p.type() == OIIO::TypeInt) return std::to_string(p.get_int());
+    if (p.type() == OIIO::TypeDesc::DOUBLE)
+        return fmt::format("{}", *static_cast<const double*>(p.data()));
+    if (p.type() == OIIO::TypeFloat) return fmt::format("{}", p.get_float());
+    return std::nullopt;
+}
+
 // A streak image (write_streak_exr) as a cube of height 1; nullopt when the file's header does
 // not mark it as one (a cube, a steady image: read_exr_cube then names the problem).
 std::optional<io::Cube> read_streak(const std::string& path) {
@@ -153,8 +163,9 @@ std::optional<io::Cube> read_streak(const std::string& path) {
             cube.depth[x] = pixels[x * size_t(nc) + size_t(channel[3])];
     }
     for (const OIIO::ParamValue& p : spec.extra_attribs)
-        if (p.type() == OIIO::TypeString && starts_with(p.name().string(), "femto:"))
-            cube.attributes.emplace_back(p.name().string(), p.get_string());
+        if (starts_with(p.name().string(), "femto:"))
+            if (std::optional<std::string> value = attribute_text(p))
+                cube.attributes.emplace_back(p.name().string(), *value);
     return cube;
 }
 
@@ -177,7 +188,7 @@ io::Cube load_cube(const std::string& path) {
     }
     if (std::string(magic, 6) != "\x93NUMPY") {
         // A single-part OpenEXR file (the version field's multi-part bit, 0x1000, is clear)
-        // may be a streak image; a cube has a part per bin.
+        // may be a streak image; a cube has a frames part and (usually) a depth part.
         const bool single_part_exr =
             std::string(magic, 4) == "\x76\x2f\x31\x01" && (uint8_t(magic[5]) & 0x10) == 0;
         if (single_part_exr)

@@ -121,10 +121,10 @@ public:
                                     invalid_.load()));
         const std::vector<float> rgb = steady_image();
         const io::Attributes attrs = io::render_attributes(info);
-        const std::string exr = out_base + ".exr", png = out_base + ".png";
-        io::write_exr_rgb(exr, width_, height_, rgb.data(), attrs);
-        io::write_png_preview(png, width_, height_, rgb.data(), exposure_);
-        return {exr, png};
+        io::OutputSet files;
+        io::write_exr_rgb(files.add(out_base + ".exr"), width_, height_, rgb.data(), attrs);
+        io::write_png_preview(files.add(out_base + ".png"), width_, height_, rgb.data(), exposure_);
+        return files.commit();
     }
 
 private:

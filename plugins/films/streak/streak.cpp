@@ -193,19 +193,19 @@ public:
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
         warn_rejected();
-        std::vector<std::string> files;
+        io::OutputSet files;
         for (size_t s = 0; s < rows_.size(); ++s) {
             io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());
             attrs.push_back({"femto:row", std::to_string(rows_[s])});
             const io::Cube row = row_cube(s);
             const std::string base = fmt::format("{}_row{:04}", out_base, rows_[s]);
-            files.push_back(base + ".exr");
-            viz::write_streak_exr(files.back(), row, 0, std::move(attrs));  // adds femto:layout
-            files.push_back(base + ".png");
+            // write_streak_exr adds femto:layout
+            viz::write_streak_exr(files.add(base + ".exr"), row, 0, std::move(attrs));
             const std::vector<float> img = viz::streak_slice(row, 0);
-            io::write_png_preview(files.back(), width_, grid_.bins, img.data(), exposure_);
+            io::write_png_preview(files.add(base + ".png"), width_, grid_.bins, img.data(),
+                                  exposure_);
         }
-        return files;
+        return files.commit();
     }
 
     std::vector<int> rows_;         // sorted

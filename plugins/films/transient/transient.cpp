@@ -1,7 +1,8 @@
 // Time-resolved film (x-y-t cube): every contribution is reconstructed in space by the
 // <rfilter> and in time by the <tfilter> (histogram by default) on a grid of `bins` bins.
-// Writes OUTBASE.exr (one EXR part per bin plus a depth part), OUTBASE_steady.exr (the
-// time-integrated image), OUTBASE.png (its preview) and, with --npy, OUTBASE.npy.
+// Writes OUTBASE.exr (the frames stacked top to bottom, plus a depth part), OUTBASE_steady.exr
+// (the time-integrated image), OUTBASE.png (its preview) and, with --npy, OUTBASE.npy, as one
+// io::OutputSet: the files replace earlier outputs together or not at all.
 //
 // Memory: the cube (W*H*T*3 floats) is allocated once; per-pixel filter weights and depth
 // sums are doubles. Blocks hold one tile (plus the filter border) of the cube each. Sums are
@@ -12,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include "femto/film.h"
@@ -118,8 +120,20 @@ public:
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the cube would need {:.1f} GiB (limit 64 GiB)",
                                            bytes / double(1 << 30)));
+        const std::string compression = props.get_string("compression", "rle");
+        if (!io::parse_exr_compression(compression, exr_.compression))
+            props.fail("compression", fmt::format("unknown compression \"{}\"; valid: none, rle, "
+                                                  "zips, zip, piz",
+                                                  compression));
+        if (int64_t(height_) * grid_.bins > std::numeric_limits<int>::max())
+            props.fail("bins",
+                       fmt::format("height x bins = {} exceeds the {} rows an EXR image "
+                                   "can hold",
+                                   int64_t(height_) * grid_.bins, std::numeric_limits<int>::max()));
+        // Writing adds at most ~1/16 of the cube (write_exr_cube's frame batches; the .npy
+        // files stream a pixel at a time): 1/8 keeps a margin for OpenEXR's line buffers.
         const double total =
-            bytes * (1 + (variance_enabled_ ? 1 : 0) + (count_enabled_ ? 1.0 / 3 : 0));
+            bytes * (1 + (variance_enabled_ ? 1 : 0) + (count_enabled_ ? 1.0 / 3 : 0) + 1.0 / 8);
         const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
         if (ram > 0 && total > 0.75 * ram)
             props.fail("bins",
@@ -243,48 +257,42 @@ public:
         io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());
         if (tfilter_->max_radius() > 0) attrs.push_back(window_spill_attribute());
         const std::vector<float> scale = pixel_normalisation();
-        std::vector<std::string> files;
-        files.push_back(out_base + ".exr");
-        io::write_exr_cube(files.back(), width_, height_, grid_.bins, cube_.data(), depth.data(),
-                           attrs, scale.data());
+        const std::vector<size_t> shape = {size_t(height_), size_t(width_), size_t(grid_.bins), 3};
+        io::OutputSet files;  // all appear together, or none
+        io::write_exr_cube(files.add(out_base + ".exr"), width_, height_, grid_.bins, cube_.data(),
+                           depth.data(), attrs, scale.data(), exr_);
         const std::vector<float> steady = steady_image();
-        files.push_back(out_base + "_steady.exr");
-        io::write_exr_rgb(files.back(), width_, height_, steady.data(), attrs);
-        files.push_back(out_base + ".png");
-        io::write_png_preview(files.back(), width_, height_, steady.data(), exposure_);
-        if (info.write_npy) {
-            files.push_back(out_base + ".npy");
-            io::write_npy(files.back(), {size_t(height_), size_t(width_), size_t(grid_.bins), 3},
-                          cube_.data(), scale.data());
-        }
-        if (variance_enabled_) {
-            // Variance of each pixel-bin estimate (a weighted mean of per-sample values):
-            // (E_w[v^2] - E_w[v]^2) / (n_eff - 1), n_eff = (sum w)^2 / sum w^2.
-            const size_t T3 = size_t(grid_.bins) * 3;
-            std::vector<float> var(cube_.size(), 0.f);
-            for (size_t p = 0; p < pixels; ++p) {
-                const PixelSums& pw = weights_[p];
-                if (!(pw.weight > 0) || !(pw.weight2 > 0)) continue;
-                const double n_eff = pw.weight * pw.weight / pw.weight2;
-                if (!(n_eff > 1)) continue;
-                for (size_t i = 0; i < T3; ++i) {
-                    const double m = cube_[p * T3 + i] / pw.weight,
-                                 m2 = sq_[p * T3 + i] / pw.weight;
-                    var[p * T3 + i] = float(std::max(0.0, m2 - m * m) / (n_eff - 1));
-                }
-            }
-            files.push_back(out_base + "_variance.npy");
-            io::write_npy(files.back(), {size_t(height_), size_t(width_), size_t(grid_.bins), 3},
-                          var.data());
-        }
-        if (count_enabled_) {
-            files.push_back(out_base + "_count.npy");
-            io::write_npy(files.back(), {size_t(height_), size_t(width_), size_t(grid_.bins)},
-                          count_.data());
-        }
-        return files;
+        io::write_exr_rgb(files.add(out_base + "_steady.exr"), width_, height_, steady.data(),
+                          attrs);
+        io::write_png_preview(files.add(out_base + ".png"), width_, height_, steady.data(),
+                              exposure_);
+        if (info.write_npy)
+            io::write_npy(files.add(out_base + ".npy"), shape, cube_.data(), scale.data());
+        if (variance_enabled_)
+            io::write_npy_pixels(files.add(out_base + "_variance.npy"), shape,
+                                 [&](size_t p, float* out) { pixel_variance(p, out); });
+        if (count_enabled_)
+            io::write_npy(files.add(out_base + "_count.npy"),
+                          {size_t(height_), size_t(width_), size_t(grid_.bins)}, count_.data());
+        return files.commit();
     }
 
+    /// Variance of each of pixel p's bin estimates (a weighted mean of per-sample values):
+    /// (E_w[v^2] - E_w[v]^2) / (n_eff - 1), n_eff = (sum w)^2 / sum w^2; 0 where undefined.
+    void pixel_variance(size_t p, float* out) const {
+        const size_t T3 = size_t(grid_.bins) * 3;
+        std::fill(out, out + T3, 0.f);
+        const PixelSums& pw = weights_[p];
+        if (!(pw.weight > 0) || !(pw.weight2 > 0)) return;
+        const double n_eff = pw.weight * pw.weight / pw.weight2;
+        if (!(n_eff > 1)) return;
+        for (size_t i = 0; i < T3; ++i) {
+            const double m = cube_[p * T3 + i] / pw.weight, m2 = sq_[p * T3 + i] / pw.weight;
+            out[i] = float(std::max(0.0, m2 - m * m) / (n_eff - 1));
+        }
+    }
+
+    io::ExrCubeOptions exr_;
     bool count_enabled_ = false, variance_enabled_ = false;
     std::vector<float> cube_, count_, sq_;
     mutable std::mutex pool_mutex_;
@@ -325,8 +333,11 @@ CubeBlock::~CubeBlock() {
 
 FEMTO_PLUGIN(
     TransientFilm, femto::PluginKind::Film, "transient",
-    "Time-resolved film: an x-y-t cube of radiance, one EXR part per time bin",
-    {{"aovs", "string", "",
+    "Time-resolved film: an x-y-t cube of radiance (EXR frames stacked top to bottom)",
+    {{"compression", "string", "rle",
+      "OpenEXR compression of OUTBASE.exr: none, rle, zips, zip or piz (docs/outputs.md "
+      "compares them)"},
+     {"aovs", "string", "",
       "comma-separated: \"count\" writes OUTBASE_count.npy (contributions per pixel and bin), "
       "\"variance\" OUTBASE_variance.npy (variance of each pixel-bin estimate, by the "
       "formula for independent samples: it overstates the error of ldsampler renders)"}})
