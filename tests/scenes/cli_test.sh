@@ -125,6 +125,35 @@ sigint_partial)
   n=$(exr_attr out/int.exr femto:samples)
   [ "$n" -gt 0 ] && [ "$n" -lt 100000 ] || fail "samples attribute $n"
   no_temp_files out || fail "temporary files left";;
+write_signals)
+  # Ctrl-C twice and SIGTERM while the outputs are being written: femto explains, finishes
+  # a complete set, leaves no temporary file and exits 130 (the first signal's code).
+  "$femto" render "$scene" -o out/big -D spp=1 -D res=256 -D bins=512 --npy 2> err.txt &
+  pid=$!
+  for _ in $(seq 6000); do
+    grep -q 'writing out/big' err.txt && break
+    kill -0 $pid 2>/dev/null || break
+    sleep 0.01
+  done
+  kill -INT $pid; sleep 0.05; kill -INT $pid; sleep 0.05; kill -TERM $pid
+  wait $pid; code=$?
+  [ "$code" -eq 130 ] || { cat err.txt >&2; fail "exit code $code, expected 130"; }
+  grep -q 'still writing the outputs' err.txt || { cat err.txt >&2; fail "no explanation (did writing end before the signals?)"; }
+  for f in big.exr big_steady.exr big.png big.npy; do [ -s "out/$f" ] || fail "$f missing"; done
+  iinfo out/big.exr | grep -q '256 x 131072' || fail "the cube is not readable"
+  [ "$(stat -c %s out/big.npy)" -eq $((128 + 256 * 256 * 512 * 12)) ] || fail "the .npy is incomplete"
+  no_temp_files out || fail "temporary files left";;
+full_disk)
+  # A write that fails part-way (RLIMIT_FSIZE standing in for a full disk) keeps the previous
+  # outputs, says which file and why, and leaves no temporary file.
+  "$femto" render "$scene" -o out/x -D spp=1 -D res=32 -D bins=256 --npy -q || fail "first render"
+  cp out/x.exr before.exr
+  ( trap '' XFSZ; ulimit -f 1024; exec "$femto" render "$scene" -o out/x -D spp=2 -D res=32 \
+      -D bins=256 --npy --seed 7 -q ) 2> stderr.txt; code=$?
+  [ "$code" -eq 2 ] || { cat stderr.txt >&2; fail "exit code $code, expected 2"; }
+  grep -Eq 'cannot write "out/x\.npy": File too large' stderr.txt || { cat stderr.txt >&2; fail "message"; }
+  cmp -s out/x.exr before.exr || fail "the EXR was replaced by a new one beside an old .npy"
+  no_temp_files out || fail "temporary files left";;
 compat_cbox)
   need_compat
   expect_exit 0 'focus_distance' -- "$femto" render "$compat/mitsuba06-cbox/mts1-cbox-rgb.xml" -o out/cbox --lenient -D spp=4 -D res=64 -q

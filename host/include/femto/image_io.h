@@ -74,24 +74,39 @@ void write_npy_pixels(const std::string& path, const std::vector<size_t>& shape,
 /// Reads a float32 .npy file; returns the data and sets `shape`.
 std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape);
 
-/// A render's output files, made visible together. Write each file to the path add() returns
-/// (a hidden temporary name in the destination folder); commit() then renames them all into
-/// place. Until commit() the previous outputs stay untouched, and files of a set that is never
-/// committed (an error while writing one of them) are removed, so a failed write never leaves
-/// a new EXR beside an old .npy. If a rename fails, the error names the files already replaced.
+namespace detail {
+struct OutputSetAccess;
+}
+
+/// A render's output files, made visible together. While a set is alive, the files added to it
+/// and written (by any writer here, on this thread) stay under their hidden temporary names;
+/// commit() then renames them all into place:
+///
+///     io::OutputSet files;
+///     io::write_exr_rgb(files.add(base + ".exr"), ...);
+///     io::write_png_preview(files.add(base + ".png"), ...);
+///     return files.commit();
+///
+/// Until commit() the previous outputs stay untouched, and the files of a set that is never
+/// committed (an error while writing one of them) are removed, so a failed write never leaves a
+/// new EXR beside an old .npy. If a rename fails, the error names the files already replaced.
 class OutputSet {
 public:
-    OutputSet() = default;
+    OutputSet();
     OutputSet(const OutputSet&) = delete;
     OutputSet& operator=(const OutputSet&) = delete;
     ~OutputSet();
-    /// Registers `path` and returns the temporary path to write it to.
+    /// Makes `path` part of the set; returns it (to hand to a writer).
     std::string add(const std::string& path);
     /// Renames every file into place; returns the final paths in the order they were added.
     std::vector<std::string> commit();
 
 private:
+    friend struct detail::OutputSetAccess;
+    bool hold(const std::string& tmp, const std::string& path);
+    void close();
     std::vector<std::pair<std::string, std::string>> files_;  // {temporary, final}
+    bool open_ = true;
 };
 
 /// Path of the OpenColorIO config in use ($FEMTO_OCIO_CONFIG, else the one shipped).

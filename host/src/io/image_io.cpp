@@ -34,6 +34,11 @@ namespace femto::io {
 
 namespace detail {
 
+struct OutputSetAccess {
+    static std::vector<OutputSet*>& open_sets();
+    static bool hold(const std::string& tmp, const std::string& path);
+};
+
 std::string temp_path_for(const std::string& path) {
     static std::atomic<unsigned> counter{0};
     const fs::path p(path);
@@ -43,6 +48,7 @@ std::string temp_path_for(const std::string& path) {
 }
 
 void commit_file(const std::string& tmp, const std::string& path) {
+    if (OutputSetAccess::hold(tmp, path)) return;  // renamed with the rest of its set
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) {
@@ -564,13 +570,15 @@ void write_npy_file(const std::string& path, const std::vector<size_t>& shape,
                     const std::function<void(std::ofstream&)>& body) {
     const std::string tmp = temp_path_for(path);
     {
-        std::ofstream out(tmp, std::ios::binary);
         errno = 0;
-        out << npy_header(shape);
+        std::ofstream out(tmp, std::ios::binary);
+        int err = out ? 0 : errno;  // the first failure's reason; later calls overwrite errno
+        if (out) out << npy_header(shape);
         if (out) body(out);
+        if (!out && !err) err = errno;
         out.close();  // a full disk often shows only when the last buffer is flushed
         if (out.fail()) {
-            const int err = errno;
+            if (!err) err = errno;
             std::error_code ec;
             fs::remove(tmp, ec);
             throw SceneError(fmt::format("cannot write \"{}\": {}", path,
@@ -661,31 +669,72 @@ std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape)
 
 // ---- output sets --------------------------------------------------------------------------
 
+namespace detail {
+
+// The sets open on this thread, innermost last: commit_file hands a finished file to the set
+// that holds its path instead of renaming it.
+std::vector<OutputSet*>& OutputSetAccess::open_sets() {
+    thread_local std::vector<OutputSet*> sets;
+    return sets;
+}
+
+bool OutputSetAccess::hold(const std::string& tmp, const std::string& path) {
+    auto& sets = open_sets();
+    for (auto it = sets.rbegin(); it != sets.rend(); ++it)
+        if ((*it)->hold(tmp, path)) return true;
+    return false;
+}
+
+}  // namespace detail
+
+OutputSet::OutputSet() { detail::OutputSetAccess::open_sets().push_back(this); }
+
+void OutputSet::close() {
+    if (!open_) return;
+    auto& sets = detail::OutputSetAccess::open_sets();
+    sets.erase(std::remove(sets.begin(), sets.end(), this), sets.end());
+    open_ = false;
+}
+
 std::string OutputSet::add(const std::string& path) {
-    files_.emplace_back(temp_path_for(path), path);
-    return files_.back().first;
+    files_.emplace_back(std::string(), path);
+    return files_.back().second;
+}
+
+bool OutputSet::hold(const std::string& tmp, const std::string& path) {
+    for (auto& [held, final_path] : files_)
+        if (final_path == path && held.empty()) {
+            held = tmp;
+            return true;
+        }
+    return false;
 }
 
 std::vector<std::string> OutputSet::commit() {
+    close();
+    for (const auto& [tmp, path] : files_)
+        if (tmp.empty()) throw SceneError(fmt::format("\"{}\" was never written", path));
     std::vector<std::string> done;
-    for (size_t i = 0; i < files_.size(); ++i) {
+    for (auto& [tmp, path] : files_) {
         std::error_code ec;
-        fs::rename(files_[i].first, files_[i].second, ec);
+        fs::rename(tmp, path, ec);
         if (ec) {
             const std::string replaced =
                 done.empty() ? "none" : fmt::format("\"{}\"", fmt::join(done, "\", \""));
             throw SceneError(fmt::format("cannot write \"{}\": {} (outputs already replaced: {})",
-                                         files_[i].second, ec.message(), replaced));
+                                         path, ec.message(), replaced));
         }
-        done.push_back(files_[i].second);
+        tmp.clear();
+        done.push_back(path);
     }
     return done;
 }
 
 OutputSet::~OutputSet() {
+    close();
     for (const auto& [tmp, path] : files_) {
         std::error_code ec;
-        fs::remove(tmp, ec);  // nothing there once committed
+        if (!tmp.empty()) fs::remove(tmp, ec);  // not committed: the old outputs stay
     }
 }
 

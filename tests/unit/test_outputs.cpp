@@ -1,0 +1,257 @@
+// Output files: the transient cube's EXR layout (stacked frames, any bin count, the older
+// one-part-per-bin layout still read), typed header numbers, streamed .npy files, and
+// OutputSet (a render's files appear together, or the previous ones stay).
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfMultiPartOutputFile.h>
+#include <OpenEXR/ImfOutputPart.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "femto/error.h"
+#include "femto/image_io.h"
+#include "femto/testing/render.h"
+
+namespace fs = std::filesystem;
+using namespace femto;
+using femto::testing::temp_dir;
+
+namespace {
+
+// A cube whose every value is distinct, so any misplaced value shows.
+std::vector<float> numbered_cube(int w, int h, int bins) {
+    std::vector<float> data(size_t(w) * size_t(h) * size_t(bins) * 3);
+    for (size_t i = 0; i < data.size(); ++i) data[i] = float(i) * 0.25f + 1.f;
+    return data;
+}
+
+float value(const std::vector<float>& cube, int w, int bins, int x, int y, int t, int c) {
+    return cube[((size_t(y) * size_t(w) + size_t(x)) * size_t(bins) + size_t(t)) * 3 + size_t(c)];
+}
+
+std::string read_text(const fs::path& p) {
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void write_text(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+
+}  // namespace
+
+// Shapes that take each batch path of the writer: a band of rows of one frame (< 32 bins),
+// a few whole frames (32..255), 16 frames with a remainder (300 = 18 x 16 + 12), one bin.
+class CubeLayout : public ::testing::TestWithParam<std::tuple<int, int, int>> {};
+
+TEST_P(CubeLayout, FramesAreStackedTopToBottomAndReadBack) {
+    const auto [w, h, bins] = GetParam();
+    const auto dir = temp_dir("cube-layout");
+    const std::vector<float> data = numbered_cube(w, h, bins);
+    std::vector<float> scale(size_t(w) * size_t(h)), depth(scale.size());
+    for (size_t p = 0; p < scale.size(); ++p) {
+        scale[p] = 1.f / float(p + 2);
+        depth[p] = float(p) - 0.5f;
+    }
+    const std::string path = (dir / "c.exr").string();
+    io::write_exr_cube(path, w, h, bins, data.data(), depth.data(),
+                       {{"femto:bins", std::to_string(bins)}, {"femto:start", "0.05"}},
+                       scale.data());
+    // As any EXR reader sees it: the first part, W wide and H * bins tall, bin t at rows t*H...
+    int strip_w = 0, strip_h = 0;
+    const std::vector<float> strip = io::read_image_rgb(path, strip_w, strip_h, false);
+    ASSERT_EQ(strip_w, w);
+    ASSERT_EQ(strip_h, h * bins);
+    for (int t = 0; t < bins; ++t)
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(strip[((size_t(t) * h + y) * w + x) * 3 + c],
+                              value(data, w, bins, x, y, t, c) * scale[size_t(y) * w + x])
+                        << "x " << x << " y " << y << " t " << t;
+    // ... and as femto reads it back: the scaled cube, the depth, the attributes.
+    const io::Cube cube = io::read_exr_cube(path);
+    EXPECT_EQ(cube.width, w);
+    EXPECT_EQ(cube.height, h);
+    EXPECT_EQ(cube.bins, bins);
+    for (size_t i = 0; i < data.size(); ++i)
+        ASSERT_EQ(cube.data[i], data[i] * scale[i / (size_t(bins) * 3)]) << i;
+    EXPECT_EQ(cube.depth, depth);
+    ASSERT_NE(cube.attribute("femto:start"), nullptr);
+    EXPECT_EQ(*cube.attribute("femto:start"), "0.05");
+    EXPECT_EQ(cube.attribute("femto:frame_height"), nullptr) << "a layout attribute leaked";
+}
+
+INSTANTIATE_TEST_SUITE_P(Shapes, CubeLayout,
+                         ::testing::Values(std::make_tuple(3, 2, 4), std::make_tuple(5, 3, 40),
+                                           std::make_tuple(4, 3, 300), std::make_tuple(2, 2, 1),
+                                           std::make_tuple(1, 7, 17)));
+
+TEST(CubeLayout, ManyBinsOfATinyFilmRoundTrip) {
+    // 2^16 bins of a 3x2 film: a strip of 131,072 rows (one part per bin would need ~1.4 GB
+    // of OpenEXR state to write it).
+    const int w = 3, h = 2, bins = 1 << 16;
+    const auto dir = temp_dir("cube-many-bins");
+    const std::vector<float> data = numbered_cube(w, h, bins);
+    const std::string path = (dir / "c.exr").string();
+    io::write_exr_cube(path, w, h, bins, data.data(), nullptr,
+                       {{"femto:bins", std::to_string(bins)}});
+    const io::Cube cube = io::read_exr_cube(path);
+    EXPECT_EQ(cube.bins, bins);
+    EXPECT_EQ(cube.data, data);
+    EXPECT_TRUE(cube.depth.empty());
+}
+
+TEST(CubeLayout, TheOlderOnePartPerBinLayoutIsStillRead) {
+    const int w = 3, h = 2, bins = 3;
+    const auto dir = temp_dir("cube-legacy");
+    const std::vector<float> data = numbered_cube(w, h, bins);
+    const std::string path = (dir / "old.exr").string();
+    {
+        std::vector<Imf::Header> headers;
+        for (int t = 0; t < bins; ++t) {
+            Imf::Header hd(w, h);
+            hd.setName("t0000" + std::to_string(t));
+            hd.setType(Imf::SCANLINEIMAGE);
+            for (const char* c : {"R", "G", "B"}) hd.channels().insert(c, Imf::Channel(Imf::FLOAT));
+            hd.insert("femto:start", Imf::StringAttribute("1.5"));
+            headers.push_back(hd);
+        }
+        Imf::MultiPartOutputFile file(path.c_str(), headers.data(), bins);
+        const size_t xs = size_t(bins) * 3 * sizeof(float), ys = xs * w;
+        for (int t = 0; t < bins; ++t) {
+            Imf::OutputPart part(file, t);
+            Imf::FrameBuffer fb;
+            char* base = reinterpret_cast<char*>(const_cast<float*>(data.data() + t * 3));
+            for (int c = 0; c < 3; ++c)
+                fb.insert(std::string(1, "RGB"[c]),
+                          Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+            part.setFrameBuffer(fb);
+            part.writePixels(h);
+        }
+    }
+    const io::Cube cube = io::read_exr_cube(path);
+    EXPECT_EQ(cube.bins, bins);
+    EXPECT_EQ(cube.data, data);
+    EXPECT_EQ(*cube.attribute("femto:start"), "1.5");
+}
+
+TEST(CubeLayout, HeaderNumbersAreTypedAndBigIntegersStayExact) {
+    const auto dir = temp_dir("cube-attrs");
+    const std::vector<float> data = numbered_cube(2, 1, 2);
+    const std::string path = (dir / "c.exr").string();
+    io::write_exr_cube(path, 2, 1, 2, data.data(), nullptr,
+                       {{"femto:bins", "2"},
+                        {"femto:start", "0.05"},
+                        {"femto:seed", "18446744073709551615"},
+                        {"femto:scene", "a.xml"}});
+    auto in = OIIO::ImageInput::open(path);
+    ASSERT_TRUE(in);
+    const OIIO::ImageSpec& spec = in->spec();
+    EXPECT_EQ(spec.getattributetype("femto:bins"), OIIO::TypeInt);
+    EXPECT_EQ(spec.getattributetype("femto:start"), OIIO::TypeDesc(OIIO::TypeDesc::DOUBLE));
+    EXPECT_EQ(spec.getattributetype("femto:seed"), OIIO::TypeString) << "a double would round it";
+    EXPECT_EQ(spec.getattributetype("femto:scene"), OIIO::TypeString);
+    in->close();
+    const io::Cube cube = io::read_exr_cube(path);
+    EXPECT_EQ(*cube.attribute("femto:start"), "0.05");
+    EXPECT_EQ(*cube.attribute("femto:seed"), "18446744073709551615");
+}
+
+TEST(CubeLayout, CompressionsAllRoundTrip) {
+    const auto dir = temp_dir("cube-compression");
+    const std::vector<float> data = numbered_cube(5, 4, 64);
+    for (const char* name : {"none", "rle", "zips", "zip", "piz"}) {
+        io::ExrCubeOptions options;
+        ASSERT_TRUE(io::parse_exr_compression(name, options.compression));
+        options.threads = 2;
+        const std::string path = (dir / (std::string(name) + ".exr")).string();
+        io::write_exr_cube(path, 5, 4, 64, data.data(), nullptr, {{"femto:bins", "64"}}, nullptr,
+                           options);
+        EXPECT_EQ(io::read_exr_cube(path).data, data) << name;
+    }
+    io::ExrCubeOptions::Compression c;
+    EXPECT_FALSE(io::parse_exr_compression("b44", c));
+}
+
+TEST(Npy, StreamedPixelsAndWriteErrorsSayWhy) {
+    const auto dir = temp_dir("npy-stream");
+    const std::string path = (dir / "v.npy").string();
+    io::write_npy_pixels(path, {2, 3, 4}, [](size_t p, float* out) {
+        for (int k = 0; k < 4; ++k) out[k] = float(p * 10 + k);
+    });
+    std::vector<size_t> shape;
+    const std::vector<float> v = io::read_npy(path, shape);
+    EXPECT_EQ(shape, (std::vector<size_t>{2, 3, 4}));
+    EXPECT_EQ(v[5 * 4 + 3], 53.f);
+    try {
+        io::write_npy((dir / "no" / "such" / "x.npy").string(), {1}, v.data());
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("No such file"), std::string::npos) << e.what();
+    }
+}
+
+TEST(OutputSet, FilesAppearTogetherOnCommit) {
+    const auto dir = temp_dir("output-set");
+    write_text(dir / "a.npy", "old a");
+    const float one = 1.f;
+    std::vector<std::string> files;
+    {
+        io::OutputSet set;
+        io::write_npy(set.add((dir / "a.npy").string()), {1}, &one);
+        io::write_npy(set.add((dir / "b.npy").string()), {1}, &one);
+        EXPECT_EQ(read_text(dir / "a.npy"), "old a") << "replaced before commit";
+        EXPECT_FALSE(fs::exists(dir / "b.npy"));
+        files = set.commit();
+    }
+    EXPECT_EQ(files,
+              (std::vector<std::string>{(dir / "a.npy").string(), (dir / "b.npy").string()}));
+    std::vector<size_t> shape;
+    EXPECT_EQ(io::read_npy((dir / "a.npy").string(), shape), std::vector<float>{1.f});
+    EXPECT_EQ(io::read_npy((dir / "b.npy").string(), shape), std::vector<float>{1.f});
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
+}
+
+TEST(OutputSet, AnAbandonedSetLeavesThePreviousFilesAndNoTemporaries) {
+    const auto dir = temp_dir("output-set-abandon");
+    write_text(dir / "a.npy", "old a");
+    const float one = 1.f;
+    try {
+        io::OutputSet set;
+        io::write_npy(set.add((dir / "a.npy").string()), {1}, &one);
+        io::write_npy(set.add((dir / "no" / "b.npy").string()), {1}, &one);  // fails
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("cannot write \"" + (dir / "no" / "b.npy").string()),
+                  std::string::npos)
+            << "the message names the output, not its temporary: " << e.what();
+    }
+    EXPECT_EQ(read_text(dir / "a.npy"), "old a");
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+}
+
+TEST(OutputSet, AFailedRenameNamesTheFilesAlreadyReplaced) {
+    const auto dir = temp_dir("output-set-rename");
+    fs::create_directories(dir / "b.npy" / "inside");  // a folder in the way
+    const float one = 1.f;
+    io::OutputSet set;
+    io::write_npy(set.add((dir / "a.npy").string()), {1}, &one);
+    io::write_npy(set.add((dir / "b.npy").string()), {1}, &one);
+    try {
+        set.commit();
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("b.npy"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("already replaced: \"" + (dir / "a.npy").string()), std::string::npos)
+            << msg;
+    }
+}
