@@ -56,7 +56,17 @@ plugins_schema)
   "$femto" plugins roughconductor > s.txt || fail "exit code"
   grep -q "alpha" s.txt && grep -q "distribution" s.txt || fail "schema incomplete";;
 plugins_unknown)
-  expect_exit 2 'no plugin named "nosuch"' -- "$femto" plugins nosuch;;
+  expect_exit 2 '^femto: error: no plugin named "nosuch" \(`femto plugins` lists them\)' -- "$femto" plugins nosuch
+  expect_exit 2 '^femto: error: no plugin named "transient_pth"; did you mean "transient_path"\?' -- "$femto" plugins transient_pth;;
+unknown_command)
+  expect_exit 2 '^femto: error: unknown command "rendr"; did you mean "render"\? \(commands: render, plugins, viz\)$' -- "$femto" rendr x.xml
+  expect_exit 2 '^femto: error: unknown command "scene\.xml" \(commands: render, plugins, viz\)$' -- "$femto" scene.xml
+  expect_exit 2 '^femto: error: `femto` needs a command \(commands: render, plugins, viz\)$' -- "$femto"
+  expect_exit 2 '^femto: error: unknown viz command "peaktime"; did you mean "peak-time"\? \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz peaktime x.exr -o p.png
+  expect_exit 2 '^femto: error: `femto viz` needs a viz command \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz
+  # Help still works without a command.
+  "$femto" --help | grep -q 'Subcommands' || fail "femto --help"
+  "$femto" viz --help | grep -q 'peak-time' || fail "femto viz --help";;
 plugin_docs_fresh)
   "$femto" plugins --markdown > plugins.md || fail "exit code"
   diff -u "$src/docs/plugins.md" plugins.md > diff.txt ||
@@ -75,7 +85,11 @@ bad_xml)
   [ ! -e out/x.exr ] || fail "output written";;
 unknown_plugin)
   printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="spehre"/>\n</scene>\n' > u.xml
-  expect_exit 2 'u\.xml:3:1: unknown <shape> plugin "spehre" \(did you mean "sphere"\?\)' -- "$femto" render u.xml -o out/u -q;;
+  expect_exit 2 'u\.xml:3:1: unknown <shape> plugin "spehre" \(did you mean "sphere"\?\)' -- "$femto" render u.xml -o out/u -q
+  # An empty type is named as such, not "corrected" to a short name such as "hg".
+  printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="sphere">\n<bsdf type=""/>\n</shape>\n</scene>\n' > e.xml
+  expect_exit 2 'e\.xml:4:1: the <bsdf> type is empty' -- "$femto" render e.xml -o out/e -q
+  ! grep -q 'did you mean' stderr.txt || fail "an empty type got a suggestion";;
 missing_scene)
   expect_exit 2 'does not exist' -- "$femto" render nothere.xml -q;;
 missing_mesh)
@@ -182,7 +196,7 @@ viz_bad_input)
   expect_exit 2 'need the cube.s time axis' -- "$femto" viz peak-time out/cb.npy -o out/p.png --exr out/p.exr
   expect_exit 2 'tone' -- "$femto" viz frames out/cb.exr -o out/f --tone gamma
   expect_exit 2 'must end in \.exr' -- "$femto" viz unwarp out/cb.exr -o out/u.png --to world
-  expect_exit 2 'subcommand' -- "$femto" viz
+  expect_exit 2 'needs a viz command' -- "$femto" viz
   [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;
 streak_film)
   streak_scene > streak.xml

@@ -121,6 +121,11 @@ TEST(Loader, StrictParameters) {
     EXPECT_NE(msg.find("unknown <shape> plugin \"rectangel\" (did you mean \"rectangle\"?)"),
               std::string::npos)
         << msg;
+    // An empty type is named as such, not "corrected" to some short plugin name like "hg".
+    msg = load_error(scene_xml("<shape type=\"rectangle\"><bsdf type=\"\"/></shape>"));
+    EXPECT_NE(msg.find("<string>:3:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("the <bsdf> type is empty"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("did you mean"), std::string::npos) << msg;
     // A plugin of the wrong kind.
     msg = load_error(scene_xml("<shape type=\"diffuse\"/>"));
     EXPECT_NE(msg.find("is a <bsdf> plugin, but it is used as a <shape>"), std::string::npos)

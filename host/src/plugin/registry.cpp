@@ -114,9 +114,14 @@ std::vector<std::string> plugin_search_path(const std::vector<std::string>& extr
 const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
                                     const std::vector<std::string>& extra_dirs,
                                     const SourceLocation& loc) {
+    // Said plainly rather than "corrected": every short plugin name is close to "".
+    if (type.find_first_not_of(" \t\r\n") == std::string::npos)
+        throw SceneError(loc, fmt::format("the <{}> type is empty: name a <{}> plugin (`femto "
+                                          "plugins` lists them)",
+                                          kind_tag(kind), kind_tag(kind)));
     std::lock_guard<std::mutex> lock(g_mutex);
     const auto dirs = plugin_search_path(extra_dirs);
-    bool valid_name = !type.empty();
+    bool valid_name = true;
     for (char c : type)
         if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'))
             valid_name = false;
