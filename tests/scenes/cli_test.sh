@@ -121,6 +121,13 @@ bad_define)
   expect_exit 2 'expected name=value' -- "$femto" render "$scene" -D novalue -q
   expect_exit 2 'width must be in' -- "$femto" render "$scene" -D res=-1 -o out/d -q
   expect_exit 2 'scene\.xml:[0-9]+:[0-9]+: integer "width": "nan" is not an integer' -- "$femto" render "$scene" -D res=nan -o out/d -q;;
+unused_define)
+  # A -D the scene does not use is a typo until proven otherwise: an error naming the scene's
+  # parameters and the closest one; --lenient makes it a warning and renders.
+  expect_exit 2 '^femto: error: -D sppp=4: .*scene\.xml has no parameter "sppp" \(did you mean "spp"\?\); its parameters \(<default> names and \$names\): bins, max_depth, res, spp$' -- "$femto" render "$scene" -D sppp=4 -o out/u -q
+  [ ! -e out/u.exr ] || fail "output written"
+  expect_exit 0 '^warning: -D sppp=4: .* -- ignored \(--lenient\)$' -- "$femto" render "$scene" -D sppp=4 -D spp=1 -D res=8 -D bins=4 --lenient -o out/l -q
+  [ -s out/l.exr ] || fail "--lenient did not render";;
 sigint_partial)
   "$femto" render "$scene" -o out/int -D spp=100000 -D res=64 -q 2> err.txt &
   pid=$!

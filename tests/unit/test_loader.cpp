@@ -4,6 +4,7 @@
 
 #include "femto/bsdf.h"
 #include "femto/integrator.h"
+#include "femto/log.h"
 #include "femto/sensor.h"
 #include "scene_util.h"
 #include "xml/parser.h"
@@ -55,6 +56,33 @@ TEST(Loader, DefaultsSubstitutionAndDefines) {
                              std::string(kRect)));
     EXPECT_NE(msg.find("$nope is not defined"), std::string::npos) << msg;
     EXPECT_NE(msg.find("<string>:2:"), std::string::npos) << msg;  // file:line:col
+}
+
+TEST(Loader, UnusedDefineIsAnError) {
+    // The scene's parameters are its <default> names and the $names it uses.
+    const std::string xml = scene_xml(
+        "<default name=\"width_px\" value=\"16\"/>"
+        "<sensor type=\"perspective\"><film type=\"hdrfilm\">"
+        "<integer name=\"width\" value=\"$width_px\"/>"
+        "<integer name=\"height\" value=\"$height_px\"/></film></sensor>" +
+        std::string(kRect));
+    LoadOptions opts;
+    opts.defines = {{"height_px", "8"}, {"widht_px", "24"}};
+    const std::string msg = load_error(xml, opts);
+    EXPECT_NE(msg.find("-D widht_px=24: the scene has no parameter \"widht_px\" (did you mean "
+                       "\"width_px\"?)"),
+              std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("$names): height_px, width_px"), std::string::npos) << msg;
+    // A scene without parameters says so.
+    opts.defines = {{"spp", "4"}};
+    EXPECT_NE(load_error(scene_xml(kRect), opts).find("$names): (none)"), std::string::npos);
+    // --lenient: a warning, and the scene loads.
+    opts.lenient = true;
+    opts.defines = {{"height_px", "8"}, {"widht_px", "24"}};
+    const int warnings = warning_count();
+    EXPECT_EQ(load_scene_string(xml, opts)->sensor().film().width(), 16);
+    EXPECT_EQ(warning_count(), warnings + 1);
 }
 
 TEST(Loader, IncludeIsRelativeToTheIncludingFile) {
