@@ -26,6 +26,8 @@ constexpr int kExitOk = 0;
 constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInterrupted = 130;
+constexpr const char* kPluginDirHelp =
+    "Plugin folder, searched before femto's own plugins (repeatable; the first given wins)";
 
 std::atomic<bool> g_stop{false};
 
@@ -208,6 +210,7 @@ int cmd_render(const std::string& scene_path, std::string out_base,
                const std::vector<std::string>& defines, uint32_t spp, int threads, uint64_t seed,
                bool quiet, bool npy, femto::LoadOptions opts) {
     for (const auto& d : defines) opts.defines.push_back(parse_define(d));
+    femto::plugin_search_path(opts);  // checks the --plugin-dir folders before any work
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
     out_base = strip_output_extension(out_base);
     prepare_output(out_base);
@@ -262,7 +265,7 @@ int main(int argc, char** argv) {
         ->check(whole_number_in(1, 4096));
     render->add_option("--seed", seed, "Random seed")
         ->check(whole_number_in(0, std::numeric_limits<uint64_t>::max()));
-    render->add_option("--plugin-dir", opts.plugin_dirs, "Extra plugin folder (repeatable)");
+    render->add_option("--plugin-dir", opts.plugin_dirs, kPluginDirHelp);
     render->add_flag("--lenient", opts.lenient,
                      "Warn about unknown/unused parameters instead of failing");
     render->add_flag("-q,--quiet", quiet, "No progress or summary output");
@@ -273,7 +276,7 @@ int main(int argc, char** argv) {
     std::string plugin_name;
     bool markdown = false;
     plugins->add_option("name", plugin_name, "Plugin type name");
-    plugins->add_option("--plugin-dir", opts.plugin_dirs, "Extra plugin folder (repeatable)");
+    plugins->add_option("--plugin-dir", opts.plugin_dirs, kPluginDirHelp);
     plugins->add_flag("--markdown", markdown, "Print the reference in Markdown (docs/plugins.md)");
     CLI::App* viz = femto::cli::add_viz_command(app);
 

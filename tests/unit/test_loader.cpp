@@ -259,3 +259,21 @@ TEST(Loader, LazyPluginLoading) {
         EXPECT_EQ(f.find("ply.so"), std::string::npos) << f;
     }
 }
+
+TEST(Loader, PluginDirsMustBeFolders) {
+    // A --plugin-dir that is missing or a file is an error naming it, not an empty folder.
+    const std::filesystem::path dir = femto::test::temp_dir("plugin-dirs");
+    femto::test::write_text(dir / "afile", "");
+    LoadOptions opts;
+    opts.plugin_dirs = {(dir / "missing").string()};
+    EXPECT_NE(
+        load_error(scene_xml(kRect), opts)
+            .find("plugin folder \"" + opts.plugin_dirs[0] + "\" (--plugin-dir) does not exist"),
+        std::string::npos);
+    opts.plugin_dirs = {(dir / "afile").string()};
+    EXPECT_NE(load_error(scene_xml(kRect), opts).find("is not a folder"), std::string::npos);
+    // An empty folder is fine, and searched before femto's own plugins.
+    opts.plugin_dirs = {dir.string()};
+    EXPECT_NO_THROW(load_scene_string(scene_xml(kRect), opts));
+    EXPECT_EQ(plugin_search_path(opts).front(), dir.string());
+}
