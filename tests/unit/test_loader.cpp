@@ -143,7 +143,13 @@ TEST(Loader, StrictParameters) {
     // Wrong type.
     msg = load_error(scene_xml(
         "<shape type=\"rectangle\"><string name=\"flip_normals\" value=\"yes\"/></shape>"));
-    EXPECT_NE(msg.find("must be a boolean"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("must be a boolean, but a string was given"), std::string::npos) << msg;
+    // ... with the right article.
+    msg =
+        load_error(scene_xml("<integrator type=\"path\"><float name=\"max_depth\" "
+                             "value=\"2.5\"/></integrator>" +
+                             std::string(kRect)));
+    EXPECT_NE(msg.find("must be an integer, but a float was given"), std::string::npos) << msg;
     // Unknown plugin, with suggestion.
     msg = load_error(scene_xml("<shape type=\"rectangel\"/>"));
     EXPECT_NE(msg.find("unknown <shape> plugin \"rectangel\" (did you mean \"rectangle\"?)"),
@@ -157,6 +163,10 @@ TEST(Loader, StrictParameters) {
     // A plugin of the wrong kind.
     msg = load_error(scene_xml("<shape type=\"diffuse\"/>"));
     EXPECT_NE(msg.find("is a <bsdf> plugin, but it is used as a <shape>"), std::string::npos)
+        << msg;
+    msg = load_error(scene_xml("<emitter type=\"path\"/>" + std::string(kRect)));
+    EXPECT_NE(msg.find("is an <integrator> plugin, but it is used as an <emitter>"),
+              std::string::npos)
         << msg;
     // Unknown tag and attribute.
     msg =

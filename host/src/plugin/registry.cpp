@@ -175,9 +175,9 @@ const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
                                     const SourceLocation& loc) {
     // Said plainly rather than "corrected": every short plugin name is close to "".
     if (type.find_first_not_of(" \t\r\n") == std::string::npos)
-        throw SceneError(loc, fmt::format("the <{}> type is empty: name a <{}> plugin (`femto "
+        throw SceneError(loc, fmt::format("the <{}> type is empty: name {} plugin (`femto "
                                           "plugins` lists them)",
-                                          kind_tag(kind), kind_tag(kind)));
+                                          kind_tag(kind), tag_with_article(kind)));
     std::lock_guard<std::mutex> lock(g_mutex);
     const auto dirs = plugin_search_path(extra_dirs);
     bool valid_name = true;
@@ -194,10 +194,9 @@ const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
     report_shadowed(type, libraries);
     const LoadedPlugin& p = open_plugin(libraries.front(), loc);
     if (p.descriptor->kind != kind)
-        throw SceneError(loc,
-                         fmt::format("plugin \"{}\" ({}) is a <{}> plugin, but it is used as "
-                                     "a <{}>",
-                                     type, p.path, kind_tag(p.descriptor->kind), kind_tag(kind)));
+        throw SceneError(
+            loc, fmt::format("plugin \"{}\" ({}) is {} plugin, but it is used as {}", type, p.path,
+                             tag_with_article(p.descriptor->kind), tag_with_article(kind)));
     return *p.descriptor;
 }
 

@@ -40,6 +40,18 @@ std::string did_you_mean(const std::string& name, const std::vector<std::string>
     return best.empty() ? std::string() : " (did you mean \"" + best + "\"?)";
 }
 
+std::string with_article(const std::string& noun) {
+    const size_t first = noun.find_first_not_of("<\"`");
+    const char c = first == std::string::npos
+                       ? 'x'
+                       : char(std::tolower(static_cast<unsigned char>(noun[first])));
+    return (std::string("aeiou").find(c) != std::string::npos ? "an " : "a ") + noun;
+}
+
+std::string tag_with_article(PluginKind kind) {
+    return with_article("<" + std::string(kind_tag(kind)) + ">");
+}
+
 std::string join(const std::vector<std::string>& items, const std::string& sep) {
     std::string out;
     for (size_t i = 0; i < items.size(); ++i) {
