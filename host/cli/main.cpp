@@ -16,6 +16,7 @@
 #include "femto/integrator.h"
 #include "femto/log.h"
 #include "femto/sensor.h"
+#include "util/strings.h"
 #include "viz.h"
 
 namespace fs = std::filesystem;
@@ -27,6 +28,8 @@ constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInterrupted = 130;
 constexpr int kExitSignalBase = 128;  // the shell convention: 128 + signal number
+constexpr const char* kPluginDirHelp =
+    "Plugin folder, searched before femto's own plugins (repeatable; the first given wins)";
 
 // Ctrl-C (SIGINT) and SIGTERM (batch schedulers send it before a time limit) stop the render
 // after the current pass; what was rendered is written and femto exits 128 + the signal. While
@@ -93,6 +96,58 @@ std::pair<std::string, std::string> parse_define(const std::string& text) {
 
 std::string kind_heading(femto::PluginKind k) { return femto::kind_tag(k); }
 
+// "; did you mean \"x\"?" for the closest of `candidates`, or "".
+std::string did_you_mean_clause(const std::string& word,
+                                const std::vector<std::string>& candidates) {
+    const std::string closest = femto::detail::closest_match(word, candidates);
+    return closest.empty() ? std::string() : fmt::format("; did you mean \"{}\"?", closest);
+}
+
+std::vector<std::string> command_names(const CLI::App& app) {
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app.get_subcommands(std::function<bool(const CLI::App*)>{}))
+        names.push_back(sub->get_name());
+    return names;
+}
+
+// Checks the command words (`render`, `viz peak-time`) before CLI11 parses them: for a
+// mistyped one CLI11 only says "A subcommand is required", femto names the word it did not
+// know and the closest command. The levels that have commands take no option values, so the
+// first word not starting with '-' is the command.
+void check_command_words(const CLI::App& app, int argc, char** argv) {
+    const CLI::App* level = &app;
+    std::string words;  // the commands read so far: "" at the top, then "viz"
+    bool asks_for_help = false;
+    for (int i = 1; i < argc; ++i) {
+        const std::string word = argv[i];
+        if (word.rfind('-', 0) == 0) {
+            asks_for_help =
+                asks_for_help || word == "-h" || word == "--help" || word == "--version";
+            continue;
+        }
+        const std::vector<std::string> names = command_names(*level);
+        const std::string kind = words.empty() ? "" : words + " ";  // "viz command"
+        if (std::find(names.begin(), names.end(), word) == names.end())
+            throw femto::SceneError(fmt::format("unknown {0}command \"{1}\"{2} ({0}commands: {3})",
+                                                kind, word, did_you_mean_clause(word, names),
+                                                femto::detail::join(names)));
+        level = level->get_subcommand(word);
+        if (level->get_subcommands(std::function<bool(const CLI::App*)>{}).empty()) return;
+        words += words.empty() ? word : " " + word;
+    }
+    if (!asks_for_help && level->get_require_subcommand_min() > 0) {
+        const std::string kind = words.empty() ? "" : words + " ";
+        throw femto::SceneError(fmt::format("`femto{}` needs a {}command ({}commands: {})",
+                                            words.empty() ? "" : " " + words, kind, kind,
+                                            femto::detail::join(command_names(*level))));
+    }
+}
+
+int report_bad_input(const std::string& message) {
+    std::fprintf(stderr, "femto: error: %s\n", message.c_str());
+    return kExitBadInput;
+}
+
 int cmd_plugins(const std::string& name, bool markdown, const femto::LoadOptions& opts) {
     auto plugins = femto::list_plugins(opts);
     std::map<int, std::vector<const femto::PluginDescriptor*>> by_kind;
@@ -129,9 +184,13 @@ int cmd_plugins(const std::string& name, bool markdown, const femto::LoadOptions
                 fmt::print("  (from {})\n", path);
                 found = true;
             }
-        if (!found)
+        if (!found) {
+            std::vector<std::string> names;
+            for (const auto& [path, d] : plugins) names.push_back(d->type_name);
             throw femto::SceneError(
-                fmt::format("no plugin named \"{}\" (run `femto plugins`)", name));
+                fmt::format("no plugin named \"{}\"{} (`femto plugins` lists them)", name,
+                            did_you_mean_clause(name, names)));
+        }
         return kExitOk;
     }
     if (markdown) {
@@ -178,6 +237,7 @@ int cmd_render(const std::string& scene_path, std::string out_base,
                const std::vector<std::string>& defines, uint32_t spp, int threads, uint64_t seed,
                bool quiet, bool npy, femto::LoadOptions opts) {
     for (const auto& d : defines) opts.defines.push_back(parse_define(d));
+    femto::plugin_search_path(opts);  // checks the --plugin-dir folders before any work
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
     out_base = strip_output_extension(out_base);
     prepare_output(out_base);
@@ -238,7 +298,7 @@ int main(int argc, char** argv) {
         ->check(whole_number_in(1, 4096));
     render->add_option("--seed", seed, "Random seed")
         ->check(whole_number_in(0, std::numeric_limits<uint64_t>::max()));
-    render->add_option("--plugin-dir", opts.plugin_dirs, "Extra plugin folder (repeatable)");
+    render->add_option("--plugin-dir", opts.plugin_dirs, kPluginDirHelp);
     render->add_flag("--lenient", opts.lenient,
                      "Warn about unknown/unused parameters instead of failing");
     render->add_flag("-q,--quiet", quiet, "No progress or summary output");
@@ -249,18 +309,20 @@ int main(int argc, char** argv) {
     std::string plugin_name;
     bool markdown = false;
     plugins->add_option("name", plugin_name, "Plugin type name");
-    plugins->add_option("--plugin-dir", opts.plugin_dirs, "Extra plugin folder (repeatable)");
+    plugins->add_option("--plugin-dir", opts.plugin_dirs, kPluginDirHelp);
     plugins->add_flag("--markdown", markdown, "Print the reference in Markdown (docs/plugins.md)");
     CLI::App* viz = femto::cli::add_viz_command(app);
 
     try {
+        check_command_words(app, argc, argv);
         app.parse(argc, argv);
     } catch (const CLI::Success& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         // Usage errors read like every other femto error; the help text stays one --help away.
-        std::fprintf(stderr, "femto: error: %s (see femto --help)\n", e.what());
-        return kExitBadInput;
+        return report_bad_input(fmt::format("{} (see femto --help)", e.what()));
+    } catch (const femto::SceneError& e) {
+        return report_bad_input(e.what());
     }
     try {
         if (render->parsed())
@@ -268,8 +330,7 @@ int main(int argc, char** argv) {
         if (plugins->parsed()) return cmd_plugins(plugin_name, markdown, opts);
         if (viz->parsed()) return femto::cli::run_viz_command();
     } catch (const femto::SceneError& e) {
-        std::fprintf(stderr, "femto: error: %s\n", e.what());
-        return kExitBadInput;
+        return report_bad_input(e.what());
     } catch (const std::exception& e) {
         std::fprintf(stderr, "femto: internal error: %s\n", e.what());
         return kExitInternal;

@@ -6,6 +6,7 @@
 
 #include "femto/plugin.h"
 #include "femto/texture.h"
+#include "util/strings.h"
 
 namespace femto {
 
@@ -129,8 +130,8 @@ const Properties::Entry& Properties::require(const std::string& name, Type type)
                     (type == Type::Point && e->type == Type::Vector) ||
                     (type == Type::Vector && e->type == Type::Point);
     if (!ok)
-        fail(name, "parameter \"" + name + "\" must be a " + type_name(type) + ", but a " +
-                       type_name(e->type) + " was given");
+        fail(name, "parameter \"" + name + "\" must be " + detail::with_article(type_name(type)) +
+                       ", but " + detail::with_article(type_name(e->type)) + " was given");
     e->read = true;
     return *e;
 }
@@ -215,8 +216,8 @@ ObjectPtr Properties::get_object(const std::string& name, PluginKind kind) const
     if (!e) return nullptr;
     const ObjectPtr& obj = std::get<ObjectPtr>(require(name, Type::Object).value);
     if (obj->kind() != kind)
-        fail(name, "\"" + name + "\" must be a <" + kind_tag(kind) + ">, but a <" +
-                       kind_tag(obj->kind()) + "> was given");
+        fail(name, "\"" + name + "\" must be " + detail::tag_with_article(kind) + ", but " +
+                       detail::tag_with_article(obj->kind()) + " was given");
     return obj;
 }
 

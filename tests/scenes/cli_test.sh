@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # One end-to-end case of the femto CLI: cli_test.sh CASE FEMTO_BINARY SOURCE_DIR WORK_DIR
 set -uo pipefail
-case_name=$1 femto=$2 src=$3 work=$4
+case_name=$1 femto=$2 src=$3 work=$4 shadow=${5:-}  # shadow: the test plugins named "path"
 rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
 scene="$src/scenes/cornell-box/scene.xml"
 compat="$src/../shared/compat-scenes"
@@ -21,6 +21,10 @@ expect_exit() {
   local got=$?
   [ "$got" -eq "$code" ] || { cat stderr.txt >&2; fail "exit code $got, expected $code: $*"; }
   grep -Eq -- "$pattern" stderr.txt || { cat stderr.txt >&2; fail "stderr does not match /$pattern/"; }
+}
+# "min max" of an image's first channel.
+pixel_range() {
+  oiiotool "$1" --printstats | sed -n 's/.*Stats Min: *\([0-9.e+-]*\).*/\1/p;s/.*Stats Max: *\([0-9.e+-]*\).*/\1/p' | head -2 | tr '\n' ' '
 }
 exr_attr() { iinfo -v "$1" | sed -n "s/^ *$2: *\"\{0,1\}\([^\"]*\)\"\{0,1\}$/\1/p"; }
 no_temp_files() { ! ls -A "$1" | grep -q '\.tmp'; }
@@ -56,7 +60,17 @@ plugins_schema)
   "$femto" plugins roughconductor > s.txt || fail "exit code"
   grep -q "alpha" s.txt && grep -q "distribution" s.txt || fail "schema incomplete";;
 plugins_unknown)
-  expect_exit 2 'no plugin named "nosuch"' -- "$femto" plugins nosuch;;
+  expect_exit 2 '^femto: error: no plugin named "nosuch" \(`femto plugins` lists them\)' -- "$femto" plugins nosuch
+  expect_exit 2 '^femto: error: no plugin named "transient_pth"; did you mean "transient_path"\?' -- "$femto" plugins transient_pth;;
+unknown_command)
+  expect_exit 2 '^femto: error: unknown command "rendr"; did you mean "render"\? \(commands: render, plugins, viz\)$' -- "$femto" rendr x.xml
+  expect_exit 2 '^femto: error: unknown command "scene\.xml" \(commands: render, plugins, viz\)$' -- "$femto" scene.xml
+  expect_exit 2 '^femto: error: `femto` needs a command \(commands: render, plugins, viz\)$' -- "$femto"
+  expect_exit 2 '^femto: error: unknown viz command "peaktime"; did you mean "peak-time"\? \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz peaktime x.exr -o p.png
+  expect_exit 2 '^femto: error: `femto viz` needs a viz command \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz
+  # Help still works without a command.
+  "$femto" --help | grep -q 'Subcommands' || fail "femto --help"
+  "$femto" viz --help | grep -q 'peak-time' || fail "femto viz --help";;
 plugin_docs_fresh)
   "$femto" plugins --markdown > plugins.md || fail "exit code"
   diff -u "$src/docs/plugins.md" plugins.md > diff.txt ||
@@ -75,7 +89,11 @@ bad_xml)
   [ ! -e out/x.exr ] || fail "output written";;
 unknown_plugin)
   printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="spehre"/>\n</scene>\n' > u.xml
-  expect_exit 2 'u\.xml:3:1: unknown <shape> plugin "spehre" \(did you mean "sphere"\?\)' -- "$femto" render u.xml -o out/u -q;;
+  expect_exit 2 'u\.xml:3:1: unknown <shape> plugin "spehre" \(did you mean "sphere"\?\)' -- "$femto" render u.xml -o out/u -q
+  # An empty type is named as such, not "corrected" to a short name such as "hg".
+  printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="sphere">\n<bsdf type=""/>\n</shape>\n</scene>\n' > e.xml
+  expect_exit 2 'e\.xml:4:1: the <bsdf> type is empty' -- "$femto" render e.xml -o out/e -q
+  ! grep -q 'did you mean' stderr.txt || fail "an empty type got a suggestion";;
 missing_scene)
   expect_exit 2 'does not exist' -- "$femto" render nothere.xml -q;;
 missing_mesh)
@@ -107,6 +125,57 @@ bad_define)
   expect_exit 2 'expected name=value' -- "$femto" render "$scene" -D novalue -q
   expect_exit 2 'width must be in' -- "$femto" render "$scene" -D res=-1 -o out/d -q
   expect_exit 2 'scene\.xml:[0-9]+:[0-9]+: integer "width": "nan" is not an integer' -- "$femto" render "$scene" -D res=nan -o out/d -q;;
+unused_define)
+  # A -D the scene does not use is a typo until proven otherwise: an error naming the scene's
+  # parameters and the closest one; --lenient makes it a warning and renders.
+  expect_exit 2 '^femto: error: -D sppp=4: .*scene\.xml has no parameter "sppp" \(did you mean "spp"\?\); its parameters \(<default> names and \$names\): bins, max_depth, res, spp$' -- "$femto" render "$scene" -D sppp=4 -o out/u -q
+  [ ! -e out/u.exr ] || fail "output written"
+  expect_exit 0 '^warning: -D sppp=4: .* -- ignored \(--lenient\)$' -- "$femto" render "$scene" -D sppp=4 -D spp=1 -D res=8 -D bins=4 --lenient -o out/l -q
+  [ -s out/l.exr ] || fail "--lenient did not render";;
+bad_plugin_dir)
+  touch afile
+  expect_exit 2 '^femto: error: plugin folder "/nonexistent" \(--plugin-dir\) does not exist$' -- "$femto" render "$scene" --plugin-dir /nonexistent -o out/x -q
+  expect_exit 2 '^femto: error: plugin folder "afile" \(--plugin-dir\) is not a folder' -- "$femto" render "$scene" --plugin-dir afile -o out/x -q
+  expect_exit 2 '^femto: error: plugin folder "/nonexistent" \(--plugin-dir\) does not exist$' -- "$femto" plugins --plugin-dir /nonexistent
+  [ ! -e out ] || fail "the render started";;
+plugin_shadowing)
+  # A type is found by its library's file name, <type>.so, on the search path: --plugin-dir
+  # folders in the order given, femto's own plugins, then $FEMTO_PLUGIN_PATH. When several
+  # libraries provide a type, the first is used and a warning names it and the ignored ones.
+  # $shadow/a/path.so and $shadow/b/path.so are test plugins of type "path" (like the built-in
+  # integrator) that render 0.25 and 0.75 everywhere.
+  [ -f "$shadow/a/path.so" ] && [ -f "$shadow/b/path.so" ] || fail "test plugins missing in '$shadow'"
+  "$femto" plugins path > builtin.txt 2>&1 || fail "femto plugins path"
+  builtin=$(sed -n 's/^  (from \(.*\))$/\1/p' builtin.txt)
+  [ -f "$builtin" ] && ! grep -q '^warning' builtin.txt || { cat builtin.txt >&2; fail "built-in path.so"; }
+  printf '%s\n' '<scene version="3.0.0"><integrator type="path"/><sensor type="orthographic">' \
+    '<sampler type="independent"><integer name="sample_count" value="1"/></sampler>' \
+    '<film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/><rfilter type="box"/></film>' \
+    '</sensor><shape type="rectangle"/></scene>' > s.xml
+  expect_shadow() {  # expect_shadow USED IGNORED...: the warning of the last command
+    local ignored; ignored=$(IFS=,; echo "$*" | cut -d, -f2- | sed 's/,/, /g')
+    grep -qF "warning: plugin type \"path\" is provided by $# libraries: using $1, ignoring $ignored (" stderr.txt ||
+      { cat stderr.txt >&2; fail "no warning that $1 shadows $ignored"; }
+  }
+  # `femto plugins path` shows the library used; a --plugin-dir wins over the built-in plugin.
+  expect_exit 0 'provided by 2 libraries' -- "$femto" plugins path --plugin-dir "$shadow/a"
+  expect_shadow "$shadow/a/path.so" "$builtin"
+  grep -q 'copy a' stdout.txt && grep -qF "(from $shadow/a/path.so)" stdout.txt || { cat stdout.txt >&2; fail "femto plugins path"; }
+  expect_exit 0 'provided by 2 libraries' -- "$femto" render s.xml --plugin-dir "$shadow/a" -o out/a -q
+  [ "$(pixel_range out/a.exr)" = "0.250000 0.250000 " ] || fail "rendered $(pixel_range out/a.exr), not copy a's 0.25"
+  # Between two --plugin-dir folders the first given wins.
+  expect_exit 0 'provided by 3 libraries' -- "$femto" render s.xml --plugin-dir "$shadow/b" --plugin-dir "$shadow/a" -o out/ba -q
+  expect_shadow "$shadow/b/path.so" "$shadow/a/path.so" "$builtin"
+  [ "$(pixel_range out/ba.exr)" = "0.750000 0.750000 " ] || fail "rendered $(pixel_range out/ba.exr), not copy b's 0.75"
+  # $FEMTO_PLUGIN_PATH adds types; it does not replace a built-in one.
+  expect_exit 0 'provided by 2 libraries' -- env FEMTO_PLUGIN_PATH="$shadow/a" "$femto" plugins path
+  expect_shadow "$builtin" "$shadow/a/path.so"
+  # Without a second library: no warning.
+  "$femto" render s.xml -o out/builtin -q 2> stderr.txt && [ ! -s stderr.txt ] || { cat stderr.txt >&2; fail "built-in path"; }
+  # A library is identified by its descriptor's type name, which must match its file name: a
+  # copy of the built-in `direct` under the name path.so is refused.
+  mkdir copy && cp "$(dirname "$builtin")/direct.so" copy/path.so
+  expect_exit 2 '^femto: error: s\.xml:1:[0-9]+: plugin copy/path\.so declares the type "direct": a plugin library must be named after its type \(direct\.so\)$' -- "$femto" render s.xml --plugin-dir copy -o out/c -q;;
 sigint_partial)
   "$femto" render "$scene" -o out/int -D spp=100000 -D res=64 -q 2> err.txt &
   pid=$!
@@ -211,7 +280,7 @@ viz_bad_input)
   expect_exit 2 'need the cube.s time axis' -- "$femto" viz peak-time out/cb.npy -o out/p.png --exr out/p.exr
   expect_exit 2 'tone' -- "$femto" viz frames out/cb.exr -o out/f --tone gamma
   expect_exit 2 'must end in \.exr' -- "$femto" viz unwarp out/cb.exr -o out/u.png --to world
-  expect_exit 2 'subcommand' -- "$femto" viz
+  expect_exit 2 'needs a viz command' -- "$femto" viz
   [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;
 streak_film)
   streak_scene > streak.xml

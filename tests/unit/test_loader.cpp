@@ -4,6 +4,7 @@
 
 #include "femto/bsdf.h"
 #include "femto/integrator.h"
+#include "femto/log.h"
 #include "femto/sensor.h"
 #include "scene_util.h"
 #include "xml/parser.h"
@@ -55,6 +56,33 @@ TEST(Loader, DefaultsSubstitutionAndDefines) {
                              std::string(kRect)));
     EXPECT_NE(msg.find("$nope is not defined"), std::string::npos) << msg;
     EXPECT_NE(msg.find("<string>:2:"), std::string::npos) << msg;  // file:line:col
+}
+
+TEST(Loader, UnusedDefineIsAnError) {
+    // The scene's parameters are its <default> names and the $names it uses.
+    const std::string xml = scene_xml(
+        "<default name=\"width_px\" value=\"16\"/>"
+        "<sensor type=\"perspective\"><film type=\"hdrfilm\">"
+        "<integer name=\"width\" value=\"$width_px\"/>"
+        "<integer name=\"height\" value=\"$height_px\"/></film></sensor>" +
+        std::string(kRect));
+    LoadOptions opts;
+    opts.defines = {{"height_px", "8"}, {"widht_px", "24"}};
+    const std::string msg = load_error(xml, opts);
+    EXPECT_NE(msg.find("-D widht_px=24: the scene has no parameter \"widht_px\" (did you mean "
+                       "\"width_px\"?)"),
+              std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("$names): height_px, width_px"), std::string::npos) << msg;
+    // A scene without parameters says so.
+    opts.defines = {{"spp", "4"}};
+    EXPECT_NE(load_error(scene_xml(kRect), opts).find("$names): (none)"), std::string::npos);
+    // --lenient: a warning, and the scene loads.
+    opts.lenient = true;
+    opts.defines = {{"height_px", "8"}, {"widht_px", "24"}};
+    const int warnings = warning_count();
+    EXPECT_EQ(load_scene_string(xml, opts)->sensor().film().width(), 16);
+    EXPECT_EQ(warning_count(), warnings + 1);
 }
 
 TEST(Loader, IncludeIsRelativeToTheIncludingFile) {
@@ -115,15 +143,30 @@ TEST(Loader, StrictParameters) {
     // Wrong type.
     msg = load_error(scene_xml(
         "<shape type=\"rectangle\"><string name=\"flip_normals\" value=\"yes\"/></shape>"));
-    EXPECT_NE(msg.find("must be a boolean"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("must be a boolean, but a string was given"), std::string::npos) << msg;
+    // ... with the right article.
+    msg =
+        load_error(scene_xml("<integrator type=\"path\"><float name=\"max_depth\" "
+                             "value=\"2.5\"/></integrator>" +
+                             std::string(kRect)));
+    EXPECT_NE(msg.find("must be an integer, but a float was given"), std::string::npos) << msg;
     // Unknown plugin, with suggestion.
     msg = load_error(scene_xml("<shape type=\"rectangel\"/>"));
     EXPECT_NE(msg.find("unknown <shape> plugin \"rectangel\" (did you mean \"rectangle\"?)"),
               std::string::npos)
         << msg;
+    // An empty type is named as such, not "corrected" to some short plugin name like "hg".
+    msg = load_error(scene_xml("<shape type=\"rectangle\"><bsdf type=\"\"/></shape>"));
+    EXPECT_NE(msg.find("<string>:3:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("the <bsdf> type is empty"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("did you mean"), std::string::npos) << msg;
     // A plugin of the wrong kind.
     msg = load_error(scene_xml("<shape type=\"diffuse\"/>"));
     EXPECT_NE(msg.find("is a <bsdf> plugin, but it is used as a <shape>"), std::string::npos)
+        << msg;
+    msg = load_error(scene_xml("<emitter type=\"path\"/>" + std::string(kRect)));
+    EXPECT_NE(msg.find("is an <integrator> plugin, but it is used as an <emitter>"),
+              std::string::npos)
         << msg;
     // Unknown tag and attribute.
     msg =
@@ -225,4 +268,22 @@ TEST(Loader, LazyPluginLoading) {
             << "a plugin the scene never names was loaded: " << f;
         EXPECT_EQ(f.find("ply.so"), std::string::npos) << f;
     }
+}
+
+TEST(Loader, PluginDirsMustBeFolders) {
+    // A --plugin-dir that is missing or a file is an error naming it, not an empty folder.
+    const std::filesystem::path dir = femto::test::temp_dir("plugin-dirs");
+    femto::test::write_text(dir / "afile", "");
+    LoadOptions opts;
+    opts.plugin_dirs = {(dir / "missing").string()};
+    EXPECT_NE(
+        load_error(scene_xml(kRect), opts)
+            .find("plugin folder \"" + opts.plugin_dirs[0] + "\" (--plugin-dir) does not exist"),
+        std::string::npos);
+    opts.plugin_dirs = {(dir / "afile").string()};
+    EXPECT_NE(load_error(scene_xml(kRect), opts).find("is not a folder"), std::string::npos);
+    // An empty folder is fine, and searched before femto's own plugins.
+    opts.plugin_dirs = {dir.string()};
+    EXPECT_NO_THROW(load_scene_string(scene_xml(kRect), opts));
+    EXPECT_EQ(plugin_search_path(opts).front(), dir.string());
 }

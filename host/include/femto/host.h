@@ -20,8 +20,8 @@ namespace femto {
 struct LoadOptions {
     /// `-D name=value` overrides for `<default>` parameters.
     std::vector<std::pair<std::string, std::string>> defines;
-    /// Extra plugin folders (`--plugin-dir`), searched after the build folder and
-    /// $FEMTO_PLUGIN_PATH.
+    /// Extra plugin folders (`--plugin-dir`), searched first, in order: their plugins replace
+    /// built-in ones of the same type. Each must be an existing folder.
     std::vector<std::string> plugin_dirs;
     /// Report unread parameters as warnings instead of errors.
     bool lenient = false;
@@ -41,7 +41,8 @@ ObjectPtr create_object(PluginKind kind, const std::string& type, const Properti
 /// Descriptor of plugin `type` of `kind`, loading it on first use. Throws SceneError.
 const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
                                     const LoadOptions& options = {});
-/// Every plugin found on the search path (this loads them all).
+/// Every plugin type on the search path with the library that provides it (the first one
+/// found; this loads them all).
 std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(
     const LoadOptions& options = {});
 /// Paths of the plugin libraries opened so far (lazy loading means: only those named).

@@ -3,11 +3,14 @@
 #include <dlfcn.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <set>
 
+#include "femto/log.h"
 #include "util/strings.h"
 
 namespace fs = std::filesystem;
@@ -69,32 +72,89 @@ const LoadedPlugin& open_plugin(const std::string& path, const SourceLocation& l
                                           "installed femto headers",
                                           path, found, kPluginAbiVersion));
     }
+    // A type is found by its file name, so the two must agree (a library copied under another
+    // name would otherwise stand in for a type it does not implement).
+    if (fs::path(path).stem().string() != d->type_name) {
+        const std::string declared = d->type_name;
+        dlclose(handle);
+        throw SceneError(loc, fmt::format("plugin {} declares the type \"{}\": a plugin library "
+                                          "must be named after its type ({}.so)",
+                                          path, declared, declared));
+    }
     g_load_order.push_back(path);
     return g_by_path.emplace(path, LoadedPlugin{path, d}).first->second;
 }
 
+// The types in `dirs` (their libraries' file names without .so), sorted, each once.
 std::vector<std::string> available_types(const std::vector<std::string>& dirs) {
-    std::vector<std::string> names;
+    std::set<std::string> names;
     for (const auto& dir : dirs) {
         std::error_code ec;
         for (const auto& e : fs::directory_iterator(dir, ec))
-            if (e.path().extension() == ".so") names.push_back(e.path().stem().string());
+            if (e.path().extension() == ".so") names.insert(e.path().stem().string());
     }
-    return names;
+    return {names.begin(), names.end()};
+}
+
+// Every library for `type` in `dirs`, in search order: the first one is used.
+std::vector<std::string> libraries_of_type(const std::string& type,
+                                           const std::vector<std::string>& dirs) {
+    std::vector<std::string> found;
+    for (const auto& dir : dirs) {
+        const fs::path candidate = fs::path(dir) / (type + ".so");
+        std::error_code ec;
+        if (fs::exists(candidate, ec)) found.push_back(candidate.string());
+    }
+    return found;
+}
+
+// A type provided by several libraries (a plugin of one's own named like a built-in one, or
+// the same plugin in two folders) is said once per process, naming the library used and the
+// ones ignored: otherwise the only symptom is an unexpected parameter error or image.
+void report_shadowed(const std::string& type, const std::vector<std::string>& libraries) {
+    static std::set<std::string> reported;  // guarded by g_mutex
+    if (libraries.size() < 2 || !reported.insert(join(libraries)).second) return;
+    log_warning(fmt::format(
+        "plugin type \"{}\" is provided by {} libraries: using {}, ignoring {} (the first on the "
+        "plugin search path wins: --plugin-dir folders in the order given, then femto's own "
+        "plugins, then $FEMTO_PLUGIN_PATH)",
+        type, libraries.size(), libraries.front(), join({libraries.begin() + 1, libraries.end()})));
+}
+
+// An explicitly named plugin folder that is missing or not a folder is a mistake, not an
+// empty folder.
+void require_plugin_folder(const std::string& dir) {
+    std::error_code ec;
+    const fs::file_status status = fs::status(dir, ec);
+    if (!fs::exists(status))
+        throw SceneError(fmt::format("plugin folder \"{}\" (--plugin-dir) does not exist", dir));
+    if (!fs::is_directory(status))
+        throw SceneError(fmt::format(
+            "plugin folder \"{}\" (--plugin-dir) is not a folder: give the folder that holds the "
+            "plugin libraries (<type>.so)",
+            dir));
 }
 
 }  // namespace
 
 std::vector<std::string> plugin_search_path(const std::vector<std::string>& extra_dirs) {
     std::vector<std::string> dirs;
+    std::vector<fs::path> canonical;  // the same folder named twice is searched once
     auto add = [&](const std::string& d) {
         if (d.empty()) return;
         std::error_code ec;
         if (!fs::is_directory(d, ec)) return;
-        for (const auto& x : dirs)
-            if (x == d) return;
+        const fs::path c = fs::weakly_canonical(d, ec);
+        if (std::find(canonical.begin(), canonical.end(), c) != canonical.end()) return;
+        canonical.push_back(c);
         dirs.push_back(d);
     };
+    // Folders named explicitly come first, so that a plugin of one's own replaces a built-in
+    // plugin of the same type; $FEMTO_PLUGIN_PATH only adds types.
+    for (const auto& d : extra_dirs) {
+        require_plugin_folder(d);
+        add(d);
+    }
     add(build_dir_if_in_build_tree());
     add(install_dir_near_libfemto());
     if (const char* env = std::getenv("FEMTO_PLUGIN_PATH")) {
@@ -107,55 +167,49 @@ std::vector<std::string> plugin_search_path(const std::vector<std::string>& extr
             start = end + 1;
         }
     }
-    for (const auto& d : extra_dirs) add(d);
     return dirs;
 }
 
 const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
                                     const std::vector<std::string>& extra_dirs,
                                     const SourceLocation& loc) {
+    // Said plainly rather than "corrected": every short plugin name is close to "".
+    if (type.find_first_not_of(" \t\r\n") == std::string::npos)
+        throw SceneError(loc, fmt::format("the <{}> type is empty: name {} plugin (`femto "
+                                          "plugins` lists them)",
+                                          kind_tag(kind), tag_with_article(kind)));
     std::lock_guard<std::mutex> lock(g_mutex);
     const auto dirs = plugin_search_path(extra_dirs);
-    bool valid_name = !type.empty();
+    bool valid_name = true;
     for (char c : type)
         if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'))
             valid_name = false;
-    if (valid_name)
-        for (const auto& dir : dirs) {
-            const fs::path candidate = fs::path(dir) / (type + ".so");
-            std::error_code ec;
-            if (!fs::exists(candidate, ec)) continue;
-            const LoadedPlugin& p = open_plugin(candidate.string(), loc);
-            if (p.descriptor->kind != kind)
-                throw SceneError(
-                    loc, fmt::format("plugin \"{}\" ({}) is a <{}> plugin, but it is "
-                                     "used as a <{}>",
-                                     type, p.path, kind_tag(p.descriptor->kind), kind_tag(kind)));
-            return *p.descriptor;
-        }
-    throw SceneError(
-        loc, fmt::format("unknown <{}> plugin \"{}\"{}; searched: {}", kind_tag(kind), type,
-                         did_you_mean(type, available_types(dirs)),
-                         dirs.empty() ? std::string("(no plugin folder exists)") : join(dirs)));
+    const std::vector<std::string> libraries =
+        valid_name ? libraries_of_type(type, dirs) : std::vector<std::string>();
+    if (libraries.empty())
+        throw SceneError(
+            loc, fmt::format("unknown <{}> plugin \"{}\"{}; searched: {}", kind_tag(kind), type,
+                             did_you_mean(type, available_types(dirs)),
+                             dirs.empty() ? std::string("(no plugin folder exists)") : join(dirs)));
+    report_shadowed(type, libraries);
+    const LoadedPlugin& p = open_plugin(libraries.front(), loc);
+    if (p.descriptor->kind != kind)
+        throw SceneError(
+            loc, fmt::format("plugin \"{}\" ({}) is {} plugin, but it is used as {}", type, p.path,
+                             tag_with_article(p.descriptor->kind), tag_with_article(kind)));
+    return *p.descriptor;
 }
 
 std::vector<std::pair<std::string, const PluginDescriptor*>> list_plugins(
     const std::vector<std::string>& extra_dirs) {
     std::lock_guard<std::mutex> lock(g_mutex);
+    const auto dirs = plugin_search_path(extra_dirs);
     std::vector<std::pair<std::string, const PluginDescriptor*>> out;
-    std::map<std::string, bool> seen;
-    for (const auto& dir : plugin_search_path(extra_dirs)) {
-        std::vector<fs::path> files;
-        std::error_code ec;
-        for (const auto& e : fs::directory_iterator(dir, ec))
-            if (e.path().extension() == ".so") files.push_back(e.path());
-        std::sort(files.begin(), files.end());
-        for (const auto& f : files) {
-            if (seen[f.stem().string()]) continue;  // earlier folders win, as in find_plugin
-            seen[f.stem().string()] = true;
-            const LoadedPlugin& p = open_plugin(f.string(), SourceLocation{});
-            out.emplace_back(p.path, p.descriptor);
-        }
+    for (const std::string& type : available_types(dirs)) {
+        const std::vector<std::string> libraries = libraries_of_type(type, dirs);
+        report_shadowed(type, libraries);
+        const LoadedPlugin& p = open_plugin(libraries.front(), SourceLocation{});
+        out.emplace_back(p.path, p.descriptor);
     }
     return out;
 }

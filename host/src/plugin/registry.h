@@ -10,8 +10,9 @@
 
 namespace femto::detail {
 
-/// Folders searched, in order: the build's plugin folder, the install folder next to
-/// libfemto, $FEMTO_PLUGIN_PATH (colon-separated), then `extra_dirs`.
+/// Folders searched, in order: `extra_dirs` (--plugin-dir, each of which must be a folder:
+/// SceneError otherwise), the build's plugin folder, the install folder next to libfemto, then
+/// $FEMTO_PLUGIN_PATH (colon-separated). The first library of a type wins.
 std::vector<std::string> plugin_search_path(const std::vector<std::string>& extra_dirs);
 
 /// The descriptor of `type`, which must be of `kind`; throws SceneError at `loc` otherwise.

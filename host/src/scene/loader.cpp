@@ -15,6 +15,7 @@
 #include "femto/sensor.h"
 #include "femto/shape.h"
 #include "plugin/registry.h"
+#include "util/lenient.h"
 #include "util/strings.h"
 #include "xml/parser.h"
 
@@ -269,8 +270,7 @@ public:
             const std::string msg = fmt::format(
                 "<{} type=\"{}\"> has no parameter \"{}\"{}; valid: {}", node.tag, desc.type_name,
                 e.name, did_you_mean(e.name, names), names.empty() ? "(none)" : join(names));
-            if (!options_.lenient) throw SceneError(e.location, msg);
-            log_warning(e.location, msg + " -- ignored (--lenient)");
+            reject_unless_lenient(options_.lenient, e.location, msg);
             e.read = true;  // reported already; the plugin never sees it read
         }
     }
@@ -285,8 +285,7 @@ public:
             else
                 msg = fmt::format("<{} type=\"{}\"> did not use parameter \"{}\"", node.tag,
                                   props.plugin_type(), e->name);
-            if (!options_.lenient) throw SceneError(e->location, msg);
-            log_warning(e->location, msg + " -- ignored (--lenient)");
+            reject_unless_lenient(options_.lenient, e->location, msg);
         }
     }
 
@@ -457,14 +456,15 @@ ObjectPtr create_default(PluginKind kind, const std::string& type, const SourceL
 
 std::unique_ptr<Scene> load_scene(const std::string& path, const LoadOptions& options) {
     detail::OptionsScope scope(options);
-    const detail::XmlNode root = detail::parse_scene_file(path, options.defines);
+    const detail::XmlNode root = detail::parse_scene_file(path, options.defines, options.lenient);
     return detail::Instantiator(options).build_scene(root);
 }
 
 std::unique_ptr<Scene> load_scene_string(const std::string& xml, const LoadOptions& options,
                                          const std::string& base_dir) {
     detail::OptionsScope scope(options);
-    const detail::XmlNode root = detail::parse_scene_string(xml, base_dir, options.defines);
+    const detail::XmlNode root =
+        detail::parse_scene_string(xml, base_dir, options.defines, options.lenient);
     return detail::Instantiator(options).build_scene(root);
 }
 

@@ -20,7 +20,8 @@ size_t edit_distance(const std::string& a, const std::string& b) {
     return prev[b.size()];
 }
 
-std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
+std::string closest_match(const std::string& name, const std::vector<std::string>& candidates) {
+    if (name.empty()) return {};
     const std::string* best = nullptr;
     size_t best_d = ~size_t(0);
     for (const auto& c : candidates) {
@@ -31,7 +32,24 @@ std::string did_you_mean(const std::string& name, const std::vector<std::string>
         }
     }
     if (!best || best_d > std::max<size_t>(2, name.size() / 2)) return {};
-    return " (did you mean \"" + *best + "\"?)";
+    return *best;
+}
+
+std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
+    const std::string best = closest_match(name, candidates);
+    return best.empty() ? std::string() : " (did you mean \"" + best + "\"?)";
+}
+
+std::string with_article(const std::string& noun) {
+    const size_t first = noun.find_first_not_of("<\"`");
+    const char c = first == std::string::npos
+                       ? 'x'
+                       : char(std::tolower(static_cast<unsigned char>(noun[first])));
+    return (std::string("aeiou").find(c) != std::string::npos ? "an " : "a ") + noun;
+}
+
+std::string tag_with_article(PluginKind kind) {
+    return with_article("<" + std::string(kind_tag(kind)) + ">");
 }
 
 std::string join(const std::vector<std::string>& items, const std::string& sep) {

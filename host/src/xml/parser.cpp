@@ -8,7 +8,11 @@
 #include <fstream>
 #include <map>
 #include <pugixml.hpp>
+#include <set>
 #include <sstream>
+
+#include "util/lenient.h"
+#include "util/strings.h"
 
 namespace fs = std::filesystem;
 
@@ -33,8 +37,8 @@ constexpr size_t kMaxSceneFileBytes = size_t(1) << 30;
 // Version differences are data: names that the generic camelCase -> snake_case rule gets wrong,
 // and plugin types that were renamed.
 const std::map<std::string, std::string> kIrregularNames = {
-    {"intIOR", "int_ior"},   {"extIOR", "ext_ior"},   {"toUV", "to_uv"},
-    {"fovAxis", "fov_axis"}, {"rrDepth", "rr_depth"}, {"uvScale", "uv_scale"},
+    {"intIOR", "int_ior"},          {"extIOR", "ext_ior"},   {"toUV", "to_uv"},
+    {"fovAxis", "fov_axis"},        {"rrDepth", "rr_depth"}, {"uvScale", "uv_scale"},
     {"densityMultiplier", "scale"},  // media: 0.x's densityMultiplier is Mitsuba 3's scale
 };
 struct TypeRename {
@@ -188,8 +192,10 @@ void expand_includes(XmlNode& node, std::vector<std::string>& stack) {
 bool is_identifier_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
 bool is_identifier_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
 
+// Moves the <default>s into `params` (a -D wins) and their names into `scene_params`.
 void collect_defaults(XmlNode& node, std::map<std::string, std::string>& params,
-                      const std::map<std::string, std::string>& defines) {
+                      const std::map<std::string, std::string>& defines,
+                      std::set<std::string>& scene_params) {
     std::vector<XmlNode> kept;
     for (auto& c : node.children) {
         if (c.tag == "default") {
@@ -202,15 +208,18 @@ void collect_defaults(XmlNode& node, std::map<std::string, std::string>& params,
                 !std::all_of(name->begin(), name->end(), is_identifier_char))
                 throw SceneError(c.location, fmt::format("invalid parameter name \"{}\"", *name));
             if (!defines.count(*name) && !params.count(*name)) params[*name] = *value;
+            scene_params.insert(*name);
             continue;
         }
-        collect_defaults(c, params, defines);
+        collect_defaults(c, params, defines, scene_params);
         kept.push_back(std::move(c));
     }
     node.children = std::move(kept);
 }
 
-void substitute(XmlNode& node, const std::map<std::string, std::string>& params) {
+// Replaces every $name by its value and adds the name to `scene_params`.
+void substitute(XmlNode& node, const std::map<std::string, std::string>& params,
+                std::set<std::string>& scene_params) {
     for (auto& a : node.attributes) {
         if (a.value.find('$') == std::string::npos) continue;
         std::string out;
@@ -231,15 +240,33 @@ void substitute(XmlNode& node, const std::map<std::string, std::string>& params)
                                 "value=\"...\"/> or pass -D {}=...",
                                 name, name, name));
             out += it->second;
+            scene_params.insert(name);
             i = j - 1;
         }
         a.value = std::move(out);
     }
-    for (auto& c : node.children) substitute(c, params);
+    for (auto& c : node.children) substitute(c, params, scene_params);
+}
+
+// A -D the scene never reads is most likely a typo (-D sppp=4 would otherwise render with the
+// default spp without a word), so it is reported as an unused parameter is.
+void check_defines_used(const std::vector<std::pair<std::string, std::string>>& defines,
+                        const std::set<std::string>& scene_params, const std::string& file,
+                        bool lenient) {
+    const std::vector<std::string> names(scene_params.begin(), scene_params.end());
+    for (const auto& [name, value] : defines) {
+        if (scene_params.count(name)) continue;
+        reject_unless_lenient(
+            lenient, SourceLocation{},
+            fmt::format("-D {}={}: {} has no parameter \"{}\"{}; its parameters (<default> "
+                        "names and $names): {}",
+                        name, value, file.empty() ? "the scene" : file, name,
+                        did_you_mean(name, names), names.empty() ? "(none)" : join(names)));
+    }
 }
 
 XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::string>>& defines,
-                   const std::string& top_file) {
+                   const std::string& top_file, bool lenient) {
     std::vector<std::string> stack;
     std::error_code ec;
     stack.push_back(top_file.empty() ? std::string() : fs::weakly_canonical(top_file, ec).string());
@@ -247,8 +274,10 @@ XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::
     expand_includes(scene, stack);
     std::map<std::string, std::string> define_map(defines.begin(), defines.end());
     std::map<std::string, std::string> params = define_map;
-    collect_defaults(scene, params, define_map);
-    substitute(scene, params);
+    std::set<std::string> scene_params;
+    collect_defaults(scene, params, define_map, scene_params);
+    substitute(scene, params, scene_params);
+    check_defines_used(defines, scene_params, top_file, lenient);
     return scene;
 }
 
@@ -286,17 +315,20 @@ std::string upgrade_plugin_type(const std::string& tag, const std::string& type)
 }
 
 XmlNode parse_scene_file(const std::string& path,
-                         const std::vector<std::pair<std::string, std::string>>& defines) {
+                         const std::vector<std::pair<std::string, std::string>>& defines,
+                         bool lenient) {
     const std::string text = read_file(path, SourceLocation{});
     fs::path p(path);
     std::string base = p.parent_path().string();
     if (base.empty()) base = ".";
-    return run_passes(parse_text(text, path, base, SourceLocation{}), defines, path);
+    return run_passes(parse_text(text, path, base, SourceLocation{}), defines, path, lenient);
 }
 
 XmlNode parse_scene_string(const std::string& xml, const std::string& base_dir,
-                           const std::vector<std::pair<std::string, std::string>>& defines) {
-    return run_passes(parse_text(xml, "<string>", base_dir, SourceLocation{}), defines, "");
+                           const std::vector<std::pair<std::string, std::string>>& defines,
+                           bool lenient) {
+    return run_passes(parse_text(xml, "<string>", base_dir, SourceLocation{}), defines, "",
+                      lenient);
 }
 
 }  // namespace femto::detail

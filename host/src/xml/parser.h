@@ -27,12 +27,15 @@ struct XmlNode {
 };
 
 /// Parses, upgrades and expands a scene file into the IR whose root is <scene>.
-/// `defines` are the -D name=value overrides.
+/// `defines` are the -D name=value overrides; one the scene does not use (no <default> and no
+/// $name of that name) is an error, or a warning when `lenient`.
 XmlNode parse_scene_file(const std::string& path,
-                         const std::vector<std::pair<std::string, std::string>>& defines);
+                         const std::vector<std::pair<std::string, std::string>>& defines,
+                         bool lenient = false);
 /// Same for XML text; relative paths resolve against `base_dir`.
 XmlNode parse_scene_string(const std::string& xml, const std::string& base_dir,
-                           const std::vector<std::pair<std::string, std::string>>& defines);
+                           const std::vector<std::pair<std::string, std::string>>& defines,
+                           bool lenient = false);
 
 /// Resolves a relative file name written in `node` as Mitsuba does: next to the file that
 /// names it, else next to the top-level scene file. Returns the first candidate that exists

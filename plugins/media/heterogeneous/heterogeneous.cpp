@@ -251,8 +251,8 @@ private:
         }
         const uint64_t expected = kHeaderBytes + voxels * sizeof(float);
         if (file_size != expected)
-            fail("has " + std::to_string(file_size) + " bytes but a " + dims +
-                 " float32 grid needs " + std::to_string(expected) +
+            fail("has " + std::to_string(file_size) + " bytes but a float32 grid of " + dims +
+                 " needs " + std::to_string(expected) +
                  (file_size < expected ? " (the file is truncated)" : " (trailing data)"));
         for (int a = 0; a < 3; ++a) {
             bmin_[a] = load_f32(h + 24 + 4 * a);
