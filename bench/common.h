@@ -57,6 +57,14 @@ inline std::string cpu_model() {
     return "unknown";
 }
 
+/// A field of /proc/self/status in kB (VmHWM = peak RSS, VmRSS = current), or -1.
+inline long status_kb(const std::string& key) {
+    std::ifstream f("/proc/self/status");
+    for (std::string line; std::getline(f, line);)
+        if (line.rfind(key + ":", 0) == 0) return std::stol(line.substr(key.size() + 1));
+    return -1;
+}
+
 inline std::string now_utc() {
     const std::time_t t = std::time(nullptr);
     char buf[64];

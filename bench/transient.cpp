@@ -70,6 +70,7 @@ using femto_bench::rel_mse;
 using femto_bench::replace_block;
 using femto_bench::replace_once;
 using femto_bench::split;
+using femto_bench::status_kb;
 
 // -- options -----------------------------------------------------------------------------------
 
@@ -171,14 +172,6 @@ Options parse(int argc, char** argv) {
 }
 
 // -- machine -----------------------------------------------------------------------------------
-
-/// A field of /proc/self/status in kB (VmHWM = peak RSS, VmRSS = current), or -1.
-long status_kb(const std::string& key) {
-    std::ifstream f("/proc/self/status");
-    for (std::string line; std::getline(f, line);)
-        if (line.rfind(key + ":", 0) == 0) return std::stol(line.substr(key.size() + 1));
-    return -1;
-}
 
 // -- scene text --------------------------------------------------------------------------------
 

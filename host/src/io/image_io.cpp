@@ -272,9 +272,17 @@ Imf::Compression exr_compression(ExrCubeOptions::Compression c) {
     return Imf::RLE_COMPRESSION;
 }
 
-// OpenEXR compresses line buffers on its own global thread pool.
-void set_exr_threads(int threads) {
-    const int n = threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency()));
+// OpenEXR compresses a file's chunks (1 row for none/rle/zips, 16 for zip, 32 for piz) as
+// tasks of its global thread pool. A task per chunk of a few kB costs more than it saves
+// (bench/write.cpp: a 256-wide rle strip writes faster on one thread), so small chunks stay
+// on the calling thread.
+void set_exr_threads(const ExrCubeOptions& options, int width) {
+    using C = ExrCubeOptions::Compression;
+    const int rows = options.compression == C::zip ? 16 : options.compression == C::piz ? 32 : 1;
+    const size_t chunk_bytes = size_t(width) * size_t(rows) * 3 * sizeof(float);
+    int n = options.threads > 0 ? options.threads
+                                : int(std::max(1u, std::thread::hardware_concurrency()));
+    if (chunk_bytes < (size_t(64) << 10)) n = 1;
     if (Imf::globalThreadCount() != (n > 1 ? n : 0)) Imf::setGlobalThreadCount(n > 1 ? n : 0);
 }
 
@@ -288,14 +296,18 @@ void insert_rgb(Imf::FrameBuffer& fb, const float* first, Imath::V2i origin, int
 }
 
 // The frames part is transposed from the cube ([pixel][bin][3]) a batch of frame rows at a
-// time: `frames` whole frames when several bins are written together (each pixel's bins are
-// contiguous, so one batch reads the cube in cache-line-sized runs), or `rows` rows of one
-// frame. A batch is at most ~1/16 of the cube whatever its shape.
+// time: several whole frames when there are >= 32 bins (each pixel's bins of a batch are
+// contiguous, so one batch reads the cube in runs of >= 2 cache lines): 16, or as many small
+// frames as fit in 4 MB, so that tiny frames do not cost a call each; else `rows` rows of one
+// frame. A batch is at most 1/16 of the cube whatever its shape.
 struct FrameBatches {
     int frames = 1, rows = 0;
-    FrameBatches(int height, int bins)
-        : frames(std::clamp(bins / 16, 1, 16)),
-          rows(frames > 1 ? height : std::clamp(int(int64_t(height) * bins / 16), 1, height)) {}
+    FrameBatches(int width, int height, int bins) {
+        const size_t frame_bytes = size_t(width) * size_t(height) * 3 * sizeof(float);
+        const int fit = int(std::min<size_t>((size_t(4) << 20) / frame_bytes, 1 << 20));
+        frames = std::clamp(bins / 16, 1, std::max(16, fit));
+        rows = frames > 1 ? height : std::clamp(int(int64_t(height) * bins / 16), 1, height);
+    }
 };
 
 struct CubeView {
@@ -345,7 +357,7 @@ Imf::Header cube_part_header(const std::string& name, int width, int rows, int s
 void write_frames_part(Imf::MultiPartOutputFile& file, const CubeView& v, const float* data,
                        const float* pixel_scale) {
     Imf::OutputPart part(file, 0);
-    const FrameBatches batch(v.height, v.bins);
+    const FrameBatches batch(v.width, v.height, v.bins);
     const size_t xs = 3 * sizeof(float), ys = xs * size_t(v.width);
     std::vector<float> buffer(size_t(batch.frames) * size_t(batch.rows) * size_t(v.width) * 3);
     for (int t0 = 0; t0 < v.bins; t0 += batch.frames) {
@@ -385,7 +397,7 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
                         path, height, bins, std::numeric_limits<int>::max()));
     const std::string tmp = temp_path_for(path);
     try {
-        set_exr_threads(options.threads);
+        set_exr_threads(options, width);
         std::vector<Imf::Header> headers;
         headers.push_back(cube_part_header("frames", width, height * bins, height * bins, options));
         for (const char* c : {"R", "G", "B"})
@@ -443,7 +455,7 @@ void read_depth_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
 void read_frames_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
     const CubeView v{cube.width, cube.height, cube.bins};
     const Imath::Box2i w = checked_window(file.header(p), cube.width, cube.height * cube.bins);
-    const int frames = std::clamp(cube.bins / 16, 1, 16);
+    const int frames = FrameBatches(cube.width, cube.height, cube.bins).frames;
     std::vector<float> buffer(size_t(frames) * v.pixels() * 3);
     const size_t xs = 3 * sizeof(float), ys = xs * size_t(cube.width);
     Imf::InputPart part(file, p);
