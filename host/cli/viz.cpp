@@ -8,6 +8,9 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -27,6 +30,7 @@ namespace {
 struct VizOptions {
     std::string cube, output, exr, tone = "linear", to;
     std::optional<double> start, bin_width;
+    std::optional<float> level;
     float exposure = 0.f;
     int row = -1, fps = 12, isochrones = 0;
     bool gif = false, mp4 = false, keep_window = false, quiet = false;
@@ -112,7 +116,7 @@ int cmd_frames(const io::Cube& cube) {
     if (access(dir.c_str(), W_OK) != 0)
         throw SceneError(fmt::format("the output folder \"{}\" is not writable", dir));
     // One exposure for every frame, from the whole cube, so that frames are comparable.
-    const float reference = viz::reference_level(cube);
+    const float reference = g_opts.level ? *g_opts.level : viz::reference_level(cube);
     const size_t pixels = size_t(cube.width) * size_t(cube.height);
     std::vector<std::vector<float>> frames;
     for (int t = 0; t < cube.bins; ++t) {
@@ -167,7 +171,8 @@ int cmd_peak_time(const io::Cube& cube, const TimeGrid& grid) {
     }
     prepare_file(g_opts.output, "-o");
     if (g_opts.isochrones < 0) throw SceneError("--isochrones must be >= 0");
-    const std::vector<float> img = viz::peak_time_image(cube, g_opts.isochrones);
+    const std::vector<float> img =
+        viz::peak_time_image(cube, g_opts.isochrones, g_opts.level, g_opts.exposure);
     viz::write_png8(g_opts.output, cube.width, cube.height, img);
     announce(g_opts.output);
     if (!g_opts.exr.empty()) {
@@ -191,9 +196,10 @@ int cmd_rainbow(const io::Cube& cube) {
     }
     const std::vector<float> rgb = viz::rainbow_fusion(cube);
     const size_t pixels = size_t(cube.width) * size_t(cube.height);
-    viz::write_png8(
-        g_opts.output, cube.width, cube.height,
-        viz::tone_map(rgb.data(), pixels, viz::reference_level(rgb), g_opts.exposure, tone));
+    const float reference =
+        g_opts.level ? *g_opts.level : viz::reference_level(rgb, viz::emitter_pixels(cube));
+    viz::write_png8(g_opts.output, cube.width, cube.height,
+                    viz::tone_map(rgb.data(), pixels, reference, g_opts.exposure, tone));
     announce(g_opts.output);
     if (!g_opts.exr.empty()) {
         io::Attributes attrs = time_attributes(cube);
@@ -202,6 +208,16 @@ int cmd_rainbow(const io::Cube& cube) {
         announce(g_opts.exr);
     }
     return 0;
+}
+
+// The streak slice's default level: every time row of a column that sees an emitter is skipped.
+float streak_level(const io::Cube& cube, const std::vector<float>& slice) {
+    const std::vector<uint8_t> emitter = viz::emitter_pixels(cube);
+    std::vector<uint8_t> excluded(size_t(cube.width) * size_t(cube.bins));
+    for (size_t t = 0; t < size_t(cube.bins); ++t)
+        std::copy_n(&emitter[size_t(g_opts.row) * size_t(cube.width)], size_t(cube.width),
+                    &excluded[t * size_t(cube.width)]);
+    return viz::reference_level(slice, excluded);
 }
 
 int cmd_streak(const io::Cube& cube) {
@@ -214,9 +230,9 @@ int cmd_streak(const io::Cube& cube) {
         prepare_file(g_opts.exr, "--exr");
     }
     const size_t pixels = size_t(cube.width) * size_t(cube.bins);
-    viz::write_png8(
-        g_opts.output, cube.width, cube.bins,
-        viz::tone_map(img.data(), pixels, viz::reference_level(img), g_opts.exposure, tone));
+    const float reference = g_opts.level ? *g_opts.level : streak_level(cube, img);
+    viz::write_png8(g_opts.output, cube.width, cube.bins,
+                    viz::tone_map(img.data(), pixels, reference, g_opts.exposure, tone));
     announce(g_opts.output);
     if (!g_opts.exr.empty()) {
         // The streak film's format, with the row's depth in channel Z when the cube has it.
@@ -265,14 +281,20 @@ CLI::App* add_common(CLI::App* sub) {
     return sub;
 }
 
+void add_level(CLI::App* sub) {
+    sub->add_option("--level", g_opts.level,
+                    "Reference level: the linear value shown as white (full brightness); default "
+                    "the 99th percentile of the data over the pixels that do not see an emitter");
+    sub->add_option("--exposure", g_opts.exposure,
+                    "Exposure in stops, relative to the reference level");
+}
+
 void add_tone(CLI::App* sub) {
     sub->add_option("--tone", g_opts.tone,
                     "Tone curve: linear (sRGB display transform) or log (log(1 + 1000 x) / "
                     "log(1001), for the high dynamic range of transient data, ch. 4.5)")
         ->check(CLI::IsMember({"linear", "log"}));
-    sub->add_option("--exposure", g_opts.exposure,
-                    "Exposure in stops, relative to the reference level (the 99.5th percentile "
-                    "of the data)");
+    add_level(sub);
 }
 
 }  // namespace
@@ -306,6 +328,7 @@ CLI::App* add_viz_command(CLI::App& app) {
     g_peak->add_option("--isochrones", g_opts.isochrones,
                        "Thesis style: only every N-th bin contributes, so coloured isochrones are "
                        "separated by black (0 = continuous)");
+    add_level(g_peak);
 
     g_rainbow = add_common(g_viz->add_subcommand(
         "rainbow",
@@ -343,6 +366,8 @@ CLI::App* add_viz_command(CLI::App& app) {
 }
 
 int run_viz_command() {
+    if (g_opts.level && !(*g_opts.level > 0 && std::isfinite(*g_opts.level)))
+        throw SceneError(fmt::format("--level must be a positive number, got {}", *g_opts.level));
     const io::Cube cube = viz::load_cube(g_opts.cube);
     if (viz::is_streak(cube) && !g_unwarp->parsed()) {
         // Frames, peak-time and rainbow images of one row are a pixel tall, and a streak

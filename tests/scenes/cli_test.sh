@@ -27,6 +27,8 @@ pixel_range() {
   oiiotool "$1" --printstats | sed -n 's/.*Stats Min: *\([0-9.e+-]*\).*/\1/p;s/.*Stats Max: *\([0-9.e+-]*\).*/\1/p' | head -2 | tr '\n' ' '
 }
 exr_attr() { iinfo -v "$1" | sed -n "s/^ *$2: *\"\{0,1\}\([^\"]*\)\"\{0,1\}$/\1/p"; }
+# The mean of a PNG's 8-bit values over pixels and channels, rounded down.
+png_mean() { iinfo --stats "$1" | awk '/Stats Avg/ { printf "%d", ($3 + $4 + $5) / 3 }'; }
 no_temp_files() { ! ls -A "$1" | grep -q '\.tmp'; }
 # A small streak-film scene (rows 5 and 12 of 32x24, 30 bins) on stdout.
 streak_scene() {
@@ -262,6 +264,15 @@ viz_outputs)
   "$femto" viz peak-time out/cb.npy --start 3.5 --bin-width 0.05 -o out/peakn.png --exr out/peakn.exr --isochrones 4 -q ||
     fail "peak-time from .npy"
   "$femto" viz rainbow out/cb.exr -o out/rainbow.png -q && [ -s out/rainbow.png ] || fail "rainbow"
+  # The lamp in view does not set the default level, so the box is not near black (with a
+  # window long enough for the walls' light), and --level (about the lamp's radiance) wins.
+  "$femto" render "$scene" -o out/long -D spp=2 -D res=32 -D bins=128 -q || fail "render failed"
+  for sub in rainbow peak-time; do
+    "$femto" viz $sub out/long.exr -o out/$sub.png -q && "$femto" viz $sub out/long.exr -o out/$sub-lamp.png --level 20 -q ||
+      fail "$sub"
+    [ "$(png_mean out/$sub.png)" -gt 45 ] || fail "default $sub is dark: mean $(png_mean out/$sub.png)"
+    [ "$(png_mean out/$sub-lamp.png)" -lt 30 ] || fail "$sub --level ignored: mean $(png_mean out/$sub-lamp.png)"
+  done
   "$femto" viz streak out/cb.exr --row 16 -o out/streak.png --exr out/streak.exr -q || fail "streak"
   [ "$(iinfo out/streak.exr | sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\),.*/\1x\2/p')" = 32x24 ] || fail "streak size"
   [ "$(exr_attr out/streak.exr femto:row)" = 16 ] || fail "streak row attribute"
@@ -279,6 +290,7 @@ viz_bad_input)
   expect_exit 2 'already in camera time' -- "$femto" viz unwarp out/cb.exr -o out/u.exr --to camera
   expect_exit 2 'need the cube.s time axis' -- "$femto" viz peak-time out/cb.npy -o out/p.png --exr out/p.exr
   expect_exit 2 'tone' -- "$femto" viz frames out/cb.exr -o out/f --tone gamma
+  expect_exit 2 'level must be a positive number' -- "$femto" viz peak-time out/cb.exr -o out/p.png --level 0
   expect_exit 2 'must end in \.exr' -- "$femto" viz unwarp out/cb.exr -o out/u.png --to world
   expect_exit 2 'needs a viz command' -- "$femto" viz
   [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;

@@ -14,7 +14,9 @@
 //  - PNG previews of equal images may differ by one 8-bit step (float rounding at a step).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -438,6 +440,111 @@ TEST(Viz, RainbowFusionTintsByTime) {
     EXPECT_FLOAT_EQ(r[8], 1.f);
     const Color mid = viz::time_colour(0.5);
     EXPECT_FLOAT_EQ(mid.g, 1.f);
+}
+
+// ---- reference level: a lamp in view must not set it ---------------------------------------
+
+namespace {
+
+// A dim room seen at depth 2 (camera time; bin 8 of 0.25) with a tiny, very bright lamp: the
+// lamp's pixels (x 6..8, y 0..1; 6 of 256 pixels, more than the 0.5 % above a 99.5th
+// percentile) shine 500 at their own depth, the room's pixels peak at bins 12..19 with 0.5 to
+// 1, and one noisy pixel peaks late, at bin 38.
+constexpr int kRoomSize = 16, kRoomBins = 40;
+bool is_lamp(int x, int y) { return x >= 6 && x <= 8 && y <= 1; }
+int room_peak(int x, int y) { return x == 15 && y == 15 ? 38 : 12 + (x + y) % 8; }
+
+io::Cube room_with_lamp(const char* time = "camera") {
+    const int N = kRoomSize;
+    io::Cube c = make_cube(N, N, kRoomBins, 0.0, 0.25, time);
+    c.depth.assign(size_t(N) * N, 2.f);
+    const int lamp_bin = std::string(time) == "world" ? 0 : 8;
+    for (int y = 0; y < N; ++y)
+        for (int x = 0; x < N; ++x)
+            for (int ch = 0; ch < 3; ++ch) {
+                if (is_lamp(x, y)) {
+                    at(c, x, y, lamp_bin, ch) = 500.f;
+                    at(c, x, y, 20, ch) = 0.01f;  // the room's light the lamp reflects
+                    continue;
+                }
+                at(c, x, y, room_peak(x, y), ch) = 0.5f + 0.5f * float(x) / float(N - 1);
+                at(c, x, y, room_peak(x, y) + 1, ch) = 0.1f;
+            }
+    return c;
+}
+
+float display_max(const std::vector<float>& img, int x, int y) {
+    const size_t i = (size_t(y) * kRoomSize + size_t(x)) * 3;
+    return std::max({img[i], img[i + 1], img[i + 2]});
+}
+
+}  // namespace
+
+TEST(Viz, EmitterPixelsSeeLightAtTheirOwnDepth) {
+    for (const char* time : {"camera", "world"}) {
+        const io::Cube c = room_with_lamp(time);
+        const std::vector<uint8_t> emitter = viz::emitter_pixels(c);
+        ASSERT_EQ(emitter.size(), size_t(kRoomSize) * kRoomSize);
+        for (int y = 0; y < kRoomSize; ++y)
+            for (int x = 0; x < kRoomSize; ++x)
+                EXPECT_EQ(emitter[size_t(y) * kRoomSize + size_t(x)], is_lamp(x, y) ? 1 : 0)
+                    << time << " " << x << "," << y;
+    }
+    // Without a depth part (a .npy) or a time frame nothing can be recognised.
+    io::Cube bare = room_with_lamp();
+    bare.depth.clear();
+    for (uint8_t e : viz::emitter_pixels(bare)) EXPECT_EQ(e, 0);
+    io::Cube no_frame = room_with_lamp();
+    no_frame.attributes.pop_back();  // femto:time
+    for (uint8_t e : viz::emitter_pixels(no_frame)) EXPECT_EQ(e, 0);
+}
+
+TEST(Viz, LampInViewDoesNotDarkenThePictures) {
+    const io::Cube c = room_with_lamp();
+    // Frames: the level comes from the room (its largest value is 1), not from the lamp.
+    const float frame_level = viz::reference_level(c);
+    EXPECT_GE(frame_level, 0.5f);
+    EXPECT_LE(frame_level, 1.f);
+    // Peak time: every room pixel is at least half bright, the lamp saturates.
+    const std::vector<float> peak = viz::peak_time_image(c);
+    for (int y = 0; y < kRoomSize; ++y)
+        for (int x = 0; x < kRoomSize; ++x)
+            EXPECT_GT(display_max(peak, x, y), is_lamp(x, y) ? 0.99f : 0.5f) << x << "," << y;
+    // The colours span the room's peaks, not the lamp's early one or the single late one: the
+    // room's earliest peak (bin 12) is red, its latest (bin 19) blue.
+    const size_t earliest = 0, latest = (size_t(15) * kRoomSize + 14) * 3;  // (0,0), (14,15)
+    EXPECT_GT(peak[earliest], 0.5f);
+    EXPECT_EQ(peak[earliest + 1], 0.f);
+    EXPECT_EQ(peak[earliest + 2], 0.f);
+    EXPECT_GT(peak[latest + 2], 0.5f);
+    EXPECT_EQ(peak[latest], 0.f);
+    // Rainbow fusion: the level of the fused image without the lamp; the room's median pixel
+    // is then well above black (the lamp would put it at 1/500 of white).
+    const std::vector<float> fused = viz::rainbow_fusion(c);
+    const float rainbow_level = viz::reference_level(fused, viz::emitter_pixels(c));
+    EXPECT_LE(rainbow_level, 1.1f * 1.0001f);  // the room's brightest pixel: 1 + 0.1
+    const size_t n = size_t(kRoomSize) * kRoomSize;
+    const std::vector<float> shown =
+        viz::tone_map(fused.data(), n, rainbow_level, 0.f, viz::Tone::Linear);
+    std::vector<float> room;
+    for (int y = 0; y < kRoomSize; ++y)
+        for (int x = 0; x < kRoomSize; ++x)
+            if (!is_lamp(x, y)) room.push_back(display_max(shown, x, y));
+    std::nth_element(room.begin(), room.begin() + ptrdiff_t(room.size() / 2), room.end());
+    EXPECT_GT(room[room.size() / 2], 0.5f);
+}
+
+TEST(Viz, ExplicitLevelWins) {
+    const io::Cube c = room_with_lamp();
+    // The lamp's level, given by the user: the room is dim, the lamp still full.
+    const std::vector<float> peak = viz::peak_time_image(c, 0, 500.f);
+    EXPECT_LT(display_max(peak, 3, 3), 0.35f);
+    EXPECT_GT(display_max(peak, 7, 0), 0.99f);
+    // Exposure shifts the given level: 500 at +log2(500) stops is a level of 1.
+    const std::vector<float> one = viz::peak_time_image(c, 0, 1.f);
+    const std::vector<float> shifted = viz::peak_time_image(c, 0, 500.f, std::log2(500.f));
+    for (size_t i = 0; i < one.size(); ++i) EXPECT_NEAR(shifted[i], one[i], 1e-5f) << i;
+    EXPECT_GT(display_max(one, 3, 3), 0.5f);
 }
 
 // ---- files ----------------------------------------------------------------------------------

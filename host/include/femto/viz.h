@@ -55,12 +55,29 @@ enum class Tone { Linear, Log };
 /// Parses "linear" / "log"; throws SceneError otherwise.
 Tone parse_tone(const std::string& name);
 
-/// The value (of the per-pixel, per-bin maximum RGB component) at `percentile` (0..1) over
-/// the non-zero entries of the whole cube: the reference white of every frame, so that
-/// frames are comparable. Returns 1 when the cube is black.
-float reference_level(const io::Cube& cube, double percentile = 0.995);
-/// Same, for one RGB image (row-major, 3 floats per pixel).
-float reference_level(const std::vector<float>& rgb, double percentile = 0.995);
+/// The percentile of the reference level that pictures use by default (see reference_level).
+inline constexpr double kLevelPercentile = 0.99;
+
+/// Per pixel, 1 where the pixel sees an emitter directly, else 0. A pixel counts as an emitter
+/// when more than half of its luminance arrives within one bin of the time at which light
+/// emitted at t = 0 by the surface it sees would arrive: its depth in camera time, 0 in world
+/// time. Light reflected by a surface arrives later by at least the surface's distance to a
+/// light, so only emitters (and surfaces within a bin's length of one) qualify. All 0 when the
+/// cube has no depth (a .npy) or no time axis or frame (femto:start, femto:bin_width,
+/// femto:time). Assumes pulses shorter than a bin (the default delta pulse).
+std::vector<uint8_t> emitter_pixels(const io::Cube& cube);
+
+/// The reference level of a picture, the linear value shown as white (or, with the log tone,
+/// as full brightness): the value at `percentile` (0..1) of the non-zero entries, ignoring the
+/// pixels that see an emitter (emitter_pixels), so that a lamp in view does not set the level
+/// and leave the scene black. Returns 1 when nothing is left.
+/// For a cube: over the per-pixel, per-bin maximum RGB component, so that every frame of a
+/// movie shares one level and frames are comparable.
+float reference_level(const io::Cube& cube, double percentile = kLevelPercentile);
+/// For one RGB image (row-major, 3 floats per pixel): over each pixel's largest component,
+/// skipping the pixels whose entry in `excluded` (one per pixel, or empty) is non-zero.
+float reference_level(const std::vector<float>& rgb, const std::vector<uint8_t>& excluded = {},
+                      double percentile = kLevelPercentile);
 
 /// Maps linear RGB to display values in [0, 1]: x = value * 2^exposure / reference;
 /// Linear: the sRGB transfer curve of clamp(x); Log: log(1 + k x) / log(1 + k) with
@@ -87,8 +104,11 @@ std::vector<float> peak_times(const io::Cube& cube, const TimeGrid& grid);
 /// bins that hold peaks), with the brightness of its peak (the radiance within two bins of
 /// the peak, log tone). With `isochrone_spacing` > 0, as in the thesis only every
 /// `isochrone_spacing`-th bin contributes, so that coloured isochrones are separated by black.
-/// Returns display values in [0, 1], [height][width][3].
-std::vector<float> peak_time_image(const io::Cube& cube, int isochrone_spacing = 0);
+/// The brightness is relative to `level` when given, else to reference_level of the peak
+/// energies (emitters ignored), scaled by 2^exposure. Returns display values in [0, 1],
+/// [height][width][3].
+std::vector<float> peak_time_image(const io::Cube& cube, int isochrone_spacing = 0,
+                                   std::optional<float> level = std::nullopt, float exposure = 0.f);
 
 /// Rainbow fusion (ch. 4.5): the full fusion N_ij = sum_k M_ijk (w_k = 1) of the frames'
 /// luminance, with each frame k tinted by the colour of its time, time_colour(k / (T - 1)).

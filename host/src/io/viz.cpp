@@ -99,13 +99,26 @@ void set_attribute(io::Attributes& attrs, const std::string& name, const std::st
     attrs.emplace_back(name, value);
 }
 
-// The value at `percentile` of the non-zero samples (a deterministic subsample of at most ~4M).
+// The value at `percentile` of `values`; 1 when there are none or it is not positive.
 float percentile_of(std::vector<float> values, double percentile) {
     if (values.empty()) return 1.f;
     const size_t k = std::min(values.size() - 1, size_t(double(values.size() - 1) * percentile));
     std::nth_element(values.begin(), values.begin() + ptrdiff_t(k), values.end());
     return values[k] > 0 ? values[k] : 1.f;
 }
+
+// The value at `percentile` of the positive, finite values[p] whose excluded[p] is 0 (every
+// value when `excluded` is empty); 1 when there are none.
+float level_of(const std::vector<float>& values, const std::vector<uint8_t>& excluded,
+               double percentile) {
+    std::vector<float> kept;
+    for (size_t p = 0; p < values.size(); ++p)
+        if (values[p] > 0 && std::isfinite(values[p]) && (excluded.empty() || !excluded[p]))
+            kept.push_back(values[p]);
+    return percentile_of(std::move(kept), percentile);
+}
+
+constexpr double kPeakColourPercentile = 0.01;
 
 constexpr const char* kStreakLayout = "streak image: x to the right, time downward";
 
@@ -250,11 +263,37 @@ Tone parse_tone(const std::string& name) {
     throw SceneError(fmt::format("unknown tone curve \"{}\" (valid: linear, log)", name));
 }
 
+std::vector<uint8_t> emitter_pixels(const io::Cube& cube) {
+    const size_t pixels = size_t(cube.width) * size_t(cube.height), T = size_t(cube.bins);
+    std::vector<uint8_t> emitter(pixels, 0);
+    const TimeGrid grid = time_grid(cube);
+    if (cube.depth.size() != pixels || !grid.known || grid.frame == TimeFrame::Unknown)
+        return emitter;
+    for (size_t p = 0; p < pixels; ++p) {
+        const float depth = cube.depth[p];
+        if (!(depth > 0) || !std::isfinite(depth)) continue;  // the pixel saw nothing
+        // When light the seen surface emitted at t = 0 reaches the sensor.
+        const double t = grid.frame == TimeFrame::World ? 0.0 : double(depth);
+        const double bin = std::floor((t - grid.start) / grid.bin_width);
+        if (!(bin >= -1.0 && bin <= double(T))) continue;  // outside the window
+        double near = 0, total = 0;
+        for (size_t k = 0; k < T; ++k) {
+            const double l = lum(&cube.data[(p * T + k) * 3]);
+            total += l;
+            if (std::abs(double(k) - bin) <= 1.0) near += l;
+        }
+        emitter[p] = total > 0 && near > 0.5 * total;
+    }
+    return emitter;
+}
+
 float reference_level(const io::Cube& cube, double percentile) {
-    const size_t n = cube.data.size() / 3;
+    const std::vector<uint8_t> emitter = emitter_pixels(cube);
+    const size_t n = cube.data.size() / 3, T = size_t(std::max(1, cube.bins));
     const size_t stride = std::max<size_t>(1, n / (size_t(1) << 22));
     std::vector<float> values;
     for (size_t i = 0; i < n; i += stride) {
+        if (emitter[i / T]) continue;
         const float* v = &cube.data[3 * i];
         const float m = std::max({v[0], v[1], v[2]});
         if (m > 0 && std::isfinite(m)) values.push_back(m);
@@ -262,13 +301,12 @@ float reference_level(const io::Cube& cube, double percentile) {
     return percentile_of(std::move(values), percentile);
 }
 
-float reference_level(const std::vector<float>& rgb, double percentile) {
-    std::vector<float> values;
-    for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
-        const float m = std::max({rgb[i], rgb[i + 1], rgb[i + 2]});
-        if (m > 0 && std::isfinite(m)) values.push_back(m);
-    }
-    return percentile_of(std::move(values), percentile);
+float reference_level(const std::vector<float>& rgb, const std::vector<uint8_t>& excluded,
+                      double percentile) {
+    std::vector<float> largest(rgb.size() / 3);
+    for (size_t p = 0; p < largest.size(); ++p)
+        largest[p] = std::max({rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]});
+    return level_of(largest, excluded, percentile);
 }
 
 std::vector<float> tone_map(const float* rgb, size_t pixels, float reference, float exposure,
@@ -347,14 +385,32 @@ std::vector<float> peak_times(const io::Cube& cube, const TimeGrid& grid) {
     return times;
 }
 
-std::vector<float> peak_time_image(const io::Cube& cube, int isochrone_spacing) {
+namespace {
+
+// The peak bins that the rainbow spans, red to blue: the 1st to 99th percentile of the peaks
+// of the pixels that do not see an emitter (every lit pixel when all do), so that neither a
+// lamp's early peak nor a few noisy late ones squeeze the scene into a couple of hues.
+std::pair<int, int> peak_colour_range(const std::vector<int>& peaks,
+                                      const std::vector<uint8_t>& emitter) {
+    std::vector<int> lit;
+    for (size_t p = 0; p < peaks.size(); ++p)
+        if (peaks[p] >= 0 && !emitter[p]) lit.push_back(peaks[p]);
+    if (lit.empty())
+        for (int k : peaks)
+            if (k >= 0) lit.push_back(k);
+    if (lit.empty()) return {0, 0};
+    std::sort(lit.begin(), lit.end());
+    const auto at = [&](double q) { return lit[size_t(std::lround(q * double(lit.size() - 1)))]; };
+    return {at(kPeakColourPercentile), at(1.0 - kPeakColourPercentile)};
+}
+
+}  // namespace
+
+std::vector<float> peak_time_image(const io::Cube& cube, int isochrone_spacing,
+                                   std::optional<float> level, float exposure) {
     const std::vector<int> peaks = peak_bins(cube);
-    int kmin = std::numeric_limits<int>::max(), kmax = -1;
-    for (int k : peaks)
-        if (k >= 0) {
-            kmin = std::min(kmin, k);
-            kmax = std::max(kmax, k);
-        }
+    const std::vector<uint8_t> emitter = emitter_pixels(cube);
+    const auto [kmin, kmax] = peak_colour_range(peaks, emitter);
     // The sparse volume of the thesis: only the radiance within two bins of each pixel's peak
     // (and, with isochrones, only every isochrone_spacing-th bin of it).
     std::vector<float> energy(peaks.size(), 0.f);
@@ -369,15 +425,16 @@ std::vector<float> peak_time_image(const io::Cube& cube, int isochrone_spacing) 
                     e += lum(px(cube, x, y, t));
             energy[p] = float(e);
         }
-    std::vector<float> nonzero;
-    for (float e : energy)
-        if (e > 0) nonzero.push_back(e);
-    const float ref = percentile_of(nonzero, 0.995);
+    // The level as for any picture (reference_level), over the peak energies.
+    const float ref =
+        (level && *level > 0 ? *level : level_of(energy, emitter_pixels(cube), kLevelPercentile)) /
+        std::exp2(exposure);
     const float norm = 1.f / std::log1p(kLogRange);
     std::vector<float> out(peaks.size() * 3, 0.f);
     for (size_t p = 0; p < peaks.size(); ++p) {
         if (peaks[p] < 0 || energy[p] <= 0) continue;
-        const double u = kmax > kmin ? double(peaks[p] - kmin) / double(kmax - kmin) : 0.0;
+        const double u =
+            kmax > kmin ? std::clamp(double(peaks[p] - kmin) / double(kmax - kmin), 0.0, 1.0) : 0.0;
         const Color c = time_colour(u);
         const float b = std::min(1.f, std::log1p(kLogRange * energy[p] / ref) * norm);
         out[3 * p + 0] = c.r * b;
