@@ -117,6 +117,11 @@ public:
     virtual void end_pilot() {}
     /// Latest path length (scene units) this film records; paths beyond it may stop.
     virtual double max_time() const;
+    /// Bytes a block keeps per pixel of its area, when that is as much as the film keeps per
+    /// pixel (a transient film's blocks hold every bin); 0 when blocks are small. The renderer
+    /// then picks tiles small enough that blocks in flight stay a small share of the film's
+    /// memory (a 16x16 film of 2^20 bins would otherwise hold a second cube in its one block).
+    virtual size_t block_bytes_per_pixel() const { return 0; }
     /// Whether pixel row y receives any sample (a streak film records only a few rows);
     /// the renderer skips the others.
     virtual bool row_active(int /*y*/) const { return true; }

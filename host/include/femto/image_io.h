@@ -49,13 +49,13 @@ struct ExrCubeOptions {
 bool parse_exr_compression(const std::string& name, ExrCubeOptions::Compression& out);
 
 /// Writes a cube as an OpenEXR file with two parts. Part "frames" is the film's frames stacked
-/// top to bottom: an RGB float image `width` wide and `height * bins` tall whose rows
+/// top to bottom: a tiled RGB float image `width` wide and `height * bins` tall whose rows
 /// [t * height, (t + 1) * height) are time bin t (any EXR tool reads a frame as a crop, e.g.
 /// `oiiotool cube.exr --cut WxH+0+{t*H}`). Part "depth" (channel Z) holds `depth` when given.
 /// `attributes` go into the frames part; values that read as numbers are stored as int or
 /// double attributes. With `pixel_scale` ([height][width]) every value is multiplied by its
-/// pixel's scale. The cube is transposed a few frames at a time: writing allocates at most
-/// about 1/16 of the cube beyond it, whatever the number of bins.
+/// pixel's scale. The cube is transposed a batch of rows at a time: writing allocates at most
+/// about 1/16 of the cube (or 8 MB) beyond it, whatever the number of bins.
 void write_exr_cube(const std::string& path, int width, int height, int bins, const float* data,
                     const float* depth, const Attributes& attributes,
                     const float* pixel_scale = nullptr, const ExrCubeOptions& options = {});

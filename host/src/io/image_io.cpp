@@ -218,6 +218,8 @@ std::vector<float> read_image_rgb(const std::string& path, int& width, int& heig
 #include <OpenEXR/ImfOutputPart.h>
 #include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfThreading.h>
+#include <OpenEXR/ImfTileDescriptionAttribute.h>
+#include <OpenEXR/ImfTiledOutputPart.h>
 
 #include <cstring>
 #include <fstream>
@@ -272,14 +274,9 @@ Imf::Compression exr_compression(ExrCubeOptions::Compression c) {
     return Imf::RLE_COMPRESSION;
 }
 
-// OpenEXR compresses a file's chunks (1 row for none/rle/zips, 16 for zip, 32 for piz) as
-// tasks of its global thread pool. A task per chunk of a few kB costs more than it saves
-// (bench/write.cpp: a 256-wide rle strip writes faster on one thread), so small chunks stay
-// on the calling thread.
-void set_exr_threads(const ExrCubeOptions& options, int width) {
-    using C = ExrCubeOptions::Compression;
-    const int rows = options.compression == C::zip ? 16 : options.compression == C::piz ? 32 : 1;
-    const size_t chunk_bytes = size_t(width) * size_t(rows) * 3 * sizeof(float);
+// OpenEXR compresses a file's chunks (tiles of the frames part) as tasks of its global thread
+// pool; chunks under 64 kB cost more as tasks than they save, so they stay on this thread.
+void set_exr_threads(const ExrCubeOptions& options, size_t chunk_bytes) {
     int n = options.threads > 0 ? options.threads
                                 : int(std::max(1u, std::thread::hardware_concurrency()));
     if (chunk_bytes < (size_t(64) << 10)) n = 1;
@@ -295,21 +292,6 @@ void insert_rgb(Imf::FrameBuffer& fb, const float* first, Imath::V2i origin, int
                                              w, h, xs, ys));
 }
 
-// The frames part is transposed from the cube ([pixel][bin][3]) a batch of frame rows at a
-// time: several whole frames when there are >= 32 bins (each pixel's bins of a batch are
-// contiguous, so one batch reads the cube in runs of >= 2 cache lines): 16, or as many small
-// frames as fit in 4 MB, so that tiny frames do not cost a call each; else `rows` rows of one
-// frame. A batch is at most 1/16 of the cube whatever its shape.
-struct FrameBatches {
-    int frames = 1, rows = 0;
-    FrameBatches(int width, int height, int bins) {
-        const size_t frame_bytes = size_t(width) * size_t(height) * 3 * sizeof(float);
-        const int fit = int(std::min<size_t>((size_t(4) << 20) / frame_bytes, 1 << 20));
-        frames = std::clamp(bins / 16, 1, std::max(16, fit));
-        rows = frames > 1 ? height : std::clamp(int(int64_t(height) * bins / 16), 1, height);
-    }
-};
-
 struct CubeView {
     int width, height, bins;
     size_t pixels() const { return size_t(width) * size_t(height); }
@@ -317,21 +299,33 @@ struct CubeView {
     size_t at(size_t pixel, int bin) const { return (pixel * size_t(bins) + size_t(bin)) * 3; }
 };
 
-// Copies frames [t0, t0 + n) restricted to rows [y0, y0 + rows) into out ([t][y][x][3]).
-void gather_frames(const CubeView& v, const float* data, const float* pixel_scale, int t0, int n,
-                   int y0, int rows, float* out) {
-    const size_t row_pixels = size_t(v.width), batch_pixels = size_t(rows) * row_pixels;
-    for (size_t local = 0; local < batch_pixels; ++local) {
-        const size_t pixel = size_t(y0) * row_pixels + local;
-        const float* src = data + v.at(pixel, t0);
-        const float s = pixel_scale ? pixel_scale[pixel] : 1.f;
-        for (int k = 0; k < n; ++k)
-            for (int c = 0; c < 3; ++c)
-                out[(size_t(k) * batch_pixels + local) * 3 + size_t(c)] = src[k * 3 + c] * s;
+int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// Rows [r0, r1) of the strip (row t * height + y is row y of bin t's frame), each value times
+// its pixel's scale, into out ([row][x][3]). The cube is pixel-major, so the loop runs over
+// pixels and, for each, over its consecutive bins in the batch: one pass over the cube in runs
+// of several bins, not a cache line per value.
+void gather_strip_rows(const CubeView& v, const float* data, const float* pixel_scale, int64_t r0,
+                       int64_t r1, float* out) {
+    const int64_t H = v.height;
+    for (int y = 0; y < v.height; ++y) {
+        // The bins t whose row t * H + y lies in [r0, r1).
+        const int64_t t_lo = std::max<int64_t>(0, -floor_div(y - r0, H));
+        const int64_t t_hi = floor_div(r1 - 1 - y, H);
+        if (t_lo > t_hi) continue;
+        for (int x = 0; x < v.width; ++x) {
+            const size_t pixel = size_t(y) * size_t(v.width) + size_t(x);
+            const float* src = data + v.at(pixel, int(t_lo));
+            const float s = pixel_scale ? pixel_scale[pixel] : 1.f;
+            for (int64_t t = t_lo; t <= t_hi; ++t) {
+                float* dst = out + (size_t(t * H + y - r0) * size_t(v.width) + size_t(x)) * 3;
+                for (int c = 0; c < 3; ++c) dst[c] = src[(t - t_lo) * 3 + c] * s;
+            }
+        }
     }
 }
 
-// The inverse of gather_frames (reading): frames [t0, t0 + n), whole frames, into the cube.
+// Reading: frames [t0, t0 + n), whole frames ([t][y][x][3]), into the cube.
 void scatter_frames(const CubeView& v, const float* in, int t0, int n, float* data) {
     const size_t pixels = v.pixels();
     for (size_t pixel = 0; pixel < pixels; ++pixel) {
@@ -339,6 +333,29 @@ void scatter_frames(const CubeView& v, const float* in, int t0, int n, float* da
         for (int k = 0; k < n; ++k)
             for (int c = 0; c < 3; ++c) dst[k * 3 + c] = in[(size_t(k) * pixels + pixel) * 3 + c];
     }
+}
+
+// The strip is tiled: OpenEXR keeps two tables with an entry per scanline while writing a
+// scanline image (24 bytes a row: an eighth of a 16-pixel-wide film's data), but only an offset
+// per tile for a tiled one. Tiles of 64-256 kB also make worthwhile tasks for OpenEXR's pool.
+struct StripTiling {
+    int tile_w, tile_h;
+    explicit StripTiling(int width) : tile_w(std::min(width, 256)), tile_h(16) {
+        while (tile_h < 4096 &&
+               size_t(tile_w) * size_t(tile_h) * 2 * 3 * sizeof(float) <= (size_t(256) << 10))
+            tile_h *= 2;
+    }
+    size_t tile_bytes() const { return size_t(tile_w) * size_t(tile_h) * 3 * sizeof(float); }
+};
+
+// Strip rows per batch: whole tile rows, ~8 MB (several bins of every pixel per pass over the
+// cube), at most 1/16 of the cube when that is larger than one tile row.
+int64_t strip_batch_rows(const CubeView& v, const StripTiling& tiling) {
+    const size_t row_bytes = size_t(v.width) * 3 * sizeof(float);
+    const size_t cube_bytes = v.pixels() * size_t(v.bins) * 3 * sizeof(float);
+    const size_t target = std::min(size_t(8) << 20, cube_bytes / 16);
+    const int64_t tile_rows = std::max<int64_t>(1, int64_t(target / row_bytes) / tiling.tile_h);
+    return std::min(tile_rows * tiling.tile_h, int64_t(v.height) * v.bins);
 }
 
 // Parts of one file must share a display window: both parts use the frames' (the whole
@@ -355,22 +372,19 @@ Imf::Header cube_part_header(const std::string& name, int width, int rows, int s
 }
 
 void write_frames_part(Imf::MultiPartOutputFile& file, const CubeView& v, const float* data,
-                       const float* pixel_scale) {
-    Imf::OutputPart part(file, 0);
-    const FrameBatches batch(v.width, v.height, v.bins);
+                       const float* pixel_scale, const StripTiling& tiling) {
+    Imf::TiledOutputPart part(file, 0);
+    const int64_t rows = int64_t(v.height) * v.bins, batch = strip_batch_rows(v, tiling);
     const size_t xs = 3 * sizeof(float), ys = xs * size_t(v.width);
-    std::vector<float> buffer(size_t(batch.frames) * size_t(batch.rows) * size_t(v.width) * 3);
-    for (int t0 = 0; t0 < v.bins; t0 += batch.frames) {
-        const int n = std::min(batch.frames, v.bins - t0);
-        for (int y0 = 0; y0 < v.height; y0 += batch.rows) {
-            const int rows = std::min(batch.rows, v.height - y0);
-            gather_frames(v, data, pixel_scale, t0, n, y0, rows, buffer.data());
-            const int first_row = t0 * v.height + y0, row_count = n > 1 ? n * v.height : rows;
-            Imf::FrameBuffer fb;
-            insert_rgb(fb, buffer.data(), Imath::V2i(0, first_row), v.width, row_count, xs, ys);
-            part.setFrameBuffer(fb);
-            part.writePixels(row_count);
-        }
+    std::vector<float> buffer(size_t(batch) * size_t(v.width) * 3);
+    for (int64_t r0 = 0; r0 < rows; r0 += batch) {
+        const int64_t r1 = std::min(rows, r0 + batch);
+        gather_strip_rows(v, data, pixel_scale, r0, r1, buffer.data());
+        Imf::FrameBuffer fb;
+        insert_rgb(fb, buffer.data(), Imath::V2i(0, int(r0)), v.width, int(r1 - r0), xs, ys);
+        part.setFrameBuffer(fb);
+        part.writeTiles(0, part.numXTiles() - 1, int(r0 / tiling.tile_h),
+                        int((r1 - 1) / tiling.tile_h));
     }
 }
 
@@ -397,9 +411,13 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
                         path, height, bins, std::numeric_limits<int>::max()));
     const std::string tmp = temp_path_for(path);
     try {
-        set_exr_threads(options, width);
+        const StripTiling tiling(width);
+        set_exr_threads(options, tiling.tile_bytes());
         std::vector<Imf::Header> headers;
         headers.push_back(cube_part_header("frames", width, height * bins, height * bins, options));
+        headers[0].setType(Imf::TILEDIMAGE);
+        headers[0].setTileDescription(
+            Imf::TileDescription(unsigned(tiling.tile_w), unsigned(tiling.tile_h), Imf::ONE_LEVEL));
         for (const char* c : {"R", "G", "B"})
             headers[0].channels().insert(c, Imf::Channel(Imf::FLOAT));
         for (const auto& [k, v] : attributes) insert_attribute(headers[0], k, v);
@@ -413,7 +431,7 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
             headers[1].channels().insert("Z", Imf::Channel(Imf::FLOAT));
         }
         Imf::MultiPartOutputFile file(tmp.c_str(), headers.data(), int(headers.size()));
-        write_frames_part(file, CubeView{width, height, bins}, data, pixel_scale);
+        write_frames_part(file, CubeView{width, height, bins}, data, pixel_scale, tiling);
         if (depth) {
             Imf::OutputPart part(file, 1);
             Imf::FrameBuffer fb;
@@ -455,7 +473,9 @@ void read_depth_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
 void read_frames_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
     const CubeView v{cube.width, cube.height, cube.bins};
     const Imath::Box2i w = checked_window(file.header(p), cube.width, cube.height * cube.bins);
-    const int frames = FrameBatches(cube.width, cube.height, cube.bins).frames;
+    const size_t frame_bytes = v.pixels() * 3 * sizeof(float);
+    const int frames =
+        int(std::clamp<size_t>((size_t(8) << 20) / frame_bytes, 1, size_t(cube.bins)));
     std::vector<float> buffer(size_t(frames) * v.pixels() * 3);
     const size_t xs = 3 * sizeof(float), ys = xs * size_t(cube.width);
     Imf::InputPart part(file, p);

@@ -92,15 +92,31 @@ void enable_flush_to_zero() {
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
 }
 
+// The tile side: 32 pixels, or less when the film's blocks are as dense as the film (a
+// transient cube) and a 32-pixel block (with its filter border) would exceed 1/32 of the film,
+// so that the blocks of a few threads add little to the film's memory. It depends on the film
+// alone, never on the thread count: renders stay bit-identical across thread counts. A tile is
+// at least twice the filter's radius (the 2x2 colouring needs borders narrower than a tile).
+int tile_size_for(const Film& film) {
+    const int border = film.filter_border();
+    const int smallest = std::max(4, int(std::ceil(2 * film.rfilter().radius())));
+    if (film.block_bytes_per_pixel() == 0) return kTileSize;
+    const int64_t budget = int64_t(film.width()) * film.height() / 32;
+    int size = kTileSize;
+    while (size / 2 >= smallest && int64_t(size + 2 * border) * (size + 2 * border) > budget)
+        size /= 2;
+    return size;
+}
+
 // Tiles grouped by colour (tx % 2, ty % 2): tiles of one colour never overlap, filter borders
 // included, so they merge at the same time without locks.
-std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H) {
+std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H, int tile) {
     std::array<std::vector<Tile>, 4> by_colour;
-    for (int ty = 0; ty * kTileSize < H; ++ty)
-        for (int tx = 0; tx * kTileSize < W; ++tx)
-            by_colour[size_t((ty % 2) * 2 + (tx % 2))].push_back(
-                {tx * kTileSize, ty * kTileSize, std::min(kTileSize, W - tx * kTileSize),
-                 std::min(kTileSize, H - ty * kTileSize)});
+    for (int ty = 0; ty * tile < H; ++ty)
+        for (int tx = 0; tx * tile < W; ++tx)
+            by_colour[size_t((ty % 2) * 2 + (tx % 2))].push_back({tx * tile, ty * tile,
+                                                                  std::min(tile, W - tx * tile),
+                                                                  std::min(tile, H - ty * tile)});
     return by_colour;
 }
 
@@ -149,7 +165,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     scene.integrator().preprocess(scene);
 
     const int W = film.width(), H = film.height();
-    const auto by_colour = tiles_by_colour(W, H);
+    const auto by_colour = tiles_by_colour(W, H, tile_size_for(film));
     if (film.rfilter().radius() > kTileSize / 2)
         throw SceneError(
             fmt::format("the reconstruction filter's radius ({} px) is larger than femto "

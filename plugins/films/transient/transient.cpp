@@ -151,6 +151,13 @@ public:
         return std::make_unique<CubeBlock>(*this, x0, y0, w, h);
     }
 
+    // A block stores every bin of its pixels (cube, second moment, counts, touched bits).
+    size_t block_bytes_per_pixel() const override {
+        const size_t per_bin =
+            3 * sizeof(float) * (variance_enabled_ ? 2 : 1) + (count_enabled_ ? sizeof(float) : 0);
+        return size_t(grid_.bins) * per_bin + size_t(grid_.bins + 7) / 8;
+    }
+
     /// A zeroed storage for a block of `pixels` pixels, recycled when possible.
     std::unique_ptr<BlockStorage> acquire_storage(size_t pixels) const {
         std::unique_ptr<BlockStorage> st;
