@@ -32,7 +32,7 @@ constexpr const char* kPluginDirHelp =
     "Plugin folder, searched before femto's own plugins (repeatable; the first given wins)";
 
 // Ctrl-C (SIGINT) and SIGTERM (batch schedulers send it before a time limit) stop the render
-// after the current pass; what was rendered is written and femto exits 128 + the signal. While
+// within a few samples' work; what was rendered is written and femto exits 128 + the signal. While
 // the outputs are being written, further signals only say so: stopping then would lose the
 // render and leave a half-written set.
 std::atomic<bool> g_stop{false};
@@ -61,7 +61,7 @@ extern "C" void on_stop_signal(int sig) {
     }
     g_stop.store(true);
     static const char msg[] =
-        "\nfemto: interrupted, finishing the current pass and writing what was rendered "
+        "\nfemto: interrupted, writing what was rendered "
         "(Ctrl-C again to abort without writing)\n";
     say(msg, sizeof(msg) - 1);
 }
@@ -241,7 +241,7 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
     out_base = strip_output_extension(out_base);
     prepare_output(out_base);
-    // From here on Ctrl-C means "stop after the current pass and write what was rendered".
+    // From here on Ctrl-C means "stop rendering and write what was rendered".
     handle_stop_signals(true);
     auto scene = femto::load_scene(scene_path, opts);
     femto::RenderOptions ro;

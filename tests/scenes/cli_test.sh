@@ -196,6 +196,34 @@ sigint_partial)
   n=$(exr_attr out/int.exr femto:samples)
   [ "$n" -gt 0 ] && [ "$n" -lt 100000 ] || fail "samples attribute $n"
   no_temp_files out || fail "temporary files left";;
+sigint_latency)
+  # Ctrl-C takes effect within a few samples' work, not at the end of a pass: one pixel whose
+  # pass holds 2^22 volumetric samples (~10 s), and a kernel filter's 65536-spp pilot pass.
+  sed 's|<tfilter type="histogram"/>|<tfilter type="kernel"><integer name="pilot_spp" value="65536"/></tfilter>|' \
+    "$scene" > "$src/scenes/cornell-box/.pilot-$$.xml"
+  trap 'rm -f "$src/scenes/cornell-box/.pilot-$$.xml"' EXIT
+  for run in fog pilot; do
+    if [ $run = fog ]; then
+      "$femto" render "$src/scenes/fog-object/scene.xml" -o out/$run -D res=1 --spp 67108864 -q 2> err.txt &
+    else
+      "$femto" render "$src/scenes/cornell-box/.pilot-$$.xml" -o out/$run -D res=32 -q 2> err.txt &
+    fi
+    pid=$!
+    for _ in $(seq 600); do
+      cgt=$(sed -n 's/^SigCgt:\t//p' /proc/$pid/status 2>/dev/null) || break
+      [ -n "$cgt" ] && (( (0x$cgt >> 1) & 1 )) && break
+      sleep 0.1
+    done
+    sleep 2
+    start=$(date +%s%N)
+    kill -INT $pid
+    wait $pid; code=$?
+    ms=$(( ($(date +%s%N) - start) / 1000000 ))
+    [ "$code" -eq 130 ] || { cat err.txt >&2; fail "$run: exit code $code, expected 130"; }
+    # Generous for a loaded machine; before, these took 10 s to minutes.
+    [ "$ms" -lt 5000 ] || fail "$run: Ctrl-C took $ms ms to take effect"
+    [ "$(exr_attr out/$run.exr femto:interrupted)" = true ] || fail "$run: not marked interrupted"
+  done;;
 write_signals)
   # Ctrl-C twice and SIGTERM while the outputs are being written: femto explains, finishes
   # a complete set, leaves no temporary file and exits 130 (the first signal's code).

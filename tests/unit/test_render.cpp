@@ -121,20 +121,25 @@ TEST(Render, DeterministicForSeedAndThreads) {
     EXPECT_NE(a, d);  // and the seed matters
 }
 
-TEST(Render, StopFlagEndsAfterTheCurrentPass) {
+TEST(Render, StopFlagTakesEffectWithinAPass) {
     auto scene = load_scene_string(femto::test::scene_xml(
         "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/>"
         "<integer name=\"height\" value=\"8\"/><rfilter type=\"box\"/></film></sensor>"
         "<shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"0\" z=\"4\"/>"
         "<emitter type=\"area\"><float name=\"radiance\" value=\"2\"/></emitter></shape>"));
+    // Set before the render: not a single sample (a pass no longer has to finish; cli.sigint_*
+    // check a stop in the middle of a pass and the outputs it leaves).
     std::atomic<bool> stop{true};
     RenderOptions opt;
     opt.spp = 64;
     opt.stop = &stop;
-    const RenderStats st = render(*scene, opt);
-    EXPECT_TRUE(st.interrupted);
-    EXPECT_EQ(st.spp_done, 4u);  // one pass: 64 / 16 samples
-    // The partial image is a valid, normalised image: the light is visible in the centre.
+    const RenderStats stopped = render(*scene, opt);
+    EXPECT_TRUE(stopped.interrupted);
+    EXPECT_EQ(stopped.spp_done, 0u);
+    stop = false;
+    const RenderStats full = render(*scene, opt);
+    EXPECT_FALSE(full.interrupted);
+    EXPECT_EQ(full.spp_done, 64u);
     const auto img = scene->sensor().film().steady_image();
     EXPECT_NEAR(img[3 * (4 * 8 + 4)], 2.f, 1e-5f);
 }

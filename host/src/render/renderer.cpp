@@ -121,18 +121,27 @@ std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H, int tile) {
 }
 
 // Samples [s0, s1) of every pixel of `tile`: each camera sample's numbers come from (seed,
-// pixel, sample index) alone. The tile's block is merged into the film at the end.
-void render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0, uint32_t s1,
-                 Sampler& sampler, ContributionList& list) {
+// pixel, sample index) alone. The tile's block is merged into the film at the end. A stop
+// request ends the tile early (Ctrl-C takes effect within a few samples' work, whatever the
+// pass size): the samples taken are merged, so the pixels keep valid, if unequal, estimates.
+// Returns the number of camera samples taken.
+uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0, uint32_t s1,
+                     Sampler& sampler, ContributionList& list, const std::atomic<bool>* stop) {
     const Sensor& sensor = scene.sensor();
     Film& film = sensor.film();
     const Integrator& integrator = scene.integrator();
     auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
+    uint64_t taken = 0;
     for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
         if (!film.row_active(y)) continue;
         for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
             const uint64_t pixel = uint64_t(y) * uint64_t(film.width()) + uint64_t(x);
             for (uint32_t s = s0; s < s1; ++s) {
+                if (stop && stop->load(std::memory_order_relaxed)) {
+                    film.merge(*block);
+                    return taken;
+                }
+                ++taken;
                 sampler.start(seed, pixel, s);
                 const Vec2 jitter = sampler.next_2d();
                 const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
@@ -145,6 +154,7 @@ void render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s
         }
     }
     film.merge(*block);
+    return taken;
 }
 
 }  // namespace
@@ -184,40 +194,47 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         [&] { return prototype.clone(); });
     tbb::enumerable_thread_specific<ContributionList> lists;
 
-    // Samples [s0, s1) of every pixel, tiles of one colour at a time.
+    // Samples [s0, s1) of every pixel, tiles of one colour at a time; returns the share of
+    // the pass's samples taken (1 unless stopped).
+    uint64_t active_pixels = 0;
+    for (int y = 0; y < H; ++y) active_pixels += film.row_active(y) ? uint64_t(W) : 0;
     auto run_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1) {
+        std::atomic<uint64_t> taken{0};
         for (const auto& tiles : by_colour) {
             tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
                 enable_flush_to_zero();
-                render_tile(scene, tiles[t], seed, s0, s1, *samplers.local(), lists.local());
+                taken += render_tile(scene, tiles[t], seed, s0, s1, *samplers.local(),
+                                     lists.local(), options.stop);
                 progress.advance(uint64_t(tiles[t].w) * uint64_t(tiles[t].h) * (s1 - s0));
             });
         }
+        return double(taken.load()) / double(std::max<uint64_t>(1, active_pixels * (s1 - s0)));
     };
 
     const uint64_t rays_before = scene.rays_traced();
     const auto start = Clock::now();
     RenderStats stats;
     stats.spp_requested = spp;
+    auto stopped = [&] { return options.stop && options.stop->load(); };
     if (pilot_spp > 0) {
         // The pilot's random streams are independent of the image's (another seed).
         film.begin_pilot();
         scene.refresh_time_window();
         run_pass(options.seed ^ 0x9E3779B97F4A7C15ull, 0, pilot_spp);
-        film.end_pilot();
+        film.end_pilot();  // a stopped pilot still leaves the film a usable (rougher) estimate
     }
     uint32_t pass = 0;
-    for (uint32_t s0 = 0; s0 < spp; s0 += pass_spp, ++pass) {
+    for (uint32_t s0 = 0; s0 < spp && !stopped(); s0 += pass_spp, ++pass) {
         const uint32_t s1 = std::min(spp, s0 + pass_spp);
         film.start_pass(pass);
         scene.refresh_time_window();
-        run_pass(options.seed, s0, s1);
-        stats.spp_done = s1;
-        if (options.stop && options.stop->load() && s1 < spp) {
-            stats.interrupted = true;
-            break;
-        }
+        const double share = run_pass(options.seed, s0, s1);
+        // Stopped within the pass, some pixels have s1 samples and others s0: the mean.
+        stats.spp_done = share >= 1 ? s1 : s0 + uint32_t(double(s1 - s0) * share);
+        stats.interrupted = share < 1 && stopped();
+        if (stats.interrupted) break;
     }
+    if (stats.spp_done < spp && stopped()) stats.interrupted = true;
     progress.finish();
     stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.rays = scene.rays_traced() - rays_before;
