@@ -98,6 +98,12 @@ inline std::vector<std::string> split(const std::string& s, char sep) {
     return out;
 }
 
+/// The value after option argv[i] (advancing i), for the benchmarks' option parsers.
+inline std::string option_value(int argc, char** argv, int& i) {
+    if (i + 1 >= argc) throw std::invalid_argument(std::string(argv[i]) + " needs a value");
+    return argv[++i];
+}
+
 /// The integers of a comma-separated list ("16,64,256").
 inline std::vector<int> int_list(const std::string& s) {
     std::vector<int> v;

@@ -102,10 +102,7 @@ Options parse(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        auto next = [&]() -> std::string {
-            if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-            return argv[++i];
-        };
+        auto next = [&] { return option_value(argc, argv, i); };
         if (a == "-h" || a == "--help") usage(0);
         if (a == "--out")
             o.out_dir = next();

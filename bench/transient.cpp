@@ -64,6 +64,7 @@ using femto_bench::int_list;
 using femto_bench::load1;
 using femto_bench::median;
 using femto_bench::now_utc;
+using femto_bench::option_value;
 using femto_bench::read_loadavg;
 using femto_bench::read_text;
 using femto_bench::rel_mse;
@@ -119,10 +120,7 @@ Options parse(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        auto next = [&]() -> std::string {
-            if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-            return argv[++i];
-        };
+        auto next = [&] { return option_value(argc, argv, i); };
         auto next_int = [&]() { return std::stoi(next()); };
         if (a == "-h" || a == "--help") usage(0);
         if (a == "--mode")

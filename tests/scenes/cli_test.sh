@@ -26,6 +26,15 @@ expect_exit() {
 pixel_range() {
   oiiotool "$1" --printstats | sed -n 's/.*Stats Min: *\([0-9.e+-]*\).*/\1/p;s/.*Stats Max: *\([0-9.e+-]*\).*/\1/p' | head -2 | tr '\n' ' '
 }
+# Waits until process $1 has installed its SIGINT handler (bit 2 of SigCgt) or has ended.
+wait_for_sigint_handler() {
+  local cgt
+  for _ in $(seq 600); do
+    cgt=$(sed -n 's/^SigCgt:\t//p' /proc/$1/status 2>/dev/null) || return
+    [ -n "$cgt" ] && (( (0x$cgt >> 1) & 1 )) && return
+    sleep 0.1
+  done
+}
 exr_attr() { iinfo -v "$1" | sed -n "s/^ *$2: *\"\{0,1\}\([^\"]*\)\"\{0,1\}$/\1/p"; }
 # The mean of a PNG's 8-bit values over pixels and channels, rounded down.
 png_mean() { iinfo --stats "$1" | awk '/Stats Avg/ { printf "%d", ($3 + $4 + $5) / 3 }'; }
@@ -181,12 +190,7 @@ plugin_shadowing)
 sigint_partial)
   "$femto" render "$scene" -o out/int -D spp=100000 -D res=64 -q 2> err.txt &
   pid=$!
-  # Wait until femto has installed its SIGINT handler (bit 2 of SigCgt), then let it render.
-  for _ in $(seq 600); do
-    cgt=$(sed -n 's/^SigCgt:\t//p' /proc/$pid/status 2>/dev/null) || break
-    [ -n "$cgt" ] && (( (0x$cgt >> 1) & 1 )) && break
-    sleep 0.1
-  done
+  wait_for_sigint_handler $pid
   sleep 1
   kill -INT $pid
   wait $pid; code=$?
@@ -209,11 +213,7 @@ sigint_latency)
       "$femto" render "$src/scenes/cornell-box/.pilot-$$.xml" -o out/$run -D res=32 -q 2> err.txt &
     fi
     pid=$!
-    for _ in $(seq 600); do
-      cgt=$(sed -n 's/^SigCgt:\t//p' /proc/$pid/status 2>/dev/null) || break
-      [ -n "$cgt" ] && (( (0x$cgt >> 1) & 1 )) && break
-      sleep 0.1
-    done
+    wait_for_sigint_handler $pid
     sleep 2
     start=$(date +%s%N)
     kill -INT $pid
