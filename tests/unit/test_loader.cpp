@@ -208,7 +208,51 @@ TEST(Loader, MalformedAndEmpty) {
     EXPECT_NE(load_error("<scene></scene>").find("version"), std::string::npos);
     EXPECT_NE(load_error("<notascene version=\"3.0.0\"/>").find("must be <scene>"),
               std::string::npos);
-    EXPECT_NE(load_error("").find("malformed XML"), std::string::npos);
+    EXPECT_NE(load_error("").find("holds no XML element"), std::string::npos);
+}
+
+TEST(Loader, DeepNestingIsAnErrorNotAStackOverflow) {
+    auto nested = [](int depth, const std::string& inner) {
+        std::string xml;
+        for (int i = 0; i < depth; ++i) xml += "<bsdf type=\"twosided\">";
+        xml += inner;
+        for (int i = 0; i < depth; ++i) xml += "</bsdf>";
+        return xml;
+    };
+    for (const int depth : {7000, 100000}) {
+        const std::string msg =
+            load_error("<scene version=\"3.0.0\">" + nested(depth, "") + "</scene>");
+        EXPECT_NE(msg.find("<string>:1:"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("nested more than 100 levels deep"), std::string::npos) << msg;
+    }
+    // An included file's elements count from the depth of the <include>.
+    const auto dir = test::temp_dir("deep-include");
+    test::write_text(dir / "part.xml", "<scene version=\"3.0.0\">" + nested(60, "") + "</scene>");
+    test::write_text(
+        dir / "main.xml",
+        "<scene version=\"3.0.0\">" + nested(50, "<include filename=\"part.xml\"/>") + "</scene>");
+    try {
+        load_scene((dir / "main.xml").string());
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("part.xml:1:"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("nested more than 100"), std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(Loader, NothingBesidesTheRootElement) {
+    const std::string scene = scene_xml(kRect);
+    std::string msg = load_error(scene + "<shape type=\"sphere\"/>\n");
+    EXPECT_NE(msg.find("<shape> outside the root element <scene>"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("<string>:5:1:"), std::string::npos) << msg;
+    msg = load_error(scene + "\n  trailing words\n");
+    EXPECT_NE(msg.find("<string>:6:3: text outside the root element"), std::string::npos) << msg;
+    msg = load_error("stray<scene version=\"3.0.0\"/>");
+    EXPECT_NE(msg.find("text outside the root element"), std::string::npos) << msg;
+    // Comments, the declaration and blank space around the root are fine.
+    EXPECT_NO_THROW(
+        load_scene_string("<?xml version=\"1.0\"?>\n<!-- a -->\n" + scene + "<!-- b -->\n\n"));
 }
 
 TEST(Loader, MissingMeshFileIsLocated) {
