@@ -136,6 +136,27 @@ TEST(Loader, StrictParameters) {
     EXPECT_NE(msg.find("does not use the nested object"), std::string::npos) << msg;
 }
 
+TEST(Loader, ParameterGivenTwiceIsAnError) {
+    std::string msg =
+        load_error(scene_xml("<sensor type=\"perspective\">\n<float name=\"fov\" value=\"30\"/>\n"
+                             "<float name=\"fov\" value=\"40\"/></sensor>" +
+                             std::string(kRect)));
+    EXPECT_NE(msg.find("<string>:4:1: \"perspective\": parameter \"fov\" is given twice "
+                       "(first at <string>:3:1)"),
+              std::string::npos)
+        << msg;
+    // Whatever the types, and for named objects too.
+    msg = load_error(
+        scene_xml("<shape type=\"rectangle\"><boolean name=\"flip_normals\" value=\"true\"/>"
+                  "<string name=\"flip_normals\" value=\"x\"/></shape>"));
+    EXPECT_NE(msg.find("parameter \"flip_normals\" is given twice"), std::string::npos) << msg;
+    msg = load_error(
+        scene_xml("<medium type=\"homogeneous\" id=\"fog\"/><shape type=\"cube\"><bsdf "
+                  "type=\"null\"/><ref name=\"interior\" id=\"fog\"/><ref name=\"interior\" "
+                  "id=\"fog\"/></shape>"));
+    EXPECT_NE(msg.find("parameter \"interior\" is given twice"), std::string::npos) << msg;
+}
+
 TEST(Loader, AtMostOneChildOfAKind) {
     // Properties::child(): located at the second child, naming the tag.
     std::string msg = load_error(scene_xml(

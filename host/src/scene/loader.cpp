@@ -310,20 +310,33 @@ public:
         return it->second;
     }
 
+    // A name given twice in one object is a mistake whichever value was meant (Mitsuba 3
+    // refuses it too), so it is not silently resolved to the last one.
+    static void refuse_duplicate(const Properties& props, const std::string& name,
+                                 const XmlNode& c) {
+        if (props.has(name))
+            throw SceneError(c.location,
+                             fmt::format("\"{}\": parameter \"{}\" is given twice (first at {})",
+                                         props.plugin_type(), name, props.location_of(name).str()));
+    }
+
+    void add_object(Properties& props, const XmlNode& c, ObjectPtr obj, int& arg_index) {
+        const std::string* name = c.attribute("name");
+        if (name) refuse_duplicate(props, *name, c);
+        props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), std::move(obj),
+                         c.location);
+    }
+
     void add_child(Properties& props, const XmlNode& c, int& arg_index) {
         PluginKind kind;
         if (kind_from_tag(c.tag, kind)) {
-            ObjectPtr obj = build(c, kind);
-            const std::string* name = c.attribute("name");
-            props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), obj, c.location);
+            add_object(props, c, build(c, kind), arg_index);
             return;
         }
         if (c.tag == "ref") {
             check_attributes(c, {"id", "name"});
             check_no_children(c);
-            ObjectPtr obj = resolve(c);
-            const std::string* name = c.attribute("name");
-            props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), obj, c.location);
+            add_object(props, c, resolve(c), arg_index);
             return;
         }
         if (!kPropertyTags.count(c.tag))
@@ -334,6 +347,7 @@ public:
                             join({kPropertyTags.begin(), kPropertyTags.end()}, " "), kObjectTags));
         const std::string& name = require_attr(c, "name");
         if (name.empty()) throw SceneError(c.location, "empty parameter name");
+        refuse_duplicate(props, name, c);
         if (c.tag != "transform") check_no_children(c);
         if (c.tag == "boolean") {
             check_attributes(c, {"name", "value"});
