@@ -216,6 +216,73 @@ TEST(Loader, BadValues) {
         std::string::npos);
 }
 
+TEST(Loader, ProjectiveMatrixIsRefused) {
+    const std::string msg = load_error(scene_xml(
+        "<shape type=\"rectangle\"><transform name=\"to_world\">\n<matrix value=\"1 0 0 0 "
+        "0 1 0 0 0 0 1 0 0 0 0.5 1\"/></transform></shape>"));
+    EXPECT_NE(msg.find("<string>:4:1: <matrix> has the last row 0 0 0.5 1, not 0 0 0 1"),
+              std::string::npos)
+        << msg;
+    EXPECT_NO_THROW(load_scene_string(
+        scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\"><matrix value=\"2 0 0 1 "
+                  "0 2 0 0 0 0 2 0 0 0 0 1\"/></transform></shape>")));
+}
+
+// Far beyond 1e9 scene units single-precision ray tracing breaks down (black images, Embree
+// aborting on ray origins past 1.8e18): such scenes are refused where they are written.
+TEST(Loader, CoordinatesBeyondTheSceneRangeAreRefused) {
+    auto sensor_at = [](const std::string& transform) {
+        return scene_xml("<sensor type=\"perspective\">\n<transform name=\"to_world\">" +
+                         transform + "</transform></sensor>" + std::string(kRect));
+    };
+    std::string msg = load_error(sensor_at("<translate x=\"2e18\"/>"));
+    EXPECT_NE(msg.find("<string>:3:1: \"perspective\": to_world's origin lies at (2e+18, 0, 0), "
+                       "beyond femto's limit of +-1e+09 scene units"),
+              std::string::npos)
+        << msg;
+    // A lookat names the coordinate at fault, whether a float could hold it or not.
+    for (const std::string origin : {"2e18", "1e39"}) {
+        msg = load_error(sensor_at("<lookat origin=\"" + origin +
+                                   ", 0, 0\" target=\"0, 0, 0\" up=\"0, 1, 0\"/>"));
+        EXPECT_NE(msg.find("<lookat> origin lies at (" + origin.substr(0, 1) + "e+"),
+                  std::string::npos)
+            << msg;
+    }
+    msg =
+        load_error(sensor_at("<lookat origin=\"0, 0, 1\" target=\"0, 0, 0\" up=\"0, 1e39, 0\"/>"));
+    EXPECT_NE(msg.find("up: 1e+39 is beyond the range of single precision"), std::string::npos)
+        << msg;
+    msg = load_error(
+        scene_xml("<shape type=\"rectangle\">\n<transform name=\"to_world\"><scale value=\"3e9\"/>"
+                  "</transform></shape>"));
+    EXPECT_NE(
+        msg.find("<string>:3:1: vertex 0 (0-based) of the mesh, in the scene, lies at (-3e+09"),
+        std::string::npos)
+        << msg;
+    msg = load_error(
+        scene_xml("<shape type=\"sphere\"><float name=\"radius\" value=\"2e9\"/></shape>"));
+    EXPECT_NE(msg.find("a sphere of radius 2e+09"), std::string::npos) << msg;
+    msg = load_error(
+        scene_xml("<emitter type=\"point\"><point name=\"position\" x=\"1e12\" y=\"0\" z=\"0\"/>"
+                  "</emitter>"));
+    EXPECT_NE(msg.find("the point light lies at (1e+12, 0, 0)"), std::string::npos) << msg;
+    msg = load_error(scene_xml(
+        "<sensor type=\"orthographic\"><transform name=\"to_world\"><scale value=\"1e10\"/>"
+        "</transform></sensor>" +
+        std::string(kRect)));
+    EXPECT_NE(msg.find("a corner of the view lies at"), std::string::npos) << msg;
+    msg = load_error(scene_xml(
+        "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5, 1e39, 0.5\"/></bsdf>"));
+    EXPECT_NE(msg.find("rgb: 1e+39 is beyond the range of single precision"), std::string::npos)
+        << msg;
+    // Large scenes within the range load.
+    EXPECT_NO_THROW(load_scene_string(scene_xml(
+        "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0, 0, "
+        "9e8\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform></sensor><shape "
+        "type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5e8\"/></transform>"
+        "</shape>")));
+}
+
 TEST(Loader, MalformedAndEmpty) {
     std::string msg =
         load_error("<scene version=\"3.0.0\">\n  <shape type=\"rectangle\">\n</scene>");

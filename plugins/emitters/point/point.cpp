@@ -21,7 +21,8 @@ public:
             props.fail("position", "give either position or to_world, not both");
         position_ = props.has("to_world") ? read_to_world(props).point(Vec3(0.f))
                                           : props.get_point("position", Vec3(0.f));
-        if (!is_finite(position_)) props.fail("position", "the position must be finite");
+        if (!within_scene_range(position_))
+            props.fail("position", outside_scene_range("the point light", position_));
     }
 
     EmitterSample sample_direct(const Vec3& ref, Vec2 /*u*/) const override {
