@@ -1,8 +1,12 @@
 // The XML loader: passes (include, default, $param, -D, version upgrade), references,
 // transforms, value parsing and strict parameters.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
 
 #include "femto/bsdf.h"
+#include "femto/input_file.h"
 #include "femto/integrator.h"
 #include "femto/sensor.h"
 #include "scene_util.h"
@@ -348,6 +352,52 @@ TEST(Loader, MissingMeshFileIsLocated) {
         scene_xml("<shape type=\"obj\"><string name=\"filename\" value=\"no/such.obj\"/></shape>"));
     EXPECT_NE(msg.find("<string>:3:"), std::string::npos) << msg;
     EXPECT_NE(msg.find("such.obj"), std::string::npos) << msg;
+}
+
+// A FIFO blocks whoever opens it and a device such as /dev/zero never ends: every reader of a
+// file that a scene names refuses both, with the location of the name.
+TEST(Loader, InputFilesMustBeRegularFiles) {
+    const auto dir = test::temp_dir("input-files");
+    const std::string fifo = (dir / "fifo").string();
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    for (const std::string& path : {fifo, std::string("/dev/zero")})
+        for (const std::string& xml :
+             {"<shape type=\"obj\">\n<string name=\"filename\" value=\"" + path + "\"/></shape>",
+              "<shape type=\"ply\">\n<string name=\"filename\" value=\"" + path + "\"/></shape>",
+              "<shape type=\"rectangle\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" "
+              "name=\"reflectance\">\n<string name=\"filename\" value=\"" +
+                  path + "\"/></texture></bsdf></shape>",
+              "<medium type=\"heterogeneous\" id=\"m\">\n<string name=\"density\" value=\"" + path +
+                  "\"/></medium>" + std::string(kRect),
+              "\n<include filename=\"" + path + "\"/>" + std::string(kRect)}) {
+            const std::string msg = load_error(scene_xml(xml));
+            EXPECT_NE(msg.find("<string>:4:1:"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("\"" + path + "\""), std::string::npos) << msg;
+            EXPECT_NE(msg.find("not a regular file"), std::string::npos) << msg;
+        }
+    EXPECT_THROW(load_scene(fifo), SceneError);
+
+    // Reads stop at the size the file had when it was opened.
+    test::write_text(dir / "data.txt", "0123456789");
+    InputFile file((dir / "data.txt").string(), SourceLocation{"s.xml", 1, 2});
+    EXPECT_EQ(file.size(), 10u);
+    char head[4];
+    EXPECT_EQ(file.read(head, sizeof head), 4u);
+    test::write_text(dir / "data.txt", "0123456789 and more");  // grows meanwhile
+    EXPECT_EQ(file.read_rest(), "456789");
+    EXPECT_EQ(file.read(head, sizeof head), 0u);
+    try {
+        InputFile missing((dir / "nothere.obj").string(), SourceLocation{"s.xml", 3, 4});
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("s.xml:3:4: cannot open"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("nothere.obj\": no such file"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(input_file_problem(dir.string()), "it is a directory");
+    EXPECT_EQ(input_file_problem((dir / "data.txt").string()), "");
+    std::filesystem::remove_all(dir);
 }
 
 TEST(Loader, LazyPluginLoading) {

@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <pugixml.hpp>
-#include <sstream>
+
+#include "femto/input_file.h"
 
 namespace fs = std::filesystem;
 
@@ -64,17 +64,15 @@ struct LineTable {
 };
 
 std::string read_file(const std::string& path, const SourceLocation& from) {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec))
-        throw SceneError(from,
-                         fmt::format("scene file \"{}\" does not exist or is not a file", path));
-    if (fs::file_size(path, ec) > kMaxSceneFileBytes)
+    const std::string problem = input_file_problem(path);
+    if (!problem.empty())
+        throw SceneError(from, fmt::format("scene file \"{}\" does not exist or is not a file "
+                                           "({})",
+                                           path, problem));
+    InputFile file(path, from);
+    if (file.size() > kMaxSceneFileBytes)
         throw SceneError(from, fmt::format("scene file \"{}\" is larger than 1 GiB", path));
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw SceneError(from, fmt::format("cannot read scene file \"{}\"", path));
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    return file.read_rest();
 }
 
 bool is_blank(const std::string& text) {

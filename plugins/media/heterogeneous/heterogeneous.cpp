@@ -38,12 +38,12 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "femto/input_file.h"
 #include "femto/medium.h"
 #include "femto/plugin.h"
 #include "femto/sampler.h"
@@ -200,18 +200,11 @@ private:
     void load(const Properties& props, const std::string& filename) {
         auto fail = [&](const std::string& what) { fail_file(props, filename, what); };
         if (filename.empty()) fail("empty file name");
-        std::error_code ec;
-        if (fs::is_directory(filename, ec)) fail("is a directory, not a .vol file");
-        if (!fs::exists(filename, ec)) fail("no such file");
-        if (!fs::is_regular_file(filename, ec)) fail("is not a regular file");
-        const uintmax_t file_size = fs::file_size(filename, ec);
-        if (ec) fail("cannot read its size (" + ec.message() + ")");
-        std::ifstream in(filename, std::ios::binary);
-        if (!in) fail("cannot open it for reading");
+        femto::InputFile in(filename, props.location_of("density"));
+        const uint64_t file_size = in.size();
 
         unsigned char h[kHeaderBytes];
-        in.read(reinterpret_cast<char*>(h), kHeaderBytes);
-        const size_t got = static_cast<size_t>(in.gcount());
+        const size_t got = in.read(h, kHeaderBytes);
         if (got < 4 || h[0] != 'V' || h[1] != 'O' || h[2] != 'L')
             fail(
                 "not a Mitsuba grid volume (.vol) file (it does not start with the bytes "
@@ -265,10 +258,8 @@ private:
                      ", " + to_str(bmax_[2]) + "): it needs finite min < max on every axis");
 
         data_.resize(voxels);
-        in.read(reinterpret_cast<char*>(data_.data()),
-                static_cast<std::streamsize>(voxels * sizeof(float)));
-        if (static_cast<uint64_t>(in.gcount()) != voxels * sizeof(float))
-            fail("could not read the " + std::to_string(voxels) + " densities (read error)");
+        if (in.read(data_.data(), voxels * sizeof(float)) != voxels * sizeof(float))
+            fail("could not read the " + std::to_string(voxels) + " densities (the file shrank)");
         if constexpr (std::endian::native == std::endian::big)
             for (float& v : data_)
                 v = std::bit_cast<float>(__builtin_bswap32(std::bit_cast<uint32_t>(v)));
