@@ -287,6 +287,21 @@ TEST(Loader, CoordinatesBeyondTheSceneRangeAreRefused) {
         "</shape>")));
 }
 
+TEST(Loader, NegativeReflectanceIsRefused) {
+    for (const std::string bsdf :
+         {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.5, -0.1, 0.5\"/></bsdf>",
+          "<bsdf type=\"plastic\">\n<float name=\"diffuse_reflectance\" value=\"-1\"/></bsdf>",
+          "<bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\">\n<rgb "
+          "name=\"color0\" value=\"-0.2\"/></texture></bsdf>"}) {
+        const std::string msg = load_error(scene_xml(bsdf));
+        EXPECT_NE(msg.find("<string>:4:1:"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("must not be negative"), std::string::npos) << msg;
+    }
+    EXPECT_NO_THROW(load_scene_string(scene_xml(
+        "<bsdf type=\"diffuse\" id=\"b\"><rgb name=\"reflectance\" value=\"0, 0.5, 1\"/></bsdf>" +
+        std::string(kRect))));
+}
+
 TEST(Loader, MalformedAndEmpty) {
     std::string msg =
         load_error("<scene version=\"3.0.0\">\n  <shape type=\"rectangle\">\n</scene>");
