@@ -302,6 +302,26 @@ TEST(Loader, NegativeReflectanceIsRefused) {
         std::string(kRect))));
 }
 
+// Emission near float's limit (3.4e38) overflowed to infinity in the outputs.
+TEST(Loader, AbsurdEmissionIsRefused) {
+    for (const std::string emitter :
+         {"<shape type=\"rectangle\"><emitter type=\"area\">\n<rgb name=\"radiance\" "
+          "value=\"3e38\"/></emitter></shape>",
+          "<emitter type=\"point\">\n<rgb name=\"intensity\" value=\"1, 1e31, 1\"/></emitter>",
+          "<emitter type=\"spot\">\n<float name=\"intensity\" value=\"2e30\"/></emitter>",
+          "<emitter type=\"collimated\"><float name=\"radius\" value=\"0.1\"/>\n<rgb "
+          "name=\"power\" value=\"1e35\"/></emitter>"}) {
+        const std::string msg = load_error(scene_xml(emitter));
+        EXPECT_NE(msg.find("<string>:4:1:"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("is beyond femto's limit of 1e+30"), std::string::npos) << msg;
+    }
+    const std::string msg = load_error(scene_xml(
+        "<emitter type=\"point\"><rgb name=\"intensity\" value=\"1, -1, 1\"/></emitter>"));
+    EXPECT_NE(msg.find("the intensity must not be negative"), std::string::npos) << msg;
+    EXPECT_NO_THROW(load_scene_string(
+        scene_xml("<emitter type=\"point\"><rgb name=\"intensity\" value=\"1e29\"/></emitter>")));
+}
+
 TEST(Loader, MalformedAndEmpty) {
     std::string msg =
         load_error("<scene version=\"3.0.0\">\n  <shape type=\"rectangle\">\n</scene>");

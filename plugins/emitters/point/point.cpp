@@ -14,9 +14,7 @@ namespace {
 class PointEmitter final : public Emitter {
 public:
     explicit PointEmitter(const Properties& props)
-        : Emitter(props), intensity_(props.get_color("intensity", Color(1.f))) {
-        if (intensity_.r < 0 || intensity_.g < 0 || intensity_.b < 0)
-            props.fail("intensity", "the intensity must not be negative");
+        : Emitter(props), intensity_(read_emission(props, "intensity", Color(1.f))) {
         if (props.has("position") && props.has("to_world"))
             props.fail("position", "give either position or to_world, not both");
         position_ = props.has("to_world") ? read_to_world(props).point(Vec3(0.f))
