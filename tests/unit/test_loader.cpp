@@ -322,6 +322,52 @@ TEST(Loader, AbsurdEmissionIsRefused) {
         scene_xml("<emitter type=\"point\"><rgb name=\"intensity\" value=\"1e29\"/></emitter>")));
 }
 
+// Errors found once the scene is built (preprocess, prepare) point at the element concerned.
+TEST(Loader, ErrorsBeforeRenderingAreLocated) {
+    auto render_error = [](const std::string& xml) {
+        auto scene = load_scene_string(xml);
+        RenderOptions options;
+        options.spp = 1;
+        options.threads = 1;
+        try {
+            render(*scene, options);
+        } catch (const SceneError& e) {
+            return std::string(e.what());
+        }
+        ADD_FAILURE() << "no error for\n" << xml;
+        return std::string();
+    };
+    const std::string fog = "<medium type=\"homogeneous\"/>";
+    std::string msg =
+        render_error(scene_xml("\n<integrator type=\"direct\"/><sensor "
+                               "type=\"perspective\">" +
+                               fog + "</sensor>" + kRect));
+    EXPECT_NE(msg.find("<string>:3:1: the direct integrator does not render participating media"),
+              std::string::npos)
+        << msg;
+    msg = render_error(
+        scene_xml("<integrator type=\"transient_path\"><integer name=\"max_depth\" value=\"4\"/>\n"
+                  "<distance type=\"exponential\"/></integrator><sensor type=\"perspective\">" +
+                  fog + "</sensor>" + kRect));
+    EXPECT_NE(msg.find("<string>:3:1: distance sampling \"exponential\""), std::string::npos)
+        << msg;
+    msg = render_error(scene_xml(
+        "<sensor type=\"perspective\"><film type=\"hdrfilm\">\n<rfilter type=\"gaussian\"><float "
+        "name=\"stddev\" value=\"40\"/></rfilter></film></sensor>" +
+        std::string(kRect)));
+    EXPECT_NE(msg.find("<string>:3:1: the reconstruction filter's radius"), std::string::npos)
+        << msg;
+    // Unbounded paths: located at max_depth, and world time (no cut) is named as the reason.
+    msg = render_error(
+        scene_xml("<integrator type=\"transient_path\">\n<integer name=\"max_depth\" value=\"-1\"/>"
+                  "</integrator><sensor type=\"perspective\"><film type=\"transient\"><float "
+                  "name=\"bin_width\" value=\"0.1\"/><integer name=\"bins\" value=\"4\"/><boolean "
+                  "name=\"world_time\" value=\"true\"/></film></sensor>" +
+                  std::string(kRect)));
+    EXPECT_NE(msg.find("<string>:3:1: transient_path with max_depth=-1"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("in world time"), std::string::npos) << msg;
+}
+
 TEST(Loader, MalformedAndEmpty) {
     std::string msg =
         load_error("<scene version=\"3.0.0\">\n  <shape type=\"rectangle\">\n</scene>");

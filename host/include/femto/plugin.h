@@ -23,8 +23,8 @@
 namespace femto {
 
 /// Bumped whenever a public header changes in a way that breaks compiled plugins.
-/// (6: schemas carry the base classes' parameters, ParamSpec::inherited_from.)
-inline constexpr uint32_t kPluginAbiVersion = 6;
+/// (7: Object::location().)
+inline constexpr uint32_t kPluginAbiVersion = 7;
 
 struct PluginDescriptor {
     uint32_t abi_version;

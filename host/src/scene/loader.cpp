@@ -294,6 +294,7 @@ public:
         ObjectPtr obj(raw);
         obj->set_id(props.id());
         obj->set_type_name(desc.type_name);
+        obj->set_location(props.location());
         return obj;
     }
 
