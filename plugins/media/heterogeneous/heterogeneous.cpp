@@ -31,6 +31,8 @@
 //
 // Bad input (missing or truncated file, wrong magic, version or encoding, absurd or
 // inconsistent sizes, NaN, infinite or negative densities) is a SceneError naming the file.
+// So is a grid whose tracking would take more than 1e4 steps along a ray through it: scale *
+// (largest - smallest density) times the longest chord through its box in the scene.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -59,6 +61,9 @@ using femto::Vec3;
 constexpr size_t kHeaderBytes = 48;
 /// Largest number of voxels accepted (8 GiB of float32).
 constexpr uint64_t kMaxVoxels = uint64_t(1) << 31;
+/// Largest expected number of ratio-tracking steps along a ray through the grid (residual
+/// majorant x longest chord through the box).
+constexpr double kMaxTrackingSteps = 1e4;
 /// Ratio-tracking estimates below this are Russian-rouletted.
 constexpr double kRouletteThreshold = 0.1;
 
@@ -124,6 +129,7 @@ public:
         min_sigma_ = scale_ * min_density_;
         max_sigma_ = scale_ * max_density_;
         residual_majorant_ = max_sigma_ - min_sigma_;
+        check_tracking_work(props, to_world);
     }
 
     bool homogeneous() const override { return false; }
@@ -190,6 +196,32 @@ private:
             if (fs::exists(candidate, ec) || !fs::exists(p, ec)) return candidate.string();
         }
         return name;
+    }
+
+    // Ratio tracking takes about residual majorant x chord steps along a ray through the box
+    // (more where the grid is nearly empty: nothing ends the walk early). A voxel of density
+    // 1e6 made renders of a second take minutes; such grids are refused.
+    void check_tracking_work(const Properties& props, const femto::Transform& to_world) const {
+        double chord = 0.0;  // longest chord through the box: its longest diagonal, in the scene
+        for (int corner = 0; corner < 4; ++corner) {
+            const Vec3 diagonal(float((corner & 1 ? -1 : 1) * (bmax_[0] - bmin_[0])),
+                                float((corner & 2 ? -1 : 1) * (bmax_[1] - bmin_[1])),
+                                float(bmax_[2] - bmin_[2]));
+            const std::array<double, 3> d = apply_vector(to_world.matrix(), diagonal);
+            chord = std::max(chord, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+        }
+        const double steps = residual_majorant_ * chord;
+        if (!(steps <= kMaxTrackingSteps))
+            props.fail("scale",
+                       "the density grid's majorant (scale * (largest - smallest density) = " +
+                           to_str(residual_majorant_) +
+                           " per scene unit) times the longest chord "
+                           "through its box (" +
+                           to_str(chord) + " scene units) is " + to_str(steps) +
+                           ": tracking a ray through it would take about that many density "
+                           "lookups, and femto accepts at most " +
+                           to_str(kMaxTrackingSteps) +
+                           " (lower the scale, or the densities, of the grid)");
     }
 
     [[noreturn]] static void fail_file(const Properties& props, const std::string& filename,
