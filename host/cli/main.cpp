@@ -71,13 +71,24 @@ void handle_stop_signals(bool on) {
 }
 
 // Creates the output folder and checks it is writable, before spending time on a render.
+// Output names that are folders are refused here: renaming a finished file onto a folder
+// fails late, with the system's least helpful message.
 void prepare_output(const std::string& out_base) {
     if (out_base.empty() || out_base.back() == '/')
         throw femto::SceneError(
             fmt::format("output \"{}\" must name a file (without extension)", out_base));
+    std::error_code ec;
+    if (fs::is_directory(out_base, ec))
+        throw femto::SceneError(
+            fmt::format("output \"{}\" is a folder: name a file in it "
+                        "(without extension), e.g. -o {}/render",
+                        out_base, out_base));
+    for (const char* suffix : {".exr", ".png", ".npy", "_steady.exr"})
+        if (fs::is_directory(out_base + suffix, ec))
+            throw femto::SceneError(
+                fmt::format("cannot write \"{}{}\": a folder has that name", out_base, suffix));
     fs::path dir = fs::path(out_base).parent_path();
     if (dir.empty()) dir = ".";
-    std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir))
         throw femto::SceneError(fmt::format("cannot create the output folder \"{}\"{}",

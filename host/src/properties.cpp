@@ -279,7 +279,12 @@ std::shared_ptr<Texture> get_texture(const Properties& props, const std::string&
         auto obj = props.get_object(name, PluginKind::Texture);
         return std::static_pointer_cast<Texture>(obj);
     }
-    return std::make_shared<ConstantTexture>(props.get_color(name));
+    const Color c = props.get_color(name);
+    if (c.r < 0 || c.g < 0 || c.b < 0)
+        props.fail(name, fmt::format("\"{}\" must not be negative, got {}: a reflectance below 0 "
+                                     "would make negative radiance",
+                                     name, default_text(c)));
+    return std::make_shared<ConstantTexture>(c);
 }
 
 }  // namespace femto

@@ -1,5 +1,7 @@
 #include "femto/transform.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <stdexcept>
 
@@ -144,6 +146,20 @@ double Transform::det3() const {
     return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
            m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
            m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+bool within_scene_range(double x, double y, double z) {
+    for (const double v : {x, y, z})
+        if (!(std::abs(v) <= kMaxSceneCoordinate)) return false;  // also false for NaN
+    return true;
+}
+
+std::string outside_scene_range(const std::string& what, double x, double y, double z) {
+    return fmt::format(
+        "{} lies at ({:g}, {:g}, {:g}), beyond femto's limit of +-{:g} scene units: rays and "
+        "areas are computed in single precision, which overflows past it (black images, or a "
+        "crash); scale the scene down (e.g. use a larger length unit)",
+        what, x, y, z, kMaxSceneCoordinate);
 }
 
 }  // namespace femto

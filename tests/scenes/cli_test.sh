@@ -119,6 +119,24 @@ unwritable_output)
   fi
   ls -A ro | grep -q . && fail "something was written";
   true;;
+bad_output_folder)
+  # Output names that are folders are refused before rendering, with a message that says so.
+  mkdir -p folder out/taken.exr
+  expect_exit 2 '^femto: error: output "folder" is a folder: name a file in it' -- "$femto" render "$scene" -o folder -q
+  expect_exit 2 '^femto: error: cannot write "out/taken\.exr": a folder has that name' -- "$femto" render "$scene" -o out/taken -q
+  ls -A folder | grep -q . && fail "something was written";
+  true;;
+bad_far_scene)
+  # A camera at 2e18 made Embree abort (exit 134); beyond 1e9 scene units femto refuses.
+  sed 's|<lookat origin="0, 0, 3.9"|<translate x="2e18"/><lookat origin="0, 0, 3.9"|' "$scene" > far.xml
+  expect_exit 2 'far\.xml:[0-9]+:[0-9]+: "perspective": to_world.s origin lies at \(-?2e\+18, 0, 3\.9\), beyond femto.s limit' -- "$femto" render far.xml -o out/far -q
+  [ ! -e out/far.exr ] || fail "output written";;
+bad_texture)
+  # A corrupt PNG texture: one located line from femto, none from libpng.
+  printf '\211PNG\r\n\032\n\0\0\0\015IHDR\0\0\0\002\0\0\0\002\010\002\0\0\0BAD!' > corrupt.png
+  printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="rectangle"><bsdf type="diffuse">\n<texture type="bitmap" name="reflectance"><string name="filename" value="corrupt.png"/></texture></bsdf></shape>\n</scene>\n' > t.xml
+  expect_exit 2 '^femto: error: t\.xml:4:[0-9]+: "bitmap": cannot read image "[^"]*corrupt\.png": ' -- "$femto" render t.xml -o out/t -q
+  [ "$(wc -l < stderr.txt)" -eq 1 ] || { cat stderr.txt >&2; fail "more than one line on stderr"; };;
 bad_spp)
   expect_exit 2 '^femto: error: --spp: expected a whole number from 1 to 4294967295, got "0"' -- "$femto" render "$scene" --spp 0 -q
   expect_exit 2 '^femto: error: --spp: expected a whole number .*got "-3"' -- "$femto" render "$scene" --spp -3 -q

@@ -534,6 +534,40 @@ TEST(Heterogeneous, BadParametersAreLocatedSceneErrors) {
     fs::remove_all(dir);
 }
 
+// Ratio tracking takes ~ majorant x chord steps per ray: a grid that would need more than
+// 1e4 is refused (a voxel of 1e6 made a second-long render take minutes, 1e10 never ended).
+TEST(Heterogeneous, GridsTooDenseToTrackAreRefused) {
+    const auto dir = femto::test::temp_dir("het-dense");
+    auto one_dense_voxel = [&](double density) {
+        const fs::path file = dir / ("d" + std::to_string(int(std::log10(density))) + ".vol");
+        write_bytes(file, make_grid(2, 2, 2, {0, 0, 0}, {1, 1, 1}, [=](int x, int y, int z) {
+                              return x + y + z == 0 ? density : 0.0;
+                          }).bytes());
+        return file;
+    };
+    for (const double density : {1e6, 1e10}) {
+        const std::string what = medium_error(medium_props(one_dense_voxel(density)));
+        EXPECT_NE(what.find("times the longest chord through its box (1.73205 scene units)"),
+                  std::string::npos)
+            << what;
+        EXPECT_NE(what.find("femto accepts at most 10000"), std::string::npos) << what;
+    }
+    // The chord is measured in the scene: scaling the box down makes the same grid trackable.
+    Properties p = medium_props(one_dense_voxel(1e6));
+    femto::Transform::Matrix small{};
+    for (int i = 0; i < 3; ++i) small[i][i] = 1e-3;
+    small[3][3] = 1;
+    p.set("to_world", Properties::Type::Transform, femto::Transform(small));
+    EXPECT_NO_THROW(femto::create_object(PluginKind::Medium, "heterogeneous", p));
+    // A constant grid needs no tracking (its transmittance is exact), however dense.
+    write_bytes(dir / "c.vol", make_grid(2, 2, 2, {0, 0, 0}, {1, 1, 1}, [](int, int, int) {
+                                   return 1e6;
+                               }).bytes());
+    EXPECT_NO_THROW(
+        femto::create_object(PluginKind::Medium, "heterogeneous", medium_props(dir / "c.vol")));
+    fs::remove_all(dir);
+}
+
 TEST(Heterogeneous, RelativeFileNamesResolveNextToTheSceneFile) {
     const auto dir = femto::test::temp_dir("het-relative");
     fs::create_directories(dir / "grids");

@@ -347,6 +347,95 @@ TEST_F(TextureBitmap, BadInput) {
     EXPECT_THROW(make_texture(no_file), femto::SceneError);
 }
 
+// The message of the SceneError that loading `file` gives, and what was printed meanwhile.
+std::pair<std::string, std::string> bitmap_error(const std::string& file) {
+    Properties props("bitmap", {"scene.xml", 7, 3});
+    props.set("filename", Properties::Type::String, file, {"scene.xml", 8, 5});
+    ::testing::internal::CaptureStderr();
+    std::string what;
+    try {
+        make_texture(props);
+        ADD_FAILURE() << file << ": no error";
+    } catch (const femto::SceneError& e) {
+        what = e.what();
+    }
+    return {what, ::testing::internal::GetCapturedStderr()};
+}
+
+size_t count(const std::string& text, const std::string& part) {
+    size_t n = 0;
+    for (size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+    return n;
+}
+
+// A corrupt image gives one located error that says once which file it is, and nothing else
+// on stderr (libpng prints its own "libpng error:" lines, which femto keeps back).
+TEST_F(TextureBitmap, CorruptImageGivesOneCleanError) {
+    const std::string png = (dir_ / "corrupt.png").string();
+    std::ofstream(png, std::ios::binary)
+        << std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\0\x02\0\0\0\x02\x08\x02\0\0\0BAD!", 33);
+    const auto [what, printed] = bitmap_error(png);
+    EXPECT_NE(what.find("scene.xml:8:5: \"bitmap\": cannot read image \"" + png + "\": "),
+              std::string::npos)
+        << what;
+    EXPECT_EQ(count(what, "cannot read image"), 1u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_EQ(printed, "");
+}
+
+// OpenEXR would allocate scanline buffers for the width a header claims (1.4 GB here) before
+// femto sees the size: such a header is refused first.
+TEST_F(TextureBitmap, HugeExrDataWindowIsRefusedAtTheHeader) {
+    auto attribute = [](const std::string& name, const std::string& type, const std::string& data) {
+        const uint32_t size = uint32_t(data.size());
+        std::string a = name + '\0' + type + '\0';
+        a.append(reinterpret_cast<const char*>(&size), 4);
+        return a + data;
+    };
+    auto ints = [](std::initializer_list<int32_t> v) {
+        return std::string(reinterpret_cast<const char*>(std::data(v)), v.size() * 4);
+    };
+    const float one = 1.f, zero2[2] = {0.f, 0.f};
+    std::string exr("\x76\x2f\x31\x01\x02\0\0\0", 8);
+    exr += attribute("channels", "chlist", std::string("R\0", 2) + ints({1, 0, 1, 1}) + '\0');
+    exr += attribute("compression", "compression", std::string(1, '\0'));
+    exr += attribute("dataWindow", "box2i", ints({0, 0, 240'000'000, 15}));
+    exr += attribute("displayWindow", "box2i", ints({0, 0, 240'000'000, 15}));
+    exr += attribute("lineOrder", "lineOrder", std::string(1, '\0'));
+    exr +=
+        attribute("pixelAspectRatio", "float", std::string(reinterpret_cast<const char*>(&one), 4));
+    exr += attribute("screenWindowCenter", "v2f",
+                     std::string(reinterpret_cast<const char*>(zero2), 8));
+    exr += attribute("screenWindowWidth", "float",
+                     std::string(reinterpret_cast<const char*>(&one), 4));
+    exr += '\0';
+    const std::string path = (dir_ / "huge.exr").string();
+    std::ofstream(path, std::ios::binary) << exr;
+    const auto [what, printed] = bitmap_error(path);
+    EXPECT_NE(what.find("exceeds the maximum width of 65536"), std::string::npos) << what;
+    EXPECT_EQ(count(what, "cannot read image"), 1u) << what;
+}
+
+// Negative (or NaN) texels would make negative radiance: they are read as 0, with a warning.
+TEST_F(TextureBitmap, NegativeTexelsAreReadAsZero) {
+    const std::string pfm = (dir_ / "negative.pfm").string();
+    std::ofstream out(pfm, std::ios::binary);
+    out << "PF\n2 1\n" << (std::endian::native == std::endian::little ? "-1.0" : "1.0") << "\n";
+    const float data[6] = {-0.5f, 0.25f, 1.f, 0.5f, std::nanf(""), -2.f};
+    out.write(reinterpret_cast<const char*>(data), sizeof(data));
+    out.close();
+    Properties props("bitmap", {});
+    props.set_string("filename", pfm);
+    ::testing::internal::CaptureStderr();
+    auto t = make_texture(props);
+    const std::string printed = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(printed.find("has 3 negative or non-finite channel values; they are read as 0"),
+              std::string::npos)
+        << printed;
+    EXPECT_COLOR_NEAR(at(*t, 0.25f, 0.5f), Color(0.f, 0.25f, 1.f), 1e-6f);
+    EXPECT_COLOR_NEAR(at(*t, 0.75f, 0.5f), Color(0.5f, 0.f, 0.f), 1e-6f);
+}
+
 TEST(TextureBitmapSchema, ParametersAreDocumented) {
     const femto::PluginDescriptor& d = femto::find_plugin(PluginKind::Texture, "bitmap");
     std::vector<std::string> names;

@@ -71,6 +71,14 @@ protected:
     /// Reads the pulse parameters and the medium (inherited_params()).
     explicit Emitter(const Properties& props);
 
+    /// Largest emitted value accepted per channel (radiance, intensity, irradiance, power). A
+    /// float holds up to 3.4e38, but a render multiplies emission by path throughputs and sums
+    /// many samples: values near that limit would write infinities into the outputs.
+    static constexpr float kMaxEmission = 1e30f;
+    /// Reads an emitted quantity: a located SceneError unless every channel is finite, >= 0
+    /// and at most kMaxEmission.
+    static Color read_emission(const Properties& props, const std::string& name, const Color& def);
+
     const Shape* shape_ = nullptr;
     PulseProfile pulse_;
     std::shared_ptr<class Medium> medium_;

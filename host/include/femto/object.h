@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "femto/error.h"
+
 namespace femto {
 
 /// The kinds of plugin. The XML tag decides which kind a scene object must have.
@@ -90,9 +92,14 @@ public:
     /// The plugin type it was built from (`type="..."`); set by the host.
     const std::string& type_name() const { return type_name_; }
     void set_type_name(std::string t) { type_name_ = std::move(t); }
+    /// Where the object's tag is in the scene (empty for objects not built from a file); set
+    /// by the host, for errors found after construction (preprocess(), prepare()).
+    const SourceLocation& location() const { return location_; }
+    void set_location(SourceLocation location) { location_ = std::move(location); }
 
 private:
     std::string id_, type_name_;
+    SourceLocation location_;
 };
 
 using ObjectPtr = std::shared_ptr<Object>;

@@ -24,6 +24,7 @@ namespace femto {
 
 /// Bumped whenever a public header changes in a way that breaks compiled plugins.
 /// (6: schemas carry the base classes' parameters, ParamSpec::inherited_from.)
+/// (7: Object::location(); Film::block_bytes_per_pixel().)
 inline constexpr uint32_t kPluginAbiVersion = 7;
 
 struct PluginDescriptor {

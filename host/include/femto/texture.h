@@ -32,7 +32,8 @@ private:
 };
 
 /// Reads parameter `name` as a colour (rgb/srgb/spectrum/float) or a nested texture.
-/// Missing -> a constant `def`.
+/// Missing -> a constant `def`. Textures are reflectances and colours: a negative constant is
+/// a located SceneError (it would make negative radiance).
 std::shared_ptr<Texture> get_texture(const Properties& props, const std::string& name,
                                      const Color& def);
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 
 #include "femto/math.h"
 
@@ -42,5 +43,20 @@ public:
 private:
     Matrix m_, inv_;
 };
+
+/// Largest coordinate magnitude, in scene units, of anything placed in the scene (mesh
+/// vertices, sphere extents, sensor and emitter positions, after their transforms). Rays, hits
+/// and areas are single precision: the squared length of a cross product of two edges (areas,
+/// normals) overflows a float once edges pass ~4e9, which turns images black, and Embree
+/// aborts on ray origins beyond ~1.8e18. Within +-1e9 every such product stays finite.
+inline constexpr double kMaxSceneCoordinate = 1e9;
+/// True when x, y and z are finite and within +-kMaxSceneCoordinate.
+bool within_scene_range(double x, double y, double z);
+inline bool within_scene_range(const Vec3& p) { return within_scene_range(p.x, p.y, p.z); }
+/// An error message: `what` lies at (x, y, z), outside that range, and why that is refused.
+std::string outside_scene_range(const std::string& what, double x, double y, double z);
+inline std::string outside_scene_range(const std::string& what, const Vec3& p) {
+    return outside_scene_range(what, p.x, p.y, p.z);
+}
 
 }  // namespace femto

@@ -18,12 +18,14 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
 
 #include "femto/color.h"
 #include "femto/error.h"
+#include "femto/input_file.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
 
@@ -181,21 +183,108 @@ void write_png_preview(const std::string& path, int width, int height, const flo
     commit(tmp, path);
 }
 
+namespace {
+
+constexpr int kMaxImageSide = 1 << 16;
+constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
+
+// OpenEXR allocates scanline buffers for the width a header claims while opening the file,
+// before OpenImageIO hands femto the spec: a corrupt header could ask for gigabytes. Its own
+// limit makes such files fail at the header instead.
+void limit_openexr_sizes() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        Imf::Header::setMaxImageSize(kMaxImageSide, kMaxImageSide);
+        Imf::Header::setMaxTileSize(kMaxImageSide, kMaxImageSide);
+    });
+}
+
+// libpng, inside OpenImageIO, prints "libpng error: ..." straight to stderr before OpenImageIO
+// turns the failure into the error message that femto reports itself, with the scene location.
+// While an image is decoded, stderr goes to a temporary file; what was printed is passed on
+// only when the image was read (libpng's warnings), and dropped when femto reports an error.
+class HeldStderr {
+public:
+    HeldStderr() {
+        std::fflush(stderr);
+        held_ = std::tmpfile();
+        saved_ = held_ ? ::dup(STDERR_FILENO) : -1;
+        if (saved_ >= 0 && ::dup2(::fileno(held_), STDERR_FILENO) < 0) {
+            ::close(saved_);
+            saved_ = -1;
+        }
+    }
+    ~HeldStderr() {
+        release(true);
+        if (held_) std::fclose(held_);
+    }
+    HeldStderr(const HeldStderr&) = delete;
+    HeldStderr& operator=(const HeldStderr&) = delete;
+
+    /// Gives stderr back; with `pass_on`, writes to it what was printed meanwhile.
+    void release(bool pass_on) {
+        if (saved_ < 0) return;
+        std::fflush(stderr);
+        ::dup2(saved_, STDERR_FILENO);
+        ::close(saved_);
+        saved_ = -1;
+        if (!pass_on) return;
+        std::rewind(held_);
+        char buffer[4096];
+        for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, held_)) > 0;)
+            std::fwrite(buffer, 1, n, stderr);
+    }
+
+private:
+    std::FILE* held_ = nullptr;
+    int saved_ = -1;
+};
+
+// OpenImageIO's error for `in` (or its global one), leaving no error pending: OpenImageIO
+// prints unretrieved errors when the process exits, after femto's own message.
+std::string take_oiio_error(const OIIO::ImageInput* in) {
+    std::string error = in ? in->geterror() : std::string();
+    const std::string global = OIIO::geterror();
+    if (error.empty()) error = global;
+    if (error.empty()) return "unknown error";
+    // Several lines (one per library layer) make one message: femto's errors are one line.
+    while (!error.empty() && error.back() == '\n') error.pop_back();
+    for (size_t nl; (nl = error.find('\n')) != std::string::npos;) error.replace(nl, 1, "; ");
+    return error;
+}
+
+// Reads all channels as float; returns "" or what went wrong.
+std::string decode_image(const std::string& path, OIIO::ImageSpec& spec,
+                         std::vector<float>& pixels) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) return take_oiio_error(nullptr);
+    spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 ||
+        int64_t(spec.width) * spec.height > kMaxImagePixels)
+        return fmt::format("unsupported size {}x{}x{} (at most 2^28 pixels)", spec.width,
+                           spec.height, spec.nchannels);
+    pixels.resize(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+        return take_oiio_error(in.get());
+    return {};
+}
+
+}  // namespace
+
 std::vector<float> read_image_rgb(const std::string& path, int& width, int& height,
                                   bool srgb_8bit) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw SceneError(fmt::format("cannot read image \"{}\": {}", path, OIIO::geterror()));
-    const OIIO::ImageSpec& spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 ||
-        int64_t(spec.width) * spec.height > (int64_t(1) << 28))
-        throw SceneError(fmt::format("image \"{}\" has an unsupported size {}x{}x{}", path,
-                                     spec.width, spec.height, spec.nchannels));
+    if (const std::string problem = input_file_problem(path); !problem.empty())
+        throw SceneError(fmt::format("cannot read image \"{}\": {}", path, problem));
+    limit_openexr_sizes();
+    OIIO::ImageSpec spec;
+    std::vector<float> pixels;
+    HeldStderr held;
+    const std::string error = decode_image(path, spec, pixels);
+    held.release(error.empty());
+    if (!error.empty()) throw SceneError(fmt::format("cannot read image \"{}\": {}", path, error));
     width = spec.width;
     height = spec.height;
     const int nc = spec.nchannels;
-    std::vector<float> pixels(size_t(width) * height * nc);
-    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, pixels.data()))
-        throw SceneError(fmt::format("cannot read image \"{}\": {}", path, in->geterror()));
     const bool decode = srgb_8bit && (spec.format == OIIO::TypeDesc::UINT8 ||
                                       spec.format == OIIO::TypeDesc::UINT16);
     std::vector<float> rgb(size_t(width) * height * 3);

@@ -178,6 +178,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     const auto by_colour = tiles_by_colour(W, H, tile_size_for(film));
     if (film.rfilter().radius() > kTileSize / 2)
         throw SceneError(
+            film.rfilter().location(),
             fmt::format("the reconstruction filter's radius ({} px) is larger than femto "
                         "supports ({} px)",
                         film.rfilter().radius(), kTileSize / 2));

@@ -93,4 +93,17 @@ Emitter::Emitter(const Properties& props) {
         props.fail("pulse_sigma", "pulse_sigma applies to pulse=\"gaussian\" only");
 }
 
+Color Emitter::read_emission(const Properties& props, const std::string& name, const Color& def) {
+    const Color c = props.get_color(name, def);
+    for (int i = 0; i < 3; ++i) {
+        if (c[i] < 0) props.fail(name, fmt::format("the {} must not be negative", name));
+        if (!(c[i] <= kMaxEmission))
+            props.fail(name, fmt::format("the {} ({:g}) is beyond femto's limit of {:g}: renders "
+                                         "multiply and sum it in single precision, where it would "
+                                         "overflow to infinity",
+                                         name, c[i], kMaxEmission));
+    }
+    return c;
+}
+
 }  // namespace femto

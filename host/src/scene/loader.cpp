@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <new>
 #include <set>
@@ -104,28 +105,78 @@ void check_no_children(const XmlNode& node) {
                          fmt::format("<{}> cannot contain <{}>", node.tag, node.children[0].tag));
 }
 
+// Points, vectors and colours are single precision: a larger number would become infinite.
+float to_float(const XmlNode& node, double v, const char* what) {
+    constexpr double kFloatMax = std::numeric_limits<float>::max();
+    if (std::abs(v) > kFloatMax)
+        throw SceneError(node.location, fmt::format("{}: {:g} is beyond the range of single "
+                                                    "precision (+-{:g})",
+                                                    what, v, kFloatMax));
+    return float(v);
+}
+
+Vec3 to_vec3(const XmlNode& node, const std::vector<double>& n, const char* what) {
+    return {to_float(node, n[0], what), to_float(node, n[1], what), to_float(node, n[2], what)};
+}
+
 Vec3 parse_xyz(const XmlNode& node, float def) {
     if (const std::string* v = node.attribute("value")) {
         auto n = parse_numbers(node, *v, node.tag.c_str());
-        if (n.size() == 1) return Vec3(float(n[0]));
+        if (n.size() == 1) return Vec3(to_float(node, n[0], node.tag.c_str()));
         if (n.size() != 3)
             throw SceneError(node.location,
                              fmt::format("<{}> value needs 1 or 3 numbers", node.tag));
-        return {float(n[0]), float(n[1]), float(n[2])};
+        return to_vec3(node, n, node.tag.c_str());
     }
     Vec3 r(def);
     const char* axes[] = {"x", "y", "z"};
     for (int i = 0; i < 3; ++i)
         if (const std::string* a = node.attribute(axes[i]))
-            r[i] = float(parse_number(node, *a, axes[i]));
+            r[i] = to_float(node, parse_number(node, *a, axes[i]), axes[i]);
     return r;
 }
 
-Vec3 parse_vec_attr(const XmlNode& node, const char* name) {
+std::vector<double> parse_three_numbers(const XmlNode& node, const char* name) {
     auto n = parse_numbers(node, require_attr(node, name), name);
     if (n.size() != 3)
         throw SceneError(node.location, fmt::format("<{}> {} needs 3 numbers", node.tag, name));
-    return {float(n[0]), float(n[1]), float(n[2])};
+    return n;
+}
+
+Vec3 parse_vec_attr(const XmlNode& node, const char* name) {
+    return to_vec3(node, parse_three_numbers(node, name), name);
+}
+
+// A lookat's origin or target: a place in the scene, so within kMaxSceneCoordinate.
+Vec3 parse_position_attr(const XmlNode& node, const char* name) {
+    const auto n = parse_three_numbers(node, name);
+    if (!within_scene_range(n[0], n[1], n[2]))
+        throw SceneError(node.location, outside_scene_range(fmt::format("<{}> {}", node.tag, name),
+                                                            n[0], n[1], n[2]));
+    return to_vec3(node, n, name);
+}
+
+// Mitsuba lists a matrix's rows; femto's transforms are affine (a projective last row would
+// make points divide by a varying w, which no shape, sensor or emitter expects).
+Transform parse_matrix(const XmlNode& op) {
+    check_attributes(op, {"value"});
+    auto v = parse_numbers(op, require_attr(op, "value"), "matrix");
+    Transform::Matrix mm{};
+    if (v.size() == 16) {
+        if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1)
+            throw SceneError(op.location,
+                             fmt::format("<matrix> has the last row {:g} {:g} {:g} {:g}, not 0 0 "
+                                         "0 1: femto's transforms are affine (no projection)",
+                                         v[12], v[13], v[14], v[15]));
+        for (int i = 0; i < 16; ++i) mm[i / 4][i % 4] = v[i];
+    } else if (v.size() == 9) {
+        for (int i = 0; i < 9; ++i) mm[i / 3][i % 3] = v[i];
+        mm[3][3] = 1;
+    } else {
+        throw SceneError(op.location,
+                         fmt::format("<matrix> needs 16 (or 9) numbers, got {}", v.size()));
+    }
+    return Transform(mm);
 }
 
 Transform parse_transform(const XmlNode& node) {
@@ -146,7 +197,8 @@ Transform parse_transform(const XmlNode& node) {
                 m = Transform::rotate(axis, parse_number(op, require_attr(op, "angle"), "angle"));
             } else if (op.tag == "lookat") {
                 check_attributes(op, {"origin", "target", "up"});
-                const Vec3 o = parse_vec_attr(op, "origin"), tg = parse_vec_attr(op, "target");
+                const Vec3 o = parse_position_attr(op, "origin");
+                const Vec3 tg = parse_position_attr(op, "target");
                 Vec3 up;
                 if (op.attribute("up")) {
                     up = parse_vec_attr(op, "up");
@@ -155,20 +207,7 @@ Transform parse_transform(const XmlNode& node) {
                 }
                 m = Transform::look_at(o, tg, up);
             } else if (op.tag == "matrix") {
-                check_attributes(op, {"value"});
-                auto v = parse_numbers(op, require_attr(op, "value"), "matrix");
-                Transform::Matrix mm{};
-                if (v.size() == 16) {
-                    for (int i = 0; i < 16; ++i) mm[i / 4][i % 4] = v[i];
-                } else if (v.size() == 9) {
-                    for (int i = 0; i < 9; ++i) mm[i / 3][i % 3] = v[i];
-                    mm[3][3] = 1;
-                } else {
-                    throw SceneError(
-                        op.location,
-                        fmt::format("<matrix> needs 16 (or 9) numbers, got {}", v.size()));
-                }
-                m = Transform(mm);
+                m = parse_matrix(op);
             } else {
                 throw SceneError(op.location,
                                  fmt::format("unknown transform operation <{}>; valid: "
@@ -208,9 +247,10 @@ Color parse_color(const XmlNode& node) {
     auto n = parse_numbers(node, value, node.tag.c_str());
     Color c;
     if (n.size() == 1)
-        c = Color(float(n[0]));
+        c = Color(to_float(node, n[0], node.tag.c_str()));
     else if (n.size() == 3)
-        c = Color(float(n[0]), float(n[1]), float(n[2]));
+        c = Color(to_float(node, n[0], node.tag.c_str()), to_float(node, n[1], node.tag.c_str()),
+                  to_float(node, n[2], node.tag.c_str()));
     else
         throw SceneError(node.location,
                          fmt::format("<{}> needs 1 or 3 numbers, got {}", node.tag, n.size()));
@@ -255,6 +295,7 @@ public:
         ObjectPtr obj(raw);
         obj->set_id(props.id());
         obj->set_type_name(desc.type_name);
+        obj->set_location(props.location());
         return obj;
     }
 
@@ -309,20 +350,33 @@ public:
         return it->second;
     }
 
+    // A name given twice in one object is a mistake whichever value was meant (Mitsuba 3
+    // refuses it too), so it is not silently resolved to the last one.
+    static void refuse_duplicate(const Properties& props, const std::string& name,
+                                 const XmlNode& c) {
+        if (props.has(name))
+            throw SceneError(c.location,
+                             fmt::format("\"{}\": parameter \"{}\" is given twice (first at {})",
+                                         props.plugin_type(), name, props.location_of(name).str()));
+    }
+
+    void add_object(Properties& props, const XmlNode& c, ObjectPtr obj, int& arg_index) {
+        const std::string* name = c.attribute("name");
+        if (name) refuse_duplicate(props, *name, c);
+        props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), std::move(obj),
+                         c.location);
+    }
+
     void add_child(Properties& props, const XmlNode& c, int& arg_index) {
         PluginKind kind;
         if (kind_from_tag(c.tag, kind)) {
-            ObjectPtr obj = build(c, kind);
-            const std::string* name = c.attribute("name");
-            props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), obj, c.location);
+            add_object(props, c, build(c, kind), arg_index);
             return;
         }
         if (c.tag == "ref") {
             check_attributes(c, {"id", "name"});
             check_no_children(c);
-            ObjectPtr obj = resolve(c);
-            const std::string* name = c.attribute("name");
-            props.set_object(name ? *name : fmt::format("_arg_{}", arg_index++), obj, c.location);
+            add_object(props, c, resolve(c), arg_index);
             return;
         }
         if (!kPropertyTags.count(c.tag))
@@ -333,6 +387,7 @@ public:
                             join({kPropertyTags.begin(), kPropertyTags.end()}, " "), kObjectTags));
         const std::string& name = require_attr(c, "name");
         if (name.empty()) throw SceneError(c.location, "empty parameter name");
+        refuse_duplicate(props, name, c);
         if (c.tag != "transform") check_no_children(c);
         if (c.tag == "boolean") {
             check_attributes(c, {"name", "value"});

@@ -18,6 +18,8 @@ Transform read_to_world(const Properties& props) {
     const Transform t = props.get_transform("to_world", Transform());
     if (std::abs(t.det3()) < 1e-30)
         props.fail("to_world", "to_world is degenerate (it flattens space to a plane or a line)");
+    if (const Vec3 origin = t.point(Vec3(0.f)); !within_scene_range(origin))
+        props.fail("to_world", outside_scene_range("to_world's origin", origin));
     return t;
 }
 

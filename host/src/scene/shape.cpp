@@ -62,8 +62,12 @@ void Shape::set_mesh(TriangleMesh mesh) {
             throw SceneError(location_,
                              fmt::format("triangle index {} is out of range ({} vertices)", i,
                                          mesh.positions.size()));
-    for (const Vec3& p : mesh.positions)
-        if (!is_finite(p)) throw SceneError(location_, "the mesh has a non-finite vertex position");
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+        if (!within_scene_range(mesh.positions[i]))
+            throw SceneError(location_, outside_scene_range(fmt::format("vertex {} (0-based) of "
+                                                                        "the mesh, in the scene,",
+                                                                        i),
+                                                            mesh.positions[i]));
     if (!mesh.normals.empty()) {
         if (mesh.normals.size() != mesh.positions.size())
             throw SceneError(location_, "the mesh has a different number of normals and positions");
@@ -97,6 +101,12 @@ void Shape::set_sphere(const Vec3& center, float radius) {
                          fmt::format("a sphere needs a finite center and a positive radius "
                                      "(got {})",
                                      radius));
+    if (!within_scene_range(center) || !(max_abs_component(center) + radius <= kMaxSceneCoordinate))
+        throw SceneError(
+            location_, outside_scene_range(fmt::format("a sphere of radius {:g}, centred where it "
+                                                       "is,",
+                                                       radius),
+                                           center));
     is_sphere_ = true;
     center_ = center;
     radius_ = radius;

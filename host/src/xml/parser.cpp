@@ -5,12 +5,12 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <pugixml.hpp>
 #include <set>
 #include <sstream>
 
+#include "femto/input_file.h"
 #include "util/lenient.h"
 #include "util/strings.h"
 
@@ -32,6 +32,9 @@ std::string* XmlNode::attribute(const std::string& name) {
 namespace {
 
 constexpr int kMaxIncludeDepth = 32;
+// Deeper nesting than any real scene needs; the passes and the instantiation recurse once per
+// level, so a bound keeps a hostile file from overflowing the stack. Includes count too.
+constexpr int kMaxElementDepth = 100;
 constexpr size_t kMaxSceneFileBytes = size_t(1) << 30;
 
 // Version differences are data: names that the generic camelCase -> snake_case rule gets wrong,
@@ -65,25 +68,31 @@ struct LineTable {
 };
 
 std::string read_file(const std::string& path, const SourceLocation& from) {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec))
-        throw SceneError(from,
-                         fmt::format("scene file \"{}\" does not exist or is not a file", path));
-    if (fs::file_size(path, ec) > kMaxSceneFileBytes)
+    const std::string problem = input_file_problem(path);
+    if (!problem.empty())
+        throw SceneError(from, fmt::format("scene file \"{}\" does not exist or is not a file "
+                                           "({})",
+                                           path, problem));
+    InputFile file(path, from);
+    if (file.size() > kMaxSceneFileBytes)
         throw SceneError(from, fmt::format("scene file \"{}\" is larger than 1 GiB", path));
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw SceneError(from, fmt::format("cannot read scene file \"{}\"", path));
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    return file.read_rest();
 }
 
+bool is_blank(const std::string& text) {
+    return std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isspace(c); });
+}
+
+// `depth` is the nesting level of `node` (1 for the root of the top-level file).
 XmlNode convert(const pugi::xml_node& node, const LineTable& lines, const std::string& file,
-                const std::string& base_dir) {
+                const std::string& base_dir, int depth) {
     XmlNode out;
     out.tag = node.name();
     out.location = lines.at(file, node.offset_debug() - 1);  // column of '<', not of the name
     out.base_dir = base_dir;
+    if (depth > kMaxElementDepth)
+        throw SceneError(out.location, fmt::format("elements are nested more than {} levels deep",
+                                                   kMaxElementDepth));
     for (const auto& a : node.attributes()) {
         if (out.attribute(a.name()))
             throw SceneError(out.location, fmt::format("attribute \"{}\" given twice", a.name()));
@@ -91,11 +100,9 @@ XmlNode convert(const pugi::xml_node& node, const LineTable& lines, const std::s
     }
     for (const auto& child : node.children()) {
         if (child.type() == pugi::node_element) {
-            out.children.push_back(convert(child, lines, file, base_dir));
+            out.children.push_back(convert(child, lines, file, base_dir, depth + 1));
         } else if (child.type() == pugi::node_pcdata || child.type() == pugi::node_cdata) {
-            std::string text = child.value();
-            if (std::any_of(text.begin(), text.end(),
-                            [](unsigned char c) { return !std::isspace(c); }))
+            if (!is_blank(child.value()))
                 throw SceneError(lines.at(file, child.offset_debug()),
                                  fmt::format("unexpected text inside <{}>", out.tag));
         }
@@ -135,11 +142,35 @@ void set_root_dir(XmlNode& node, const std::string& root) {
     for (auto& c : node.children) set_root_dir(c, root);
 }
 
+// Everything in the document besides its root element must be markup that carries nothing
+// (declaration, comments, processing instructions): Mitsuba reads one <scene> per file.
+void check_nothing_beside_root(const pugi::xml_document& doc, const pugi::xml_node& root,
+                               const LineTable& lines, const std::string& file) {
+    for (const auto& node : doc.children()) {
+        if (node == root) continue;
+        if (node.type() == pugi::node_element)
+            throw SceneError(lines.at(file, node.offset_debug() - 1),
+                             fmt::format("<{}> outside the root element <{}>: a scene file holds "
+                                         "one root element; move it inside",
+                                         node.name(), root.name()));
+        if ((node.type() == pugi::node_pcdata || node.type() == pugi::node_cdata) &&
+            !is_blank(node.value())) {
+            const std::string text = node.value();
+            const size_t first = text.find_first_not_of(" \t\r\n");
+            throw SceneError(lines.at(file, node.offset_debug() + ptrdiff_t(first)),
+                             fmt::format("text outside the root element <{}>", root.name()));
+        }
+    }
+}
+
+/// `root_depth` is the nesting level the file's root element takes (an included file's root
+/// stands in for its <include>).
 XmlNode parse_text(const std::string& text, const std::string& file, const std::string& base_dir,
-                   const SourceLocation& from) {
+                   const SourceLocation& from, int root_depth) {
     pugi::xml_document doc;
-    const pugi::xml_parse_result result = doc.load_buffer(
-        text.data(), text.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
+    const pugi::xml_parse_result result =
+        doc.load_buffer(text.data(), text.size(),
+                        pugi::parse_default | pugi::parse_ws_pcdata_single | pugi::parse_fragment);
     const LineTable lines(text);
     if (!result)
         throw SceneError(lines.at(file, result.offset),
@@ -148,7 +179,8 @@ XmlNode parse_text(const std::string& text, const std::string& file, const std::
     if (!root)
         throw SceneError(from.file.empty() ? SourceLocation{file, 1, 1} : from,
                          "the file holds no XML element");
-    XmlNode scene = convert(root, lines, file, base_dir);
+    check_nothing_beside_root(doc, root, lines, file);
+    XmlNode scene = convert(root, lines, file, base_dir, root_depth);
     if (scene.tag != "scene")
         throw SceneError(scene.location,
                          fmt::format("the root element must be <scene>, not <{}>", scene.tag));
@@ -156,12 +188,13 @@ XmlNode parse_text(const std::string& text, const std::string& file, const std::
     return scene;
 }
 
-void expand_includes(XmlNode& node, std::vector<std::string>& stack) {
+// `depth` is the nesting level of `node`.
+void expand_includes(XmlNode& node, std::vector<std::string>& stack, int depth) {
     std::vector<XmlNode> out;
     out.reserve(node.children.size());
     for (auto& child : node.children) {
         if (child.tag != "include") {
-            expand_includes(child, stack);
+            expand_includes(child, stack, depth + 1);
             out.push_back(std::move(child));
             continue;
         }
@@ -179,10 +212,11 @@ void expand_includes(XmlNode& node, std::vector<std::string>& stack) {
             throw SceneError(child.location,
                              "includes are nested too deeply (more than 32 levels)");
         const std::string text = read_file(p.string(), child.location);
-        XmlNode included = parse_text(text, p.string(), p.parent_path().string(), child.location);
+        XmlNode included =
+            parse_text(text, p.string(), p.parent_path().string(), child.location, depth);
         set_root_dir(included, child.root_dir);
         stack.push_back(key);
-        expand_includes(included, stack);
+        expand_includes(included, stack, depth);
         stack.pop_back();
         for (auto& c : included.children) out.push_back(std::move(c));
     }
@@ -271,7 +305,7 @@ XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::
     std::error_code ec;
     stack.push_back(top_file.empty() ? std::string() : fs::weakly_canonical(top_file, ec).string());
     set_root_dir(scene, scene.base_dir);
-    expand_includes(scene, stack);
+    expand_includes(scene, stack, 1);
     std::map<std::string, std::string> define_map(defines.begin(), defines.end());
     std::map<std::string, std::string> params = define_map;
     std::set<std::string> scene_params;
@@ -321,13 +355,13 @@ XmlNode parse_scene_file(const std::string& path,
     fs::path p(path);
     std::string base = p.parent_path().string();
     if (base.empty()) base = ".";
-    return run_passes(parse_text(text, path, base, SourceLocation{}), defines, path, lenient);
+    return run_passes(parse_text(text, path, base, SourceLocation{}, 1), defines, path, lenient);
 }
 
 XmlNode parse_scene_string(const std::string& xml, const std::string& base_dir,
                            const std::vector<std::pair<std::string, std::string>>& defines,
                            bool lenient) {
-    return run_passes(parse_text(xml, "<string>", base_dir, SourceLocation{}), defines, "",
+    return run_passes(parse_text(xml, "<string>", base_dir, SourceLocation{}, 1), defines, "",
                       lenient);
 }
 

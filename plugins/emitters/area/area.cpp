@@ -13,10 +13,7 @@ namespace {
 class AreaEmitter final : public Emitter {
 public:
     explicit AreaEmitter(const Properties& props)
-        : Emitter(props), radiance_(props.get_color("radiance", Color(1.f))) {
-        if (radiance_.r < 0 || radiance_.g < 0 || radiance_.b < 0)
-            props.fail("radiance", "the radiance must not be negative");
-    }
+        : Emitter(props), radiance_(read_emission(props, "radiance", Color(1.f))) {}
 
     EmitterSample sample_direct(const Vec3& ref, Vec2 u) const override {
         EmitterSample es;

@@ -33,16 +33,11 @@ public:
         radius_ = static_cast<float>(radius);
         if (props.has("irradiance") && props.has("power"))
             props.fail("power", "give either irradiance or power, not both");
-        if (props.has("power")) {
-            const Color power = props.get_color("power");
-            irradiance_ = power / static_cast<float>(M_PI * radius * radius);
-            if (power.r < 0 || power.g < 0 || power.b < 0)
-                props.fail("power", "the power must not be negative");
-        } else {
-            irradiance_ = props.get_color("irradiance", Color(1.f));
-            if (irradiance_.r < 0 || irradiance_.g < 0 || irradiance_.b < 0)
-                props.fail("irradiance", "the irradiance must not be negative");
-        }
+        if (props.has("power"))
+            irradiance_ = read_emission(props, "power", Color(1.f)) /
+                          static_cast<float>(M_PI * radius * radius);
+        else
+            irradiance_ = read_emission(props, "irradiance", Color(1.f));
         if (!irradiance_.is_finite())
             props.fail(props.has("power") ? "power" : "irradiance",
                        "the irradiance of the beam is not finite");

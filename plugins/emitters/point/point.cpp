@@ -14,14 +14,13 @@ namespace {
 class PointEmitter final : public Emitter {
 public:
     explicit PointEmitter(const Properties& props)
-        : Emitter(props), intensity_(props.get_color("intensity", Color(1.f))) {
-        if (intensity_.r < 0 || intensity_.g < 0 || intensity_.b < 0)
-            props.fail("intensity", "the intensity must not be negative");
+        : Emitter(props), intensity_(read_emission(props, "intensity", Color(1.f))) {
         if (props.has("position") && props.has("to_world"))
             props.fail("position", "give either position or to_world, not both");
         position_ = props.has("to_world") ? read_to_world(props).point(Vec3(0.f))
                                           : props.get_point("position", Vec3(0.f));
-        if (!is_finite(position_)) props.fail("position", "the position must be finite");
+        if (!within_scene_range(position_))
+            props.fail("position", outside_scene_range("the point light", position_));
     }
 
     EmitterSample sample_direct(const Vec3& ref, Vec2 /*u*/) const override {

@@ -20,9 +20,7 @@ namespace {
 class SpotEmitter final : public Emitter {
 public:
     explicit SpotEmitter(const Properties& props)
-        : Emitter(props), intensity_(props.get_color("intensity", Color(1.f))) {
-        if (intensity_.r < 0 || intensity_.g < 0 || intensity_.b < 0)
-            props.fail("intensity", "the intensity must not be negative");
+        : Emitter(props), intensity_(read_emission(props, "intensity", Color(1.f))) {
         const double cutoff_deg = props.get_float("cutoff_angle", 20.0);
         if (!(cutoff_deg > 0 && cutoff_deg <= 180))
             props.fail("cutoff_angle", "cutoff_angle must be in (0, 180] degrees, but " +

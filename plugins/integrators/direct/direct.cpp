@@ -32,6 +32,7 @@ public:
     void preprocess(const Scene& scene) override {
         if (scene.has_media())
             throw SceneError(
+                location(),
                 "the direct integrator does not render participating media; use path or "
                 "transient_path for a scene with <medium>");
     }

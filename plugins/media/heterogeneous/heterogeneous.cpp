@@ -31,6 +31,8 @@
 //
 // Bad input (missing or truncated file, wrong magic, version or encoding, absurd or
 // inconsistent sizes, NaN, infinite or negative densities) is a SceneError naming the file.
+// So is a grid whose tracking would take more than 1e4 steps along a ray through it: scale *
+// (largest - smallest density) times the longest chord through its box in the scene.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -38,12 +40,12 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "femto/input_file.h"
 #include "femto/medium.h"
 #include "femto/plugin.h"
 #include "femto/sampler.h"
@@ -59,6 +61,9 @@ using femto::Vec3;
 constexpr size_t kHeaderBytes = 48;
 /// Largest number of voxels accepted (8 GiB of float32).
 constexpr uint64_t kMaxVoxels = uint64_t(1) << 31;
+/// Largest expected number of ratio-tracking steps along a ray through the grid (residual
+/// majorant x longest chord through the box).
+constexpr double kMaxTrackingSteps = 1e4;
 /// Ratio-tracking estimates below this are Russian-rouletted.
 constexpr double kRouletteThreshold = 0.1;
 
@@ -124,6 +129,7 @@ public:
         min_sigma_ = scale_ * min_density_;
         max_sigma_ = scale_ * max_density_;
         residual_majorant_ = max_sigma_ - min_sigma_;
+        check_tracking_work(props, to_world);
     }
 
     bool homogeneous() const override { return false; }
@@ -192,6 +198,32 @@ private:
         return name;
     }
 
+    // Ratio tracking takes about residual majorant x chord steps along a ray through the box
+    // (more where the grid is nearly empty: nothing ends the walk early). A voxel of density
+    // 1e6 made renders of a second take minutes; such grids are refused.
+    void check_tracking_work(const Properties& props, const femto::Transform& to_world) const {
+        double chord = 0.0;  // longest chord through the box: its longest diagonal, in the scene
+        for (int corner = 0; corner < 4; ++corner) {
+            const Vec3 diagonal(float((corner & 1 ? -1 : 1) * (bmax_[0] - bmin_[0])),
+                                float((corner & 2 ? -1 : 1) * (bmax_[1] - bmin_[1])),
+                                float(bmax_[2] - bmin_[2]));
+            const std::array<double, 3> d = apply_vector(to_world.matrix(), diagonal);
+            chord = std::max(chord, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+        }
+        const double steps = residual_majorant_ * chord;
+        if (!(steps <= kMaxTrackingSteps))
+            props.fail("scale",
+                       "the density grid's majorant (scale * (largest - smallest density) = " +
+                           to_str(residual_majorant_) +
+                           " per scene unit) times the longest chord "
+                           "through its box (" +
+                           to_str(chord) + " scene units) is " + to_str(steps) +
+                           ": tracking a ray through it would take about that many density "
+                           "lookups, and femto accepts at most " +
+                           to_str(kMaxTrackingSteps) +
+                           " (lower the scale, or the densities, of the grid)");
+    }
+
     [[noreturn]] static void fail_file(const Properties& props, const std::string& filename,
                                        const std::string& what) {
         props.fail("density", "density grid " + quoted(filename) + ": " + what);
@@ -200,18 +232,11 @@ private:
     void load(const Properties& props, const std::string& filename) {
         auto fail = [&](const std::string& what) { fail_file(props, filename, what); };
         if (filename.empty()) fail("empty file name");
-        std::error_code ec;
-        if (fs::is_directory(filename, ec)) fail("is a directory, not a .vol file");
-        if (!fs::exists(filename, ec)) fail("no such file");
-        if (!fs::is_regular_file(filename, ec)) fail("is not a regular file");
-        const uintmax_t file_size = fs::file_size(filename, ec);
-        if (ec) fail("cannot read its size (" + ec.message() + ")");
-        std::ifstream in(filename, std::ios::binary);
-        if (!in) fail("cannot open it for reading");
+        femto::InputFile in(filename, props.location_of("density"));
+        const uint64_t file_size = in.size();
 
         unsigned char h[kHeaderBytes];
-        in.read(reinterpret_cast<char*>(h), kHeaderBytes);
-        const size_t got = static_cast<size_t>(in.gcount());
+        const size_t got = in.read(h, kHeaderBytes);
         if (got < 4 || h[0] != 'V' || h[1] != 'O' || h[2] != 'L')
             fail(
                 "not a Mitsuba grid volume (.vol) file (it does not start with the bytes "
@@ -265,10 +290,8 @@ private:
                      ", " + to_str(bmax_[2]) + "): it needs finite min < max on every axis");
 
         data_.resize(voxels);
-        in.read(reinterpret_cast<char*>(data_.data()),
-                static_cast<std::streamsize>(voxels * sizeof(float)));
-        if (static_cast<uint64_t>(in.gcount()) != voxels * sizeof(float))
-            fail("could not read the " + std::to_string(voxels) + " densities (read error)");
+        if (in.read(data_.data(), voxels * sizeof(float)) != voxels * sizeof(float))
+            fail("could not read the " + std::to_string(voxels) + " densities (the file shrank)");
         if constexpr (std::endian::native == std::endian::big)
             for (float& v : data_)
                 v = std::bit_cast<float>(__builtin_bswap32(std::bit_cast<uint32_t>(v)));

@@ -40,6 +40,7 @@ public:
     void prepare(const DistanceContext& ctx) const override {
         if (lambda_ == 0 && !(ctx.window_end > 0 && std::isfinite(ctx.window_end)))
             throw SceneError(
+                location(),
                 "distance sampling \"exponential\" with mean_vertices needs a film with a finite "
                 "time window in camera time (a transient or streak film); give lambda instead");
     }

@@ -15,6 +15,11 @@ public:
         if (!(near_ >= 0) || !(far_ > near_))
             props.fail("near_clip", "need 0 <= near_clip < far_clip");
         inv_aspect_ = float(film_->height()) / float(film_->width());
+        // Rays start anywhere on the film's rectangle: its corners must be in range too.
+        for (const float x : {-1.f, 1.f})
+            for (const float y : {-inv_aspect_, inv_aspect_})
+                if (const Vec3 c = to_world_.point({x, y, 0.f}); !within_scene_range(c))
+                    props.fail("to_world", outside_scene_range("a corner of the view", c));
         const Vec3 d = to_world_.vector({0, 0, 1});
         dir_len_ = length(d);
         dir_ = d / dir_len_;

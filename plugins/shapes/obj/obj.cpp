@@ -10,14 +10,15 @@
 
 #include <cmath>
 #include <cstdint>
-#include <filesystem>
-#include <fstream>
+#include <istream>
 #include <sstream>
+#include <streambuf>
 #include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
 
+#include "femto/input_file.h"
 #include "femto/log.h"
 #include "femto/plugin.h"
 #include "femto/shape.h"
@@ -39,6 +40,13 @@ struct IndexKeyHash {
     }
 };
 
+// Reads a string in place (tinyobjloader takes a stream; the file is already in memory).
+struct MemoryStreamBuf : std::streambuf {
+    explicit MemoryStreamBuf(std::string& text) {
+        setg(text.data(), text.data(), text.data() + text.size());
+    }
+};
+
 class ObjShape final : public Shape {
 public:
     explicit ObjShape(const Properties& props) : Shape(props) {
@@ -48,15 +56,9 @@ public:
         const Transform& to_world = to_world_;
         const std::string quoted = "\"" + filename + "\"";
 
-        std::error_code ec;
-        if (std::filesystem::is_directory(filename, ec))
-            props.fail("filename", "cannot open " + quoted + ": it is a directory");
-        std::ifstream in(filename, std::ios::binary);
-        if (!in)
-            props.fail("filename", "cannot open " + quoted +
-                                       (std::filesystem::exists(filename, ec)
-                                            ? ": permission denied or unreadable"
-                                            : ": no such file"));
+        std::string text = InputFile(filename, props.location_of("filename")).read_rest();
+        MemoryStreamBuf buffer(text);
+        std::istream in(&buffer);
 
         tinyobj::attrib_t attrib;
         std::vector<tinyobj::shape_t> shapes;

@@ -22,8 +22,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <numeric>
 #include <string>
@@ -31,6 +29,7 @@
 #include <utility>
 #include <vector>
 
+#include "femto/input_file.h"
 #include "femto/plugin.h"
 #include "femto/shape.h"
 #include "femto/transform.h"
@@ -121,21 +120,9 @@ private:
     }
 
     void load_file() {
-        std::error_code ec;
-        if (std::filesystem::is_directory(filename_, ec))
-            props_.fail("filename", "cannot open \"" + filename_ + "\": it is a directory");
-        std::ifstream in(filename_, std::ios::binary);
-        if (!in)
-            props_.fail("filename", "cannot open \"" + filename_ + "\"" +
-                                        (std::filesystem::exists(filename_, ec)
-                                             ? ": permission denied or unreadable"
-                                             : ": no such file"));
-        in.seekg(0, std::ios::end);
-        const std::streamoff size = in.tellg();
-        if (size < 0) fail("cannot determine the file size");
-        in.seekg(0, std::ios::beg);
-        data_.resize(static_cast<size_t>(size));
-        if (size > 0 && !in.read(data_.data(), size)) fail("read error");
+        InputFile file(filename_, props_.location_of("filename"));
+        data_.resize(static_cast<size_t>(file.size()));
+        data_.resize(file.read(data_.data(), data_.size()));
     }
 
     // -- header ------------------------------------------------------------------------------

@@ -6,10 +6,10 @@
 // the point; `bilinear` interpolates the four nearest texel centres. `wrap_mode` decides what
 // lies outside [0, 1): `repeat` tiles the image, `mirror` tiles it with every other copy
 // mirrored, `clamp` repeats the edge texels. 8-bit images are sRGB-decoded to linear values
-// unless `raw` is set; float images (EXR, PFM, HDR) are always linear.
+// unless `raw` is set; float images (EXR, PFM, HDR) are always linear. Negative or non-finite
+// values (possible in float images) are read as 0, with a warning.
 #include <cmath>
 #include <cstdint>
-#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -62,19 +62,15 @@ public:
         to_uv_ = props.get_transform("to_uv", femto::Transform());
         identity_ = to_uv_.is_identity();
 
-        std::error_code ec;
-        if (!std::filesystem::is_regular_file(filename, ec))
-            props.fail("filename",
-                       "image file \"" + filename + "\" does not exist" +
-                           (std::filesystem::exists(filename, ec) ? " as a regular file" : ""));
         try {
             data_ = femto::io::read_image_rgb(filename, width_, height_, !raw_);
         } catch (const femto::SceneError& e) {
-            props.fail("filename", "cannot read image \"" + filename + "\": " + e.message());
+            props.fail("filename", e.message());  // it names the file and what is wrong
         }
         if (width_ <= 0 || height_ <= 0 ||
             data_.size() != static_cast<size_t>(width_) * static_cast<size_t>(height_) * 3)
             props.fail("filename", "image \"" + filename + "\" is empty or could not be decoded");
+        clamp_negative_texels(props, filename);
 
         double sum[3] = {0, 0, 0};
         for (size_t i = 0; i < data_.size(); i += 3)
@@ -110,6 +106,22 @@ public:
     bool is_constant() const override { return width_ == 1 && height_ == 1; }
 
 private:
+    // Textures are reflectances and colours: a negative texel (float images can hold them)
+    // would make negative radiance, a NaN or infinite one a NaN image. They are read as 0,
+    // with a warning that says how many there were.
+    void clamp_negative_texels(const femto::Properties& props, const std::string& filename) {
+        size_t bad = 0;
+        for (float& v : data_)
+            if (!(v >= 0.f) || !std::isfinite(v)) {
+                v = 0.f;
+                ++bad;
+            }
+        if (bad > 0)
+            femto::log_warning(props.location_of("filename"),
+                               "bitmap: image \"" + filename + "\" has " + std::to_string(bad) +
+                                   " negative or non-finite channel values; they are read as 0");
+    }
+
     /// floor(x) as an integer; |x| is bounded first so the conversion cannot overflow (the
     /// wrap modes are periodic or clamp, so far-away texels are equivalent).
     static int64_t to_index(double x) {
