@@ -4,6 +4,8 @@
 #include <sys/stat.h>
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "femto/bsdf.h"
 #include "femto/input_file.h"
@@ -330,16 +332,23 @@ TEST(Loader, CoordinatesBeyondTheSceneRangeAreRefused) {
         "</shape>")));
 }
 
-TEST(Loader, NegativeReflectanceIsRefused) {
-    for (const std::string bsdf :
-         {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.5, -0.1, 0.5\"/></bsdf>",
-          "<bsdf type=\"plastic\">\n<float name=\"diffuse_reflectance\" value=\"-1\"/></bsdf>",
-          "<bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\">\n<rgb "
-          "name=\"color0\" value=\"-0.2\"/></texture></bsdf>"}) {
-        const std::string msg = load_error(scene_xml(bsdf));
-        EXPECT_NE(msg.find("<string>:4:1:"), std::string::npos) << msg;
-        EXPECT_NE(msg.find("must not be negative"), std::string::npos) << msg;
+// Each scene body gives a SceneError at `where` whose message holds `text`.
+void expect_errors(const std::vector<std::string>& bodies, const std::string& where,
+                   const std::string& text) {
+    for (const std::string& body : bodies) {
+        const std::string msg = load_error(scene_xml(body));
+        EXPECT_NE(msg.find(where), std::string::npos) << msg;
+        EXPECT_NE(msg.find(text), std::string::npos) << msg;
     }
+}
+
+TEST(Loader, NegativeReflectanceIsRefused) {
+    expect_errors(
+        {"<bsdf type=\"diffuse\">\n<rgb name=\"reflectance\" value=\"0.5, -0.1, 0.5\"/></bsdf>",
+         "<bsdf type=\"plastic\">\n<float name=\"diffuse_reflectance\" value=\"-1\"/></bsdf>",
+         "<bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\">\n<rgb "
+         "name=\"color0\" value=\"-0.2\"/></texture></bsdf>"},
+        "<string>:4:1:", "must not be negative");
     EXPECT_NO_THROW(load_scene_string(scene_xml(
         "<bsdf type=\"diffuse\" id=\"b\"><rgb name=\"reflectance\" value=\"0, 0.5, 1\"/></bsdf>" +
         std::string(kRect))));
@@ -347,17 +356,14 @@ TEST(Loader, NegativeReflectanceIsRefused) {
 
 // Emission near float's limit (3.4e38) overflowed to infinity in the outputs.
 TEST(Loader, AbsurdEmissionIsRefused) {
-    for (const std::string emitter :
-         {"<shape type=\"rectangle\"><emitter type=\"area\">\n<rgb name=\"radiance\" "
-          "value=\"3e38\"/></emitter></shape>",
-          "<emitter type=\"point\">\n<rgb name=\"intensity\" value=\"1, 1e31, 1\"/></emitter>",
-          "<emitter type=\"spot\">\n<float name=\"intensity\" value=\"2e30\"/></emitter>",
-          "<emitter type=\"collimated\"><float name=\"radius\" value=\"0.1\"/>\n<rgb "
-          "name=\"power\" value=\"1e35\"/></emitter>"}) {
-        const std::string msg = load_error(scene_xml(emitter));
-        EXPECT_NE(msg.find("<string>:4:1:"), std::string::npos) << msg;
-        EXPECT_NE(msg.find("is beyond femto's limit of 1e+30"), std::string::npos) << msg;
-    }
+    expect_errors(
+        {"<shape type=\"rectangle\"><emitter type=\"area\">\n<rgb name=\"radiance\" "
+         "value=\"3e38\"/></emitter></shape>",
+         "<emitter type=\"point\">\n<rgb name=\"intensity\" value=\"1, 1e31, 1\"/></emitter>",
+         "<emitter type=\"spot\">\n<float name=\"intensity\" value=\"2e30\"/></emitter>",
+         "<emitter type=\"collimated\"><float name=\"radius\" value=\"0.1\"/>\n<rgb "
+         "name=\"power\" value=\"1e35\"/></emitter>"},
+        "<string>:4:1:", "is beyond femto's limit of 1e+30");
     const std::string msg = load_error(scene_xml(
         "<emitter type=\"point\"><rgb name=\"intensity\" value=\"1, -1, 1\"/></emitter>"));
     EXPECT_NE(msg.find("the intensity must not be negative"), std::string::npos) << msg;

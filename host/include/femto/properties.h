@@ -44,7 +44,8 @@ public:
     void set_id(std::string id) { id_ = std::move(id); }
 
     // -- filled by the scene loader ------------------------------------------------------
-    /// Adds or replaces an entry (later definitions win, as in Mitsuba).
+    /// Adds or replaces an entry. (The scene loader refuses a name given twice in one object,
+    /// as Mitsuba 3 does; replacing is for code that builds Properties itself.)
     void set(const std::string& name, Type type, Value value, SourceLocation loc = {});
     void set_bool(const std::string& n, bool v) { set(n, Type::Bool, v); }
     void set_int(const std::string& n, int64_t v) { set(n, Type::Integer, v); }
