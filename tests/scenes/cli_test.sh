@@ -242,6 +242,16 @@ sigint_latency)
     [ "$ms" -lt 5000 ] || fail "$run: Ctrl-C took $ms ms to take effect"
     [ "$(exr_attr out/$run.exr femto:interrupted)" = true ] || fail "$run: not marked interrupted"
   done;;
+empty_window)
+  # A window no light reaches: a warning with the times light did arrive (the Cornell box's
+  # first light reaches the camera after ~5.8 units; one bin from 3.5 misses it).
+  expect_exit 0 'no light arrived within the film.s time window \[3\.5, 3\.55\] \(camera time, scene units\): the light this render traced arrived between [0-9.]+ and [0-9.]+' \
+    -- "$femto" render "$scene" -o out/empty -D bins=1 -D res=16 -D spp=2 -q
+  earliest=$(sed -n 's/.*arrived between \([0-9.]*\) and.*/\1/p' stderr.txt)
+  awk -v t="$earliest" 'BEGIN { exit !(t > 3.55 && t < 20) }' || fail "earliest arrival $earliest"
+  # A window light does reach: no such warning.
+  "$femto" render "$scene" -o out/full -D bins=64 -D res=16 -D spp=2 -q 2> err.txt || fail "render"
+  ! grep -q 'no light arrived' err.txt || fail "warned about a window that light reaches";;
 write_signals)
   # Ctrl-C twice and SIGTERM while the outputs are being written: femto explains, finishes
   # a complete set, leaves no temporary file and exits 130 (the first signal's code).

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -141,6 +142,27 @@ public:
     /// Camera samples this block rejected because a contribution's radiance was NaN or
     /// infinite (the whole sample is dropped).
     uint64_t rejected() const { return rejected_; }
+    /// Arrivals (camera-sample contributions with light) this block saw, the earliest and
+    /// latest recorded time among them, and how many fell in the film's window.
+    struct Arrivals {
+        uint64_t count = 0, inside = 0;
+        double earliest = std::numeric_limits<double>::infinity();
+        double latest = -std::numeric_limits<double>::infinity();
+        void add(double t, bool in_window) {
+            ++count;
+            inside += in_window ? 1 : 0;
+            earliest = std::min(earliest, t);
+            latest = std::max(latest, t);
+        }
+        Arrivals& operator+=(const Arrivals& o) {
+            count += o.count;
+            inside += o.inside;
+            earliest = std::min(earliest, o.earliest);
+            latest = std::max(latest, o.latest);
+            return *this;
+        }
+    };
+    const Arrivals& arrivals() const { return arrivals_; }
     int x0() const { return x0_; }
     int y0() const { return y0_; }
     int w() const { return w_; }
@@ -176,6 +198,7 @@ private:
     std::vector<BinWeight> scratch_;
     std::vector<std::pair<int, Color>> sample_bins_;  // splat_totals: one sample's bin values
     uint64_t rejected_ = 0;
+    Arrivals arrivals_;
 };
 
 /// Base of films that record time (`transient`, `streak`): reads the time grid (`start`,
@@ -213,9 +236,13 @@ protected:
     std::unique_ptr<FilmBlock> make_pilot_block(int x0, int y0, int w, int h) const;
     /// During the pilot pass, hands the block's arrivals to the filter and returns true.
     bool merge_pilot(const FilmBlock& block);
-    /// Adds the block's count of rejected samples to the film's.
-    void merge_rejected(const TimeResolvedBlock& block) { rejected_ += block.rejected(); }
-    /// Logs a warning with the number of rejected samples, if any.
+    /// Adds the block's count of rejected samples (and its arrivals) to the film's.
+    void merge_rejected(const TimeResolvedBlock& block) {
+        rejected_ += block.rejected();
+        arrivals_ += block.arrivals();
+    }
+    /// Logs a warning with the number of rejected samples, if any, and one when no light
+    /// arrived within the time window (with the times it arrived at instead).
     void warn_rejected() const;
 
     TimeGrid grid_;       ///< its frame is camera or world time (`world_time`)
@@ -225,6 +252,7 @@ protected:
 private:
     bool pilot_ = false;  // between begin_pilot() and end_pilot()
     uint64_t rejected_ = 0;
+    TimeResolvedBlock::Arrivals arrivals_;
 };
 
 inline TimeResolvedBlock::TimeResolvedBlock(const TimeResolvedFilm& film, int x0, int y0, int w,
@@ -246,6 +274,10 @@ void TimeResolvedBlock::splat(Vec2 pos, const ContributionList& sample, Storage&
     const TemporalFilter& tfilter = film_.tfilter();
     const TimeGrid& grid = film_.grid();
     const bool world_time = film_.world_time();
+    for (const Contribution& c : sample.items()) {  // for the empty-window warning
+        const double t = recorded_time(c.time, sensor, world_time);
+        arrivals_.add(t, grid.bin_of(t) >= 0);
+    }
     for_each_filter_pixel(
         film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
             const size_t slot = storage.slot(x, y);

@@ -83,6 +83,13 @@ void TimeResolvedFilm::warn_rejected() const {
     if (rejected_ > 0)
         log_warning(fmt::format("{} camera samples with a NaN or infinite radiance were discarded",
                                 rejected_));
+    const char* frame = world_time() ? "world" : "camera";
+    if (arrivals_.count > 0 && arrivals_.inside == 0)
+        log_warning(fmt::format(
+            "no light arrived within the film's time window [{}, {}] ({} time, scene units): "
+            "the light this render traced arrived between {:.6g} and {:.6g}; move the window "
+            "(start, bin_width, bins) there",
+            grid_.start, grid_.end(), frame, arrivals_.earliest, arrivals_.latest));
 }
 
 bool TimeResolvedFilm::merge_pilot(const FilmBlock& block) {
