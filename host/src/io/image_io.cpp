@@ -449,12 +449,16 @@ int64_t strip_batch_rows(const CubeView& v, const StripTiling& tiling) {
 
 // Parts of one file must share a display window: both parts use the frames' (the whole
 // strip), the depth part's data window being its first frame's place.
+// With `tiling` the part is tiled (the frames), else scanline (the depth).
 Imf::Header cube_part_header(const std::string& name, int width, int rows, int strip_rows,
-                             const ExrCubeOptions& options) {
+                             const ExrCubeOptions& options, const StripTiling* tiling = nullptr) {
     Imf::Header h(Imath::Box2i({0, 0}, {width - 1, strip_rows - 1}),
                   Imath::Box2i({0, 0}, {width - 1, rows - 1}));
     h.setName(name);
-    h.setType(Imf::SCANLINEIMAGE);
+    h.setType(tiling ? Imf::TILEDIMAGE : Imf::SCANLINEIMAGE);
+    if (tiling)
+        h.setTileDescription(Imf::TileDescription(unsigned(tiling->tile_w),
+                                                  unsigned(tiling->tile_h), Imf::ONE_LEVEL));
     h.compression() = exr_compression(options.compression);
     h.zipCompressionLevel() = std::clamp(options.zip_level, 1, 9);
     return h;
@@ -503,10 +507,8 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
         const StripTiling tiling(width);
         set_exr_threads(options, tiling.tile_bytes());
         std::vector<Imf::Header> headers;
-        headers.push_back(cube_part_header("frames", width, height * bins, height * bins, options));
-        headers[0].setType(Imf::TILEDIMAGE);
-        headers[0].setTileDescription(
-            Imf::TileDescription(unsigned(tiling.tile_w), unsigned(tiling.tile_h), Imf::ONE_LEVEL));
+        headers.push_back(
+            cube_part_header("frames", width, height * bins, height * bins, options, &tiling));
         for (const char* c : {"R", "G", "B"})
             headers[0].channels().insert(c, Imf::Channel(Imf::FLOAT));
         for (const auto& [k, v] : attributes) insert_attribute(headers[0], k, v);

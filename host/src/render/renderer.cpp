@@ -232,10 +232,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         const double share = run_pass(options.seed, s0, s1);
         // Stopped within the pass, some pixels have s1 samples and others s0: the mean.
         stats.spp_done = share >= 1 ? s1 : s0 + uint32_t(double(s1 - s0) * share);
-        stats.interrupted = share < 1 && stopped();
-        if (stats.interrupted) break;
     }
-    if (stats.spp_done < spp && stopped()) stats.interrupted = true;
+    stats.interrupted = stats.spp_done < spp;  // only a stop request ends the loop early
     progress.finish();
     stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.rays = scene.rays_traced() - rays_before;
