@@ -1,14 +1,22 @@
 // Spectra in scene files: the CIE tables against published values, the conversion to RGB
-// (Mitsuba 3's method).
+// (Mitsuba 3's method, docs/compatibility.md) and the <spectrum>/<blackbody> tags.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "color/spectrum.h"
+#include "femto/bsdf.h"
+#include "femto/sensor.h"
+#include "scene/spectrum_tags.h"
+#include "scene_util.h"
 
 using namespace femto;
+using femto::test::load_error;
+using femto::test::scene_xml;
 namespace sp = femto::spectrum;
 
 namespace {
@@ -139,4 +147,159 @@ TEST(SpectrumBlackbody, PlanckLaw) {
     EXPECT_NEAR(xy(2856)[1], 0.40745, 3e-4);
     EXPECT_NEAR(xy(6500)[0], 0.3135, 2e-4);
     EXPECT_NEAR(xy(6500)[1], 0.3236, 2e-4);
+}
+
+namespace {
+
+std::vector<float> render_image(Scene& scene) {
+    RenderOptions opt;
+    opt.seed = 7;
+    opt.spp = 4;
+    render(scene, opt);
+    return scene.sensor().film().steady_image();
+}
+
+// A diffuse square lit by a point light; the two values are XML property elements.
+std::string lit_square(const std::string& reflectance, const std::string& intensity) {
+    return scene_xml(
+        "<integrator type=\"path\"/>"
+        "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0, 0, 3\" "
+        "target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform><film type=\"hdrfilm\"><integer "
+        "name=\"width\" value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor>"
+        "<shape type=\"rectangle\"><bsdf type=\"diffuse\">" +
+        reflectance +
+        "</bsdf></shape>"
+        "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 2\"/>" +
+        intensity + "</emitter>");
+}
+
+std::string rgb_element(const std::string& name, const Color& c) {
+    // Nine significant digits give back the same float.
+    char value[128];
+    std::snprintf(value, sizeof value, "%.9g, %.9g, %.9g", c.r, c.g, c.b);
+    return "<rgb name=\"" + name + "\" value=\"" + value + "\"/>";
+}
+
+}  // namespace
+
+TEST(SpectrumLoader, UseFollowsTheObjectAndTheName) {
+    EXPECT_EQ(detail::spectrum_use("emitter", "radiance"), sp::Use::Emission);
+    EXPECT_EQ(detail::spectrum_use("emitter", "intensity"), sp::Use::Emission);
+    EXPECT_EQ(detail::spectrum_use("bsdf", "reflectance"), sp::Use::Reflectance);
+    EXPECT_EQ(detail::spectrum_use("bsdf", "eta"), sp::Use::Unbounded);
+    EXPECT_EQ(detail::spectrum_use("medium", "sigma_t"), sp::Use::Unbounded);
+}
+
+TEST(SpectrumLoader, SampledSpectraRenderAsTheirRgb) {
+    const std::string pairs = "400:0.2, 500:0.5 600:0.7,700:0.4";  // commas or spaces
+    const std::vector<double> nm = {400, 500, 600, 700}, v = {0.2, 0.5, 0.7, 0.4};
+    const Color refl = sp::convert_sampled(nm, v, sp::Use::Reflectance).rgb;
+    const Color emit = sp::convert_sampled(nm, v, sp::Use::Emission).rgb;
+    ASSERT_GT(refl.r, refl.b);  // a reddish spectrum
+    auto spectral =
+        load_scene_string(lit_square("<spectrum name=\"reflectance\" value=\"" + pairs + "\"/>",
+                                     "<spectrum name=\"intensity\" value=\"" + pairs + "\"/>"));
+    auto rgb = load_scene_string(
+        lit_square(rgb_element("reflectance", refl), rgb_element("intensity", emit)));
+    const auto a = render_image(*spectral), b = render_image(*rgb);
+    ASSERT_EQ(a.size(), b.size());
+    double sum = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        EXPECT_EQ(a[i], b[i]) << i;
+        sum += a[i];
+    }
+    EXPECT_GT(sum, 0);
+}
+
+TEST(SpectrumLoader, ConstantSpectrumIsGreyForReflectances) {
+    auto spectral =
+        load_scene_string(lit_square("<spectrum name=\"reflectance\" value=\"0.5\"/>", ""));
+    auto rgb = load_scene_string(lit_square("<rgb name=\"reflectance\" value=\"0.5\"/>", ""));
+    EXPECT_EQ(render_image(*spectral), render_image(*rgb));
+    // In an emitter it is Mitsuba 3's equal-energy colour, not grey.
+    auto emit = load_scene_string(lit_square("", "<spectrum name=\"intensity\" value=\"1\"/>"));
+    auto emit_rgb = load_scene_string(
+        lit_square("", rgb_element("intensity", sp::convert_uniform(1, sp::Use::Emission))));
+    EXPECT_EQ(render_image(*emit), render_image(*emit_rgb));
+}
+
+TEST(SpectrumLoader, SpectrumFiles) {
+    const auto dir = femto::testing::temp_dir("spectrum-files");
+    femto::test::write_text(dir / "red.spd",
+                            "# Mitsuba 0.6 spectrum\n400 0.2\n500 0.5\r\n\n600 0.7  # peak\n"
+                            "700 0.4\n");
+    auto from_file = load_scene_string(
+        lit_square("<spectrum name=\"reflectance\" filename=\"red.spd\"/>", ""), {}, dir.string());
+    auto inline_pairs = load_scene_string(lit_square(
+        "<spectrum name=\"reflectance\" value=\"400:0.2 500:0.5 600:0.7 700:0.4\"/>", ""));
+    EXPECT_EQ(render_image(*from_file), render_image(*inline_pairs));
+
+    femto::test::write_text(dir / "bad.spd", "400 0.2\n500 0.5\n600 zero\n");
+    std::string msg = load_error(
+        lit_square("<spectrum name=\"reflectance\" filename=\"bad.spd\"/>", ""), {}, dir.string());
+    EXPECT_NE(msg.find("bad.spd:3:1: expected \"wavelength value\""), std::string::npos) << msg;
+    femto::test::write_text(dir / "one.spd", "400 0.2\n");
+    msg = load_error(lit_square("<spectrum name=\"reflectance\" filename=\"one.spd\"/>", ""), {},
+                     dir.string());
+    EXPECT_NE(msg.find("at least two"), std::string::npos) << msg;
+    msg = load_error(lit_square("<spectrum name=\"reflectance\" filename=\"none.spd\"/>", ""), {},
+                     dir.string());
+    EXPECT_NE(msg.find("none.spd"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("no such file"), std::string::npos) << msg;
+    std::filesystem::remove_all(dir);
+}
+
+TEST(SpectrumLoader, Blackbody) {
+    // Mitsuba 0.6's <blackbody>: Planck's law in W m^-2 sr^-1 nm^-1, times `scale`.
+    const double scale = 1e-4;
+    const Color expected = sp::convert([&](double nm) { return scale * sp::planck(nm, 5000); },
+                                       sp::kMinNm, sp::kMaxNm, sp::Use::Emission)
+                               .rgb;
+    ASSERT_GT(expected.r, expected.b);  // 5000 K is warm
+    auto bb = load_scene_string(
+        lit_square("", "<blackbody name=\"intensity\" temperature=\"5000K\" scale=\"1e-4\"/>"), {});
+    auto rgb = load_scene_string(lit_square("", rgb_element("intensity", expected)));
+    EXPECT_EQ(render_image(*bb), render_image(*rgb));
+    auto in_06 = scene_xml(
+        "<shape type=\"rectangle\"><emitter type=\"area\"><blackbody name=\"radiance\" "
+        "temperature=\"6500\"/></emitter></shape>",
+        "0.6.0");
+    EXPECT_NO_THROW(load_scene_string(in_06));
+}
+
+TEST(SpectrumLoader, BadSpectraAreLocatedErrors) {
+    auto refl = [](const std::string& element) {
+        return load_error(scene_xml("<shape type=\"rectangle\"><bsdf type=\"diffuse\">\n" +
+                                    element + "</bsdf></shape>"));
+    };
+    struct Case {
+        std::string element, expected;
+    };
+    const std::vector<Case> cases = {
+        {"<spectrum name=\"reflectance\" value=\"400:0.5\"/>", "at least two"},
+        {"<spectrum name=\"reflectance\" value=\"500:0.5, 400:0.6\"/>", "must increase"},
+        {"<spectrum name=\"reflectance\" value=\"-400:0.5, 400:0.6\"/>", "not positive"},
+        {"<spectrum name=\"reflectance\" value=\"400:nan, 500:0.6\"/>", "not finite"},
+        {"<spectrum name=\"reflectance\" value=\"400:abc, 500:0.6\"/>",
+         "\"400:abc\" is not a wavelength:value pair"},
+        {"<spectrum name=\"reflectance\" value=\"400:0.5, 500\"/>",
+         "\"500\" is not a wavelength:value pair"},
+        {"<spectrum name=\"reflectance\" value=\"\"/>", "value is empty"},
+        {"<spectrum name=\"reflectance\" value=\"nan\"/>", "not a finite number"},
+        {"<spectrum name=\"reflectance\" value=\"0.1 0.2 0.3\"/>", "use <rgb>"},
+        {"<spectrum name=\"reflectance\"/>", "either a \"value\" or a \"filename\""},
+        {"<spectrum name=\"reflectance\" value=\"0.5\" intent=\"x\"/>",
+         "unknown attribute \"intent\""},
+        {"<spectrum type=\"blackbody\" name=\"reflectance\"><float name=\"temperature\" "
+         "value=\"5000\"/></spectrum>",
+         "<spectrum type=\"blackbody\"> is not supported"},
+        {"<blackbody name=\"reflectance\" temperature=\"-5K\"/>", "must be positive"},
+        {"<blackbody name=\"reflectance\" temperature=\"hot\"/>", "\"hot\" is not a finite"},
+        {"<blackbody name=\"reflectance\"/>", "needs the attribute \"temperature\""},
+    };
+    for (const Case& c : cases) {
+        const std::string msg = refl(c.element);
+        EXPECT_NE(msg.find(c.expected), std::string::npos) << c.element << "\n" << msg;
+        EXPECT_EQ(msg.rfind("<string>:4:", 0), 0u) << c.element << "\n" << msg;
+    }
 }
