@@ -139,6 +139,8 @@ private:
 ///  - `face_normals`: no vertex normals at all (flat shading from the geometric normal).
 void mesh_to_world(TriangleMesh& mesh, const std::vector<uint32_t>& position_ids,
                    size_t position_count, const Transform& to_world, bool face_normals);
+/// The same for a mesh whose vertices are all distinct file positions (ply, serialized).
+void mesh_to_world(TriangleMesh& mesh, const Transform& to_world, bool face_normals);
 
 /// Reads a `to_world` transform, rejecting degenerate (singular) ones with a located error.
 Transform read_to_world(const Properties& props);

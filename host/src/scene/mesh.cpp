@@ -1,5 +1,6 @@
 // Shared mesh post-processing for mesh-file shapes (see femto/shape.h).
 #include <cmath>
+#include <numeric>
 
 #include "femto/shape.h"
 
@@ -65,6 +66,12 @@ void mesh_to_world(TriangleMesh& mesh, const std::vector<uint32_t>& position_ids
         else  // only on degenerate triangles, which are never hit: any unit vector will do
             mesh.normals[i] = Vec3(0, 0, 1);
     }
+}
+
+void mesh_to_world(TriangleMesh& mesh, const Transform& to_world, bool face_normals) {
+    std::vector<uint32_t> ids(mesh.positions.size());
+    std::iota(ids.begin(), ids.end(), 0u);
+    mesh_to_world(mesh, ids, ids.size(), to_world, face_normals);
 }
 
 }  // namespace femto

@@ -505,9 +505,7 @@ public:
         const Transform& to_world = to_world_;
 
         TriangleMesh mesh = PlyReader(props, filename).read();
-        std::vector<uint32_t> ids(mesh.positions.size());
-        std::iota(ids.begin(), ids.end(), 0u);
-        mesh_to_world(mesh, ids, ids.size(), to_world, face_normals);
+        mesh_to_world(mesh, to_world, face_normals);
         set_mesh(std::move(mesh));
     }
 };

@@ -246,9 +246,7 @@ public:
         TriangleMesh mesh =
             SerializedReader(props, props.get_string("filename")).read(index, file_face_normals);
         const bool face_normals = props.get_bool("face_normals", false) || file_face_normals;
-        std::vector<uint32_t> ids(mesh.positions.size());
-        std::iota(ids.begin(), ids.end(), 0u);
-        mesh_to_world(mesh, ids, ids.size(), to_world_, face_normals);
+        mesh_to_world(mesh, to_world_, face_normals);
         set_mesh(std::move(mesh));
     }
 };
