@@ -334,6 +334,14 @@ std::vector<FurnaceCase> furnace_cases() {
         {"plastic_grey",
          [] { return build(plastic_props(Color(0.5f), Color(1.f), "polypropylene", false)); },
          false, front});
+    c.push_back({"thindielectric",
+                 [] {
+                     Properties p("thindielectric", {});
+                     p.set_float("int_ior", 1.7);
+                     return build(p);
+                 },
+                 true,
+                 {0, 30, 60, 85, 89, 120, 150, 180}});
     c.push_back({"twosided_diffuse",
                  [] { return build(Properties("twosided", {}), {diffuse_props(Color(1.f))}); },
                  true,
@@ -700,6 +708,62 @@ TEST(BsdfDielectric, SpecularFactorsScaleTheWeights) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// thindielectric
+
+// A slab reflects R' = R + T^2 R / (1 - R^2) = 2R / (1 + R) of the light (R and T = 1 - R for one
+// face), summed over its internal bounces, and lets T' = 1 - R' through undeviated: the
+// fraction of reflection samples is R' within 4 binomial standard errors, every sample has weight
+// one (so R' + T' = 1: the furnace case above), a transmission leaves along -wi with eta = 1 (the
+// path's index is unchanged) and a reflection along the mirror direction, from either side.
+TEST(BsdfThinDielectric, SlabReflectanceAndStraightTransmission) {
+    const double n_int = 1.5046, n_ext = 1.000277;  // the defaults: bk7 in air
+    const std::shared_ptr<Bsdf> bsdf = build(Properties("thindielectric", {}));
+    EXPECT_EQ(bsdf->flags(), femto::kBsdfDeltaReflection | femto::kBsdfDeltaTransmission);
+    const int n = 200000;
+    for (double theta : {0.0, 30.0, 60.0, 80.0, 89.0, 120.0, 170.0}) {
+        const Vec3 wi = direction_deg(theta, 0.8);
+        const double r = fresnel_reference(std::abs(wi.z), n_ext, n_int);
+        const double r_slab = r + (1 - r) * (1 - r) * r / (1 - r * r);
+        femto::Pcg32 rng(seed_from_name("thindielectric") + static_cast<uint64_t>(theta), 5);
+        int reflected = 0;
+        for (int i = 0; i < n; ++i) {
+            const BsdfSample s = bsdf->sample(kHit, wi, rng.next_float(), {0.5f, 0.5f});
+            ASSERT_TRUE(s.valid());
+            ASSERT_EQ(s.weight, Color(1.f));
+            ASSERT_EQ(s.eta, 1.f);
+            if (s.sampled_lobe == femto::kBsdfDeltaReflection) {
+                ++reflected;
+                ASSERT_EQ(s.wo, Vec3(-wi.x, -wi.y, wi.z));
+                ASSERT_NEAR(s.pdf, r_slab, 1e-5);
+            } else {
+                ASSERT_EQ(s.sampled_lobe, femto::kBsdfDeltaTransmission);
+                ASSERT_EQ(s.wo, -wi);
+                ASSERT_NEAR(s.pdf, 1 - r_slab, 1e-5);
+            }
+        }
+        const double fraction = double(reflected) / n;
+        std::printf("[thindielectric] %g deg: R = %.5f, R' = %.5f, reflected fraction %.5f\n",
+                    theta, r, r_slab, fraction);
+        EXPECT_NEAR(fraction, r_slab, 4 * std::sqrt(r_slab * (1 - r_slab) / n) + 1e-6) << theta;
+    }
+    EXPECT_EQ(bsdf->eval(kHit, direction_deg(30.0), -direction_deg(30.0)), Color(0.f));
+    EXPECT_EQ(bsdf->pdf(kHit, direction_deg(30.0), -direction_deg(30.0)), 0.f);
+}
+
+TEST(BsdfThinDielectric, SpecularFactorsScaleTheWeights) {
+    Properties p("thindielectric", {});
+    p.set_color("specular_reflectance", Color(0.5f, 0.6f, 0.7f));
+    p.set_color("specular_transmittance", Color(0.1f, 0.2f, 0.3f));
+    const std::shared_ptr<Bsdf> bsdf = build(p);
+    const BsdfSample r = bsdf->sample(kHit, direction_deg(50.0), 0.f, {0, 0});
+    const BsdfSample t = bsdf->sample(kHit, direction_deg(50.0), 0.9999f, {0, 0});
+    EXPECT_EQ(r.sampled_lobe, femto::kBsdfDeltaReflection);
+    EXPECT_EQ(r.weight, Color(0.5f, 0.6f, 0.7f));
+    EXPECT_EQ(t.sampled_lobe, femto::kBsdfDeltaTransmission);
+    EXPECT_EQ(t.weight, Color(0.1f, 0.2f, 0.3f));
+}
+
+// ---------------------------------------------------------------------------------------------
 // conductor
 
 /// Conductor reflectance from the complex Fresnel amplitudes (relative IOR eta + i k):
@@ -960,6 +1024,11 @@ TEST(BsdfParams, BadValuesAreRejected) {
         expect_error(p, "roughplastic without an index step");
     }
     {
+        Properties p("thindielectric", {});
+        p.set_float("int_ior", -1.5);
+        expect_error(p, "thindielectric int_ior < 0");
+    }
+    {
         Properties p("diffuse", {});
         p.set_float("reflectence", 0.5);  // misspelt: not in the schema
         expect_error(p, "unknown parameter");
@@ -1032,6 +1101,14 @@ TEST(BsdfParams, EverySchemaEntryIsRead) {
         p.set_bool("nonlinear", true);
         sets.push_back(p);
     }
+    {
+        Properties p("thindielectric", {});
+        p.set_string("int_ior", "water");
+        p.set_float("ext_ior", 1.0);
+        p.set_color("specular_reflectance", Color(1.f));
+        p.set_color("specular_transmittance", Color(0.9f));
+        sets.push_back(p);
+    }
     sets.push_back(Properties("null", {}));
 
     std::set<std::string> used;
@@ -1040,7 +1117,7 @@ TEST(BsdfParams, EverySchemaEntryIsRead) {
         for (const auto& e : p.entries()) used.insert(p.plugin_type() + "." + e.name);
     }
     for (const char* type : {"diffuse", "conductor", "roughconductor", "dielectric", "plastic",
-                             "roughplastic", "null", "twosided"}) {
+                             "roughplastic", "thindielectric", "null", "twosided"}) {
         const femto::PluginDescriptor& desc = femto::find_plugin(femto::PluginKind::Bsdf, type);
         EXPECT_EQ(desc.kind, femto::PluginKind::Bsdf);
         for (const femto::ParamSpec& spec : desc.params) {
