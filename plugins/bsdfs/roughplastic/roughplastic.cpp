@@ -17,7 +17,7 @@
 // the same rule errs by up to 1e-2 for GGX). R_int = 2 * integral of mu R_in(mu) dmu with R_in
 // the internal reflectance (F(wi.m) G1(wo, m) over the visible normals, 96 x 96 points for the
 // total internal reflection kink). Mitsuba 3 takes that outer integral as twice the mean over
-// its 64 cosines, which weighs the end points fully and underestimates Fdr_int by ~1.5% at
+// its 64 cosines, which weighs the end points fully and underestimates Fdr_int by ~1.9% at
 // polypropylene's index; femto integrates it by Gauss-Legendre (12 points) on either side of
 // the critical cosine, within 1e-4 of a 4x finer rule, so that roughplastic tends to plastic
 // (whose Fdr_int is exact) as alpha -> 0. The tables use femto's exact Beckmann G1 (see
