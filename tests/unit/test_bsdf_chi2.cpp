@@ -102,6 +102,37 @@ std::vector<BsdfChi2Case> make_cases() {
                      },
                      60.0});
 
+    // roughplastic: both lobes (glossy coating and diffuse base) are non-delta.
+    for (const char* dist : {"beckmann", "ggx"})
+        for (double alpha : {0.05, 0.3})
+            for (double a : angles) {
+                const std::string name = std::string("roughplastic_") + dist +
+                                         (alpha < 0.1 ? "_a0p05_" : "_a0p3_") + angle_name(a);
+                cases.push_back({name,
+                                 [=] {
+                                     Properties p("roughplastic", {});
+                                     p.set_string("distribution", dist);
+                                     p.set_float("alpha", alpha);
+                                     p.set_color("diffuse_reflectance",
+                                                 femto::Color(0.2f, 0.5f, 0.8f));
+                                     return p;
+                                 },
+                                 a});
+            }
+    for (const char* dist : {"beckmann", "ggx"})
+        cases.push_back({std::string("roughplastic_") + dist + "_a0p2_full_nonlinear_60deg",
+                         [=] {
+                             Properties p("roughplastic", {});
+                             p.set_string("distribution", dist);
+                             p.set_float("alpha", 0.2);
+                             p.set_bool("sample_visible", false);
+                             p.set_bool("nonlinear", true);
+                             p.set_string("int_ior", "diamond");
+                             p.set_float("diffuse_reflectance", 0.9);
+                             return p;
+                         },
+                         60.0});
+
     // twosided: the back side, one nested BSDF and two.
     auto diffuse = [] {
         Properties p("diffuse", {});

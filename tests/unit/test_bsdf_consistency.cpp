@@ -85,6 +85,19 @@ Properties plastic_props(Color d, Color s, const std::string& int_ior, bool nonl
     return p;
 }
 
+Properties roughplastic_props(const std::string& dist, double alpha, bool visible, Color d, Color s,
+                              bool nonlinear, const std::string& int_ior = "polypropylene") {
+    Properties p("roughplastic", {});
+    p.set_string("distribution", dist);
+    p.set_float("alpha", alpha);
+    p.set_bool("sample_visible", visible);
+    p.set_color("diffuse_reflectance", d);
+    p.set_color("specular_reflectance", s);
+    p.set_bool("nonlinear", nonlinear);
+    p.set_string("int_ior", int_ior);
+    return p;
+}
+
 Properties dielectric_props(double int_ior, double ext_ior) {
     Properties p("dielectric", {});
     p.set_float("int_ior", int_ior);
@@ -123,6 +136,17 @@ std::vector<Material> smooth_materials() {
                      return build(
                          plastic_props(Color(0.9f, 0.6f, 0.3f), Color(0.7f), "diamond", true));
                  }});
+    for (const char* dist : {"beckmann", "ggx"}) {
+        const std::string prefix = std::string("roughplastic_") + dist;
+        m.push_back({prefix + "_visible_a0p1", [=] {
+                         return build(roughplastic_props(dist, 0.1, true, Color(0.2f, 0.5f, 0.8f),
+                                                         Color(1.f), false));
+                     }});
+        m.push_back({prefix + "_full_a0p4_nonlinear", [=] {
+                         return build(roughplastic_props(dist, 0.4, false, Color(0.9f, 0.6f, 0.3f),
+                                                         Color(0.7f), true, "diamond"));
+                     }});
+    }
     m.push_back({"twosided_diffuse",
                  [] { return build(Properties("twosided", {}), {diffuse_props(Color(0.6f))}); },
                  true});
@@ -310,6 +334,14 @@ std::vector<FurnaceCase> furnace_cases() {
         {"plastic_grey",
          [] { return build(plastic_props(Color(0.5f), Color(1.f), "polypropylene", false)); },
          false, front});
+    c.push_back({"thindielectric",
+                 [] {
+                     Properties p("thindielectric", {});
+                     p.set_float("int_ior", 1.7);
+                     return build(p);
+                 },
+                 true,
+                 {0, 30, 60, 85, 89, 120, 150, 180}});
     c.push_back({"twosided_diffuse",
                  [] { return build(Properties("twosided", {}), {diffuse_props(Color(1.f))}); },
                  true,
@@ -324,6 +356,23 @@ std::vector<FurnaceCase> furnace_cases() {
                 std::string n(name);
                 std::replace(n.begin(), n.end(), '.', 'p');
                 c.push_back({n, [=] { return build(rough_props(dist, a, a, visible, "none")); },
+                             false, front});
+            }
+    // roughplastic loses what the single-scattering microfacet model loses: at most one. With a
+    // black base only the coating's specular lobe is left.
+    for (const char* dist : {"beckmann", "ggx"})
+        for (double a : {0.05, 0.5})
+            for (float base : {1.f, 0.f}) {
+                char name[96];
+                std::snprintf(name, sizeof name, "roughplastic_%s_alpha%g_%s", dist, a,
+                              base > 0.f ? "white" : "black_base");
+                std::string n(name);
+                std::replace(n.begin(), n.end(), '.', 'p');
+                c.push_back({n,
+                             [=] {
+                                 return build(roughplastic_props(dist, a, true, Color(base),
+                                                                 Color(1.f), false));
+                             },
                              false, front});
             }
     c.push_back({"rough_ggx_aniso",
@@ -460,6 +509,69 @@ TEST(BsdfAlbedo, PlasticEqualsSpecularFresnelPlusDiffuseIntegral) {
     }
 }
 
+// As alpha -> 0 roughplastic's rough coating becomes plastic's smooth one: T -> 1 - F,
+// R_int -> Fdr_int and the specular lobe's albedo -> F. At alpha = 1e-3 what remains differs by
+// O(alpha^2) ~ 1e-6 plus the linear interpolation of T between 64 cosines (< 1e-4 on the
+// albedo), both far below the estimate's standard error (~1e-3), so the mean sample weight of
+// roughplastic must equal plastic's exact albedo (F s plus the quadrature of its diffuse lobe)
+// within 4 standard errors. With a black base the albedo is the Fresnel reflectance alone.
+TEST(BsdfAlbedo, RoughPlasticTendsToPlasticAtSmallAlpha) {
+    const double n_int = 1.49, n_ext = 1.000277;  // polypropylene in air (the defaults)
+    const Color s(1.f);
+    for (const Color& d : {Color(0.2f, 0.5f, 0.8f), Color(0.f)})
+        for (bool nonlinear : {false, true}) {
+            if (d.is_black() && nonlinear) continue;  // the same material
+            const std::shared_ptr<Bsdf> plastic =
+                build(plastic_props(d, s, "polypropylene", nonlinear));
+            for (double theta : {0.0, 60.0}) {
+                const Vec3 wi = direction_deg(theta, 0.9);
+                const double f = fresnel_reference(wi.z, n_ext, n_int);
+                const Color diffuse = integrate_eval(*plastic, wi);
+                for (const char* dist : {"beckmann", "ggx"}) {
+                    const std::shared_ptr<Bsdf> rough =
+                        build(roughplastic_props(dist, 1e-3, true, d, s, nonlinear));
+                    const Estimate e = albedo(*rough, wi, 400000,
+                                              seed_from_name(dist) + static_cast<uint64_t>(theta));
+                    std::printf(
+                        "[albedo] roughplastic %s alpha 1e-3 base %.1f%s at %g deg: %.5f +- "
+                        "%.5f, plastic %.5f (red)\n",
+                        dist, d[0], nonlinear ? " nonlinear" : "", theta, e.mean[0], e.se[0],
+                        s[0] * f + diffuse[0]);
+                    for (int c = 0; c < 3; ++c)
+                        EXPECT_NEAR(e.mean[c], s[c] * f + diffuse[c], 4 * e.se[c] + 1e-5)
+                            << dist << " theta " << theta << " channel " << c;
+                }
+            }
+        }
+}
+
+// With a black base roughplastic is its coating's specular lobe alone: the mean sample weight
+// equals the integral of eval() (the samplers cover the lobe and weigh it without bias), and
+// the coating reflects less than all light.
+TEST(BsdfAlbedo, RoughPlasticSpecularLobeAgreesWithQuadrature) {
+    for (const char* dist : {"beckmann", "ggx"})
+        for (double alpha : {0.1, 0.5})
+            for (bool visible : {true, false})
+                for (double theta : {30.0, 75.0}) {
+                    const Vec3 wi = direction_deg(theta, 0.3);
+                    const std::shared_ptr<Bsdf> bsdf = build(
+                        roughplastic_props(dist, alpha, visible, Color(0.f), Color(1.f), false));
+                    const Color ref = integrate_eval(*bsdf, wi);
+                    const Estimate e = albedo(*bsdf, wi, 200000,
+                                              seed_from_name(dist) +
+                                                  static_cast<uint64_t>(theta * 100 + alpha * 10) +
+                                                  (visible ? 0 : 7));
+                    std::printf(
+                        "[albedo] roughplastic %s alpha %g %s, black base, at %g deg: quadrature "
+                        "%.5f, samples %.5f +- %.5f\n",
+                        dist, alpha, visible ? "visible" : "full", theta, ref[0], e.mean[0],
+                        e.se[0]);
+                    EXPECT_LT(ref[0], 1.0);
+                    // 4 standard errors plus the quadrature error bound (3e-6, rounded up).
+                    EXPECT_NEAR(e.mean[0], ref[0], 4 * e.se[0] + 1e-5) << dist << alpha << theta;
+                }
+}
+
 // ---------------------------------------------------------------------------------------------
 // dielectric
 
@@ -593,6 +705,62 @@ TEST(BsdfDielectric, SpecularFactorsScaleTheWeights) {
     EXPECT_EQ(t.weight, Color(0.1f, 0.2f, 0.3f));
     EXPECT_EQ(bsdf->flags(), femto::kBsdfDeltaReflection | femto::kBsdfDeltaTransmission);
     EXPECT_TRUE(bsdf->has_delta_only());
+}
+
+// ---------------------------------------------------------------------------------------------
+// thindielectric
+
+// A slab reflects R' = R + T^2 R / (1 - R^2) = 2R / (1 + R) of the light (R and T = 1 - R for one
+// face), summed over its internal bounces, and lets T' = 1 - R' through undeviated: the
+// fraction of reflection samples is R' within 4 binomial standard errors, every sample has weight
+// one (so R' + T' = 1: the furnace case above), a transmission leaves along -wi with eta = 1 (the
+// path's index is unchanged) and a reflection along the mirror direction, from either side.
+TEST(BsdfThinDielectric, SlabReflectanceAndStraightTransmission) {
+    const double n_int = 1.5046, n_ext = 1.000277;  // the defaults: bk7 in air
+    const std::shared_ptr<Bsdf> bsdf = build(Properties("thindielectric", {}));
+    EXPECT_EQ(bsdf->flags(), femto::kBsdfDeltaReflection | femto::kBsdfDeltaTransmission);
+    const int n = 200000;
+    for (double theta : {0.0, 30.0, 60.0, 80.0, 89.0, 120.0, 170.0}) {
+        const Vec3 wi = direction_deg(theta, 0.8);
+        const double r = fresnel_reference(std::abs(wi.z), n_ext, n_int);
+        const double r_slab = r + (1 - r) * (1 - r) * r / (1 - r * r);
+        femto::Pcg32 rng(seed_from_name("thindielectric") + static_cast<uint64_t>(theta), 5);
+        int reflected = 0;
+        for (int i = 0; i < n; ++i) {
+            const BsdfSample s = bsdf->sample(kHit, wi, rng.next_float(), {0.5f, 0.5f});
+            ASSERT_TRUE(s.valid());
+            ASSERT_EQ(s.weight, Color(1.f));
+            ASSERT_EQ(s.eta, 1.f);
+            if (s.sampled_lobe == femto::kBsdfDeltaReflection) {
+                ++reflected;
+                ASSERT_EQ(s.wo, Vec3(-wi.x, -wi.y, wi.z));
+                ASSERT_NEAR(s.pdf, r_slab, 1e-5);
+            } else {
+                ASSERT_EQ(s.sampled_lobe, femto::kBsdfDeltaTransmission);
+                ASSERT_EQ(s.wo, -wi);
+                ASSERT_NEAR(s.pdf, 1 - r_slab, 1e-5);
+            }
+        }
+        const double fraction = double(reflected) / n;
+        std::printf("[thindielectric] %g deg: R = %.5f, R' = %.5f, reflected fraction %.5f\n",
+                    theta, r, r_slab, fraction);
+        EXPECT_NEAR(fraction, r_slab, 4 * std::sqrt(r_slab * (1 - r_slab) / n) + 1e-6) << theta;
+    }
+    EXPECT_EQ(bsdf->eval(kHit, direction_deg(30.0), -direction_deg(30.0)), Color(0.f));
+    EXPECT_EQ(bsdf->pdf(kHit, direction_deg(30.0), -direction_deg(30.0)), 0.f);
+}
+
+TEST(BsdfThinDielectric, SpecularFactorsScaleTheWeights) {
+    Properties p("thindielectric", {});
+    p.set_color("specular_reflectance", Color(0.5f, 0.6f, 0.7f));
+    p.set_color("specular_transmittance", Color(0.1f, 0.2f, 0.3f));
+    const std::shared_ptr<Bsdf> bsdf = build(p);
+    const BsdfSample r = bsdf->sample(kHit, direction_deg(50.0), 0.f, {0, 0});
+    const BsdfSample t = bsdf->sample(kHit, direction_deg(50.0), 0.9999f, {0, 0});
+    EXPECT_EQ(r.sampled_lobe, femto::kBsdfDeltaReflection);
+    EXPECT_EQ(r.weight, Color(0.5f, 0.6f, 0.7f));
+    EXPECT_EQ(t.sampled_lobe, femto::kBsdfDeltaTransmission);
+    EXPECT_EQ(t.weight, Color(0.1f, 0.2f, 0.3f));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -834,6 +1002,33 @@ TEST(BsdfParams, BadValuesAreRejected) {
         expect_error(p, "plastic int_ior = 0");
     }
     {
+        Properties p("roughplastic", {});
+        p.set_float("alpha", 0.0);
+        expect_error(p, "roughplastic alpha = 0");
+    }
+    {
+        Properties p("roughplastic", {});
+        p.set_string("distribution", "phong");
+        expect_error(p, "roughplastic phong (Mitsuba 0.6)");
+    }
+    {
+        Properties p("roughplastic", {});
+        p.set_float("alpha_u", 0.1);
+        p.set_float("alpha_v", 0.2);
+        expect_error(p, "roughplastic is isotropic");
+    }
+    {
+        Properties p("roughplastic", {});
+        p.set_float("int_ior", 1.3);
+        p.set_float("ext_ior", 1.3);
+        expect_error(p, "roughplastic without an index step");
+    }
+    {
+        Properties p("thindielectric", {});
+        p.set_float("int_ior", -1.5);
+        expect_error(p, "thindielectric int_ior < 0");
+    }
+    {
         Properties p("diffuse", {});
         p.set_float("reflectence", 0.5);  // misspelt: not in the schema
         expect_error(p, "unknown parameter");
@@ -894,6 +1089,26 @@ TEST(BsdfParams, EverySchemaEntryIsRead) {
         p.set_bool("nonlinear", true);
         sets.push_back(p);
     }
+    {
+        Properties p("roughplastic", {});
+        p.set_string("distribution", "ggx");
+        p.set_float("alpha", 0.3);
+        p.set_bool("sample_visible", false);
+        p.set_color("diffuse_reflectance", Color(0.5f));
+        p.set_color("specular_reflectance", Color(1.f));
+        p.set_float("int_ior", 1.6);
+        p.set_string("ext_ior", "air");
+        p.set_bool("nonlinear", true);
+        sets.push_back(p);
+    }
+    {
+        Properties p("thindielectric", {});
+        p.set_string("int_ior", "water");
+        p.set_float("ext_ior", 1.0);
+        p.set_color("specular_reflectance", Color(1.f));
+        p.set_color("specular_transmittance", Color(0.9f));
+        sets.push_back(p);
+    }
     sets.push_back(Properties("null", {}));
 
     std::set<std::string> used;
@@ -901,8 +1116,8 @@ TEST(BsdfParams, EverySchemaEntryIsRead) {
         EXPECT_NO_THROW(build(p)) << p.plugin_type();
         for (const auto& e : p.entries()) used.insert(p.plugin_type() + "." + e.name);
     }
-    for (const char* type :
-         {"diffuse", "conductor", "roughconductor", "dielectric", "plastic", "null", "twosided"}) {
+    for (const char* type : {"diffuse", "conductor", "roughconductor", "dielectric", "plastic",
+                             "roughplastic", "thindielectric", "null", "twosided"}) {
         const femto::PluginDescriptor& desc = femto::find_plugin(femto::PluginKind::Bsdf, type);
         EXPECT_EQ(desc.kind, femto::PluginKind::Bsdf);
         for (const femto::ParamSpec& spec : desc.params) {
