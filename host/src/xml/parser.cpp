@@ -131,8 +131,13 @@ std::pair<int, int> parse_version(const XmlNode& scene) {
     return {major, minor};
 }
 
+// A <default> keeps its name: it names a $parameter and a -D, not a plugin parameter, and
+// `$maxDepth` in the same file must still find it (Mitsuba 3 skips defaults too). The 0.x
+// transform operation <lookAt> is <lookat>.
 void upgrade_tree(XmlNode& node) {
-    if (std::string* name = node.attribute("name")) *name = upgrade_parameter_name(*name);
+    if (node.tag == "lookAt") node.tag = "lookat";
+    if (node.tag != "default")
+        if (std::string* name = node.attribute("name")) *name = upgrade_parameter_name(*name);
     if (std::string* type = node.attribute("type")) *type = upgrade_plugin_type(node.tag, *type);
     for (auto& c : node.children) upgrade_tree(c);
 }
