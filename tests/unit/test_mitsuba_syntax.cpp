@@ -55,9 +55,27 @@ std::vector<float> render_string(const std::string& xml, const LoadOptions& opt 
     return render_steady(*s, 17);
 }
 
+std::vector<float> render_file(const fs::path& path, const LoadOptions& opt = {}) {
+    auto s = load_scene(path.string(), opt);
+    return render_steady(*s, 17);
+}
+
+std::string load_file_error(const fs::path& path, const LoadOptions& opt = {}) {
+    try {
+        load_scene(path.string(), opt);
+    } catch (const SceneError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "expected a SceneError for " << path;
+    return {};
+}
+
 bool contains(const std::string& text, const std::string& part) {
     return text.find(part) != std::string::npos;
 }
+
+// A unit square in the z = 0 plane facing +z (the rectangle scaled by 1/2), as an OBJ file.
+const char* kQuadObj = "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3\nf 1 3 4\n";
 
 }  // namespace
 
@@ -89,4 +107,101 @@ TEST(MitsubaSyntax, CamelCaseLookAtInOldFiles) {
     const std::string msg = load_error(scene(body, "3.0.0"));
     EXPECT_TRUE(contains(msg, "<string>:2:")) << msg;
     EXPECT_TRUE(contains(msg, "unknown transform operation <lookAt>")) << msg;
+}
+
+// 1: <path value="dir"/> adds a folder where the files named in the scene are looked up.
+TEST(MitsubaSyntax, PathAddsASearchFolder) {
+    const auto dir = femto::testing::temp_dir("mitsuba-path");
+    fs::create_directories(dir / "assets");
+    write_text(dir / "assets" / "quad.obj", kQuadObj);
+    write_text(dir / "assets" / "red.xml", scene(kRedBsdf));
+    const std::string shape_rest = "<ref id=\"red\"/></shape>\n";
+    write_text(dir / "native.xml",
+               scene(sensor_xml() + "<include filename=\"assets/red.xml\"/>" + kLight +
+                     "<shape type=\"obj\"><string name=\"filename\" value=\"assets/quad.obj\"/>" +
+                     shape_rest));
+    write_text(dir / "path.xml",
+               scene("<path value=\"assets\"/>" + sensor_xml() + "<include filename=\"red.xml\"/>" +
+                     kLight + "<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/>" +
+                     shape_rest));
+    const auto native = render_file(dir / "native.xml");
+    expect_same_image(render_file(dir / "path.xml"), native, "<path>", "explicit folders");
+
+    // Meshes are read once the whole file is, so a <path> after the shape counts (as in
+    // Mitsuba 3); an <include> is read where it stands, so only earlier <path>s count.
+    write_text(dir / "late.xml",
+               scene(sensor_xml() + "<include filename=\"assets/red.xml\"/>" + kLight +
+                     "<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/>" +
+                     shape_rest + "<path value=\"assets\"/>"));
+    expect_same_image(render_file(dir / "late.xml"), native, "<path> after the mesh",
+                      "explicit folders");
+    write_text(dir / "late-include.xml",
+               scene(sensor_xml() + "\n<include filename=\"red.xml\"/>\n<path value=\"assets\"/>" +
+                     kLight + kShapeRefRed));
+    std::string msg = load_file_error(dir / "late-include.xml");
+    EXPECT_TRUE(contains(msg, "late-include.xml:4:1:")) << msg;
+    EXPECT_TRUE(contains(msg, "included file \"red.xml\" not found (searched: " + dir.string()))
+        << msg;
+
+    // The latest <path> is searched first.
+    fs::create_directories(dir / "blue");
+    write_text(dir / "blue" / "red.xml",
+               scene("<bsdf type=\"diffuse\" id=\"red\"><rgb name=\"reflectance\" "
+                     "value=\"0.1,0.2,0.8\"/></bsdf>"));
+    write_text(dir / "two.xml",
+               scene("<path value=\"assets\"/><path value=\"blue\"/>" + sensor_xml() +
+                     "<include filename=\"red.xml\"/>" + kLight + kShapeRefRed));
+    write_text(
+        dir / "blue-native.xml",
+        scene(sensor_xml() + "<include filename=\"blue/red.xml\"/>" + kLight + kShapeRefRed));
+    expect_same_image(render_file(dir / "two.xml"), render_file(dir / "blue-native.xml"),
+                      "two <path>s", "the latest folder");
+
+    // A file found nowhere names the folders searched; a missing folder is located.
+    write_text(dir / "missing.xml",
+               scene("<path value=\"assets\"/>" + sensor_xml() + kLight +
+                     "<shape type=\"obj\">\n<string name=\"filename\" value=\"gone.obj\"/>"
+                     "</shape>\n"));
+    msg = load_file_error(dir / "missing.xml");
+    EXPECT_TRUE(contains(msg, "missing.xml:5:1: file \"gone.obj\" not found (searched: " +
+                                  (dir / "assets").string() + ", " + dir.string() + ")"))
+        << msg;
+    write_text(dir / "nofolder.xml", scene("\n<path value=\"nowhere\"/>" + sensor_xml() + kRedBsdf +
+                                           kShapeRefRed + kLight));
+    msg = load_file_error(dir / "nofolder.xml");
+    EXPECT_TRUE(contains(msg, "nofolder.xml:3:1: <path>: folder \"nowhere\" not found")) << msg;
+    write_text(dir / "file.xml", scene("<path value=\"assets/quad.obj\"/>"));
+    EXPECT_TRUE(contains(load_file_error(dir / "file.xml"), "is not a folder"));
+    msg = load_error(scene("<shape type=\"rectangle\">\n<path value=\".\"/></shape>"));
+    EXPECT_TRUE(contains(msg, "<string>:3:1: <path> can only be a child of <scene>")) << msg;
+    fs::remove_all(dir);
+}
+
+// 5: $parameters in an <include>'s file name, from -D or an earlier <default>.
+TEST(MitsubaSyntax, ParametersInIncludeFileNames) {
+    const auto dir = femto::testing::temp_dir("mitsuba-include-param");
+    fs::create_directories(dir / "parts");
+    fs::create_directories(dir / "other");
+    write_text(dir / "parts" / "red.xml", scene(kRedBsdf));
+    write_text(dir / "other" / "red.xml",
+               scene("<bsdf type=\"diffuse\" id=\"red\"><rgb name=\"reflectance\" "
+                     "value=\"0.1,0.9,0.1\"/></bsdf>"));
+    write_text(dir / "param.xml",
+               scene("<default name=\"dir\" value=\"parts\"/>" + sensor_xml() +
+                     "<include filename=\"$dir/red.xml\"/>" + kLight + kShapeRefRed));
+    expect_same_image(render_file(dir / "param.xml"), render_string(native_scene()), "$dir/red.xml",
+                      "native");
+    LoadOptions opt;
+    opt.defines = {{"dir", "other"}};
+    write_text(
+        dir / "other-native.xml",
+        scene(sensor_xml() + "<include filename=\"other/red.xml\"/>" + kLight + kShapeRefRed));
+    expect_same_image(render_file(dir / "param.xml", opt), render_file(dir / "other-native.xml"),
+                      "-D dir=other", "other/red.xml");
+    write_text(dir / "undefined.xml",
+               scene(sensor_xml() + "\n<include filename=\"$nowhere/red.xml\"/>" + kShapeRefRed));
+    const std::string msg = load_file_error(dir / "undefined.xml");
+    EXPECT_TRUE(contains(msg, "undefined.xml:4:1: parameter $nowhere is not defined")) << msg;
+    EXPECT_TRUE(contains(msg, "before this <include>")) << msg;
+    fs::remove_all(dir);
 }

@@ -330,6 +330,15 @@ public:
         }
     }
 
+    // A file a plugin reads: a name found nowhere is reported here, with the folders tried.
+    std::string find_input_file(const XmlNode& c, const std::string& name) const {
+        const FileSearch found = find_file(c, name, search_dirs_);
+        if (!found.found && !found.searched.empty())
+            throw SceneError(c.location, fmt::format("file \"{}\" not found (searched: {})", name,
+                                                     join(found.searched)));
+        return found.path;
+    }
+
     void register_id(const std::string& id, const ObjectPtr& obj, const XmlNode& node) {
         if (id.empty()) throw SceneError(node.location, "empty id");
         if (!ids_.emplace(id, obj).second)
@@ -418,7 +427,7 @@ public:
         } else if (c.tag == "string") {
             check_attributes(c, {"name", "value"});
             std::string v = require_attr(c, "value");
-            if (name == "filename" && !v.empty()) v = resolve_path(c, v);
+            if (name == "filename" && !v.empty()) v = find_input_file(c, v);
             props.set(name, Properties::Type::String, v, c.location);
         } else if (c.tag == "point" || c.tag == "vector") {
             check_attributes(c, {"name", "value", "x", "y", "z"});
@@ -435,6 +444,7 @@ public:
 
     std::unique_ptr<Scene> build_scene(const XmlNode& root) {
         check_attributes(root, {"version"});
+        search_dirs_ = root.search_dirs;
         std::shared_ptr<Integrator> integrator;
         std::shared_ptr<Sensor> sensor;
         std::vector<std::shared_ptr<Shape>> shapes;
@@ -493,6 +503,7 @@ public:
 private:
     const LoadOptions& options_;
     std::map<std::string, ObjectPtr> ids_;
+    std::vector<std::string> search_dirs_;  // the scene's <path> folders
 };
 
 }  // namespace
