@@ -205,3 +205,48 @@ TEST(MitsubaSyntax, ParametersInIncludeFileNames) {
     EXPECT_TRUE(contains(msg, "before this <include>")) << msg;
     fs::remove_all(dir);
 }
+
+// 3: a <ref> may name an object written after it; undefined ids and cycles are located errors.
+TEST(MitsubaSyntax, ForwardReferences) {
+    expect_same_image(render_string(scene(sensor_xml() + kShapeRefRed + kLight + kRedBsdf)),
+                      render_string(native_scene()), "forward <ref>", "object first");
+    // Through an alias written later, and to an object nested in a later one.
+    expect_same_image(
+        render_string(scene(sensor_xml() + "<shape type=\"rectangle\"><ref id=\"b\"/></shape>" +
+                            kLight + "<bsdf type=\"twosided\" id=\"outer\">" + kRedBsdf +
+                            "</bsdf><alias id=\"red\" as=\"b\"/>")),
+        render_string(native_scene()), "forward alias of a nested object", "object first");
+
+    std::string msg = load_error(scene(sensor_xml() +
+                                       "<shape type=\"rectangle\">\n<ref id=\"rd\"/>"
+                                       "</shape>" +
+                                       kRedBsdf + kLight));
+    EXPECT_TRUE(contains(msg,
+                         "<string>:4:1: no object with id \"rd\" is defined in the scene "
+                         "(did you mean \"red\"?)"))
+        << msg;
+    msg = load_error(scene(sensor_xml() + kShapeRefRed +
+                           "<bsdf type=\"twosided\" id=\"red\"><ref id=\"b\"/></bsdf>\n"
+                           "<bsdf type=\"twosided\" id=\"b\">\n<ref id=\"red\"/></bsdf>"));
+    EXPECT_TRUE(contains(msg,
+                         "<string>:6:1: reference cycle: \"red\" (<string>:4:1) -> \"b\" "
+                         "(<string>:5:1) -> \"red\""))
+        << msg;
+    msg = load_error(scene(sensor_xml() +
+                           "<bsdf type=\"twosided\" id=\"me\">\n<ref id=\"me\"/>"
+                           "</bsdf>" +
+                           kLight));
+    EXPECT_TRUE(contains(msg, "<string>:4:1: reference cycle: \"me\" (<string>:3:1) -> \"me\""))
+        << msg;
+
+    // A long chain of forward references is refused, not a stack overflow.
+    std::string chain;
+    const int n = 3000;
+    for (int i = 0; i < n; ++i)
+        chain += "<bsdf type=\"twosided\" id=\"b" + std::to_string(i) + "\"><ref id=\"b" +
+                 std::to_string(i + 1) + "\"/></bsdf>\n";
+    chain += "<bsdf type=\"diffuse\" id=\"b" + std::to_string(n) + "\"/>\n";
+    msg = load_error(scene(sensor_xml() + chain + kLight));
+    EXPECT_TRUE(contains(msg, "nest more than 1000 levels deep")) << msg;
+    EXPECT_TRUE(contains(msg, "<string>:")) << msg;
+}

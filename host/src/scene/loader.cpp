@@ -263,9 +263,17 @@ class Instantiator {
 public:
     explicit Instantiator(const LoadOptions& options) : options_(options) {}
 
+    // An object is built once: where it is written, or earlier when a reference needs it.
     ObjectPtr build(const XmlNode& node, PluginKind kind) {
+        if (auto it = built_.find(&node); it != built_.end()) return it->second;
         check_attributes(node, {"type", "id", "name"});
         const std::string& type = require_attr(node, "type");
+        if (building_.size() >= kMaxBuildDepth)
+            throw SceneError(node.location,
+                             fmt::format("objects and the references they follow nest more than "
+                                         "{} levels deep",
+                                         kMaxBuildDepth));
+        building_.push_back(&node);
         Properties props(type, node.location);
         if (const std::string* id = node.attribute("id")) props.set_id(*id);
         int arg_index = 0;
@@ -275,7 +283,8 @@ public:
         check_schema(props, desc, node);
         ObjectPtr obj = construct(desc, props, node);
         report_unread(props, node);
-        if (const std::string* id = node.attribute("id")) register_id(*id, obj, node);
+        building_.pop_back();
+        built_.emplace(&node, obj);
         return obj;
     }
 
@@ -339,24 +348,70 @@ public:
         return found.path;
     }
 
-    void register_id(const std::string& id, const ObjectPtr& obj, const XmlNode& node) {
-        if (id.empty()) throw SceneError(node.location, "empty id");
-        if (!ids_.emplace(id, obj).second)
-            throw SceneError(node.location, fmt::format("id \"{}\" is defined twice", id));
+    // Every id of the scene, before anything is built: a reference may name an object
+    // written after it (Mitsuba 3 resolves references once the whole file is read).
+    void index_ids(const XmlNode& node) {
+        for (const auto& c : node.children) {
+            PluginKind kind;
+            if (c.tag == "alias" && &node == root_) {
+                check_attributes(c, {"id", "as"});
+                check_no_children(c);
+                add_id(require_attr(c, "as"), c, require_attr(c, "id"));
+            } else if (kind_from_tag(c.tag, kind)) {
+                if (const std::string* id = c.attribute("id")) add_id(*id, c, {});
+                index_ids(c);
+            }
+        }
     }
 
+    void add_id(const std::string& id, const XmlNode& node, const std::string& alias_of) {
+        if (id.empty()) throw SceneError(node.location, "empty id");
+        const auto [it, fresh] = ids_.emplace(id, IdTarget{&node, alias_of});
+        if (!fresh)
+            throw SceneError(node.location, fmt::format("id \"{}\" is defined twice (first at {})",
+                                                        id, it->second.node->location.str()));
+    }
+
+    // The object `node` (a <ref> or an <alias>) names by its id, built now if need be.
     ObjectPtr resolve(const XmlNode& node) {
-        const std::string& id = require_attr(node, "id");
-        auto it = ids_.find(id);
-        if (it == ids_.end()) {
-            std::vector<std::string> known;
-            for (const auto& [k, v] : ids_) known.push_back(k);
-            throw SceneError(node.location,
-                             fmt::format("no object with id \"{}\" is defined before "
-                                         "this reference{}",
-                                         id, did_you_mean(id, known)));
+        std::string id = require_attr(node, "id");
+        for (size_t hops = 0;; ++hops) {
+            auto it = ids_.find(id);
+            if (it == ids_.end()) {
+                std::vector<std::string> known;
+                for (const auto& [k, v] : ids_) known.push_back(k);
+                throw SceneError(node.location,
+                                 fmt::format("no object with id \"{}\" is defined in the "
+                                             "scene{}",
+                                             id, did_you_mean(id, known)));
+            }
+            const IdTarget& target = it->second;
+            if (target.alias_of.empty()) {
+                PluginKind kind;
+                kind_from_tag(target.node->tag, kind);
+                refuse_cycle(*target.node, id, node);
+                return build(*target.node, kind);
+            }
+            if (hops > ids_.size())
+                throw SceneError(node.location,
+                                 fmt::format("the aliases of \"{}\" form a cycle", id));
+            id = target.alias_of;
         }
-        return it->second;
+    }
+
+    // A reference to an object still being built (itself or one holding it) can never be
+    // satisfied; the message lists the chain of ids.
+    void refuse_cycle(const XmlNode& target, const std::string& id, const XmlNode& ref) const {
+        auto it = std::find(building_.begin(), building_.end(), &target);
+        if (it == building_.end()) return;
+        std::string chain;
+        for (; it != building_.end(); ++it)
+            if (const std::string* i = (*it)->attribute("id"))
+                chain += fmt::format("\"{}\" ({}) -> ", *i, (*it)->location.str());
+        throw SceneError(ref.location,
+                         fmt::format("reference cycle: {}\"{}\": an object cannot contain "
+                                     "itself",
+                                     chain, id));
     }
 
     // A name given twice in one object is a mistake whichever value was meant (Mitsuba 3
@@ -449,12 +504,11 @@ public:
         std::shared_ptr<Sensor> sensor;
         std::vector<std::shared_ptr<Shape>> shapes;
         std::vector<std::shared_ptr<Emitter>> emitters;
+        root_ = &root;
+        index_ids(root);
         for (const auto& c : root.children) {
             if (c.tag == "alias") {
-                check_attributes(c, {"id", "as"});
-                check_no_children(c);
-                ObjectPtr obj = resolve(c);
-                register_id(require_attr(c, "as"), obj, c);
+                resolve(c);  // the object it names must exist
                 continue;
             }
             PluginKind kind;
@@ -501,8 +555,19 @@ public:
     }
 
 private:
+    // Bounds the recursion through nested objects and the references they follow, so that a
+    // long chain of forward references cannot overflow the stack.
+    static constexpr size_t kMaxBuildDepth = 1000;
+    struct IdTarget {
+        const XmlNode* node;   // the object, or the <alias>
+        std::string alias_of;  // for an <alias>: the id it stands for
+    };
+
     const LoadOptions& options_;
-    std::map<std::string, ObjectPtr> ids_;
+    const XmlNode* root_ = nullptr;
+    std::map<std::string, IdTarget> ids_;
+    std::map<const XmlNode*, ObjectPtr> built_;
+    std::vector<const XmlNode*> building_;  // objects under construction, outermost first
     std::vector<std::string> search_dirs_;  // the scene's <path> folders
 };
 
