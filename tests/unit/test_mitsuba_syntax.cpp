@@ -250,3 +250,77 @@ TEST(MitsubaSyntax, ForwardReferences) {
     EXPECT_TRUE(contains(msg, "nest more than 1000 levels deep")) << msg;
     EXPECT_TRUE(contains(msg, "<string>:")) << msg;
 }
+
+// 4: name= on objects: the slot in the scene (accepted, unique) or the parameter it binds to.
+TEST(MitsubaSyntax, NamesOnObjects) {
+    const std::string named_bsdf =
+        "<bsdf type=\"diffuse\" id=\"red\" name=\"red\"><rgb name=\"reflectance\" "
+        "value=\"0.8,0.2,0.1\"/></bsdf>\n";
+    const std::string named_sensor =
+        "<sensor type=\"perspective\" name=\"sensor\"><float name=\"fov\" value=\"60\"/>"
+        "<transform name=\"to_world\"><lookat origin=\"0,0,4\" target=\"0,0,0\" "
+        "up=\"0,1,0\"/></transform><sampler type=\"independent\" name=\"sampler\"><integer "
+        "name=\"sample_count\" value=\"4\"/></sampler><film type=\"hdrfilm\" name=\"film\">"
+        "<integer name=\"width\" value=\"16\"/><integer name=\"height\" value=\"16\"/><rfilter "
+        "type=\"box\" name=\"rfilter\"/></film></sensor>\n";
+    expect_same_image(render_string(scene(named_sensor + named_bsdf + kShapeRefRed + kLight)),
+                      render_string(native_scene()), "named objects", "unnamed");
+
+    std::string msg =
+        load_error(scene(sensor_xml() + named_bsdf + "\n<bsdf type=\"diffuse\" name=\"red\"/>" +
+                         kShapeRefRed + kLight));
+    EXPECT_TRUE(contains(msg,
+                         "<string>:5:1: name \"red\" is given to two objects of the scene "
+                         "(first at <string>:3:1)"))
+        << msg;
+    // A nested name is the parameter the object binds to: it must take that kind.
+    msg =
+        load_error(scene("<sensor type=\"perspective\">\n<film type=\"hdrfilm\" "
+                         "name=\"sampler\"/></sensor>" +
+                         kLight));
+    EXPECT_TRUE(contains(msg,
+                         "<string>:3:1: <film> named \"sampler\": parameter \"sampler\" of "
+                         "<sensor type=\"perspective\"> takes sampler, not a <film>"))
+        << msg;
+    msg = load_error(scene(sensor_xml() +
+                           "<shape type=\"rectangle\">\n<bsdf type=\"diffuse\" "
+                           "name=\"to_world\"/></shape>" +
+                           kLight));
+    EXPECT_TRUE(contains(msg,
+                         "<string>:4:1: <bsdf> named \"to_world\": parameter \"to_world\" of "
+                         "<shape type=\"rectangle\"> takes transform"))
+        << msg;
+}
+
+// 6: properties written directly in <scene> are Mitsuba's acceleration settings: accepted
+// (femto builds its own BVH); other names are unknown parameters.
+TEST(MitsubaSyntax, SceneLevelProperties) {
+    const std::string settings =
+        "<integer name=\"kd_max_depth\" value=\"20\"/><float name=\"kd_traversal_cost\" "
+        "value=\"10\"/><boolean name=\"embree_use_robust_intersections\" value=\"true\"/>";
+    const int warnings = warning_count();
+    expect_same_image(
+        render_string(scene(settings + sensor_xml() + kRedBsdf + kShapeRefRed + kLight)),
+        render_string(native_scene()), "scene properties", "none");
+    // 0.6's camelCase names are upgraded like any other parameter.
+    EXPECT_NO_THROW(load_scene_string(scene("<boolean name=\"kdParallelBuild\" value=\"true\"/>" +
+                                                sensor_xml() + kShapeRefRed + kRedBsdf + kLight,
+                                            "0.6.0")));
+    EXPECT_EQ(warning_count(), warnings);  // notes, not warnings
+
+    const std::string unknown = scene("\n<integer name=\"kd_max_dept\" value=\"3\"/>" +
+                                      sensor_xml() + kRedBsdf + kShapeRefRed + kLight);
+    std::string msg = load_error(unknown);
+    EXPECT_TRUE(contains(msg,
+                         "<string>:3:1: <scene> has no property \"kd_max_dept\" (did you "
+                         "mean \"kd_max_depth\"?)"))
+        << msg;
+    LoadOptions lenient;
+    lenient.lenient = true;
+    EXPECT_NO_THROW(load_scene_string(unknown, lenient));
+    EXPECT_EQ(warning_count(), warnings + 1);
+    msg = load_error(scene("\n<float name=\"kd_clip\" value=\"1\"/>" + sensor_xml() + kRedBsdf +
+                           kShapeRefRed + kLight));
+    EXPECT_TRUE(contains(msg, "<string>:3:1: scene property \"kd_clip\" must be a <boolean>"))
+        << msg;
+}

@@ -316,13 +316,38 @@ public:
         }
         for (const auto& e : props.entries()) {
             if (e.name.rfind("_arg_", 0) == 0) continue;
-            if (std::find(names.begin(), names.end(), e.name) != names.end()) continue;
+            if (auto it = std::find(names.begin(), names.end(), e.name); it != names.end()) {
+                if (e.type == Properties::Type::Object)
+                    check_object_fits(e, desc.params[size_t(it - names.begin())], desc, node);
+                continue;
+            }
             const std::string msg = fmt::format(
                 "<{} type=\"{}\"> has no parameter \"{}\"{}; valid: {}", node.tag, desc.type_name,
                 e.name, did_you_mean(e.name, names), names.empty() ? "(none)" : join(names));
             reject_unless_lenient(options_.lenient, e.location, msg);
             e.read = true;  // reported already; the plugin never sees it read
         }
+    }
+
+    // An object's name is the parameter it binds to, so the parameter must take an object of
+    // its kind ("color|texture" takes a <texture>, "film" a <film>).
+    static void check_object_fits(const Properties::Entry& e, const ParamSpec& spec,
+                                  const PluginDescriptor& desc, const XmlNode& node) {
+        const ObjectPtr& obj = std::get<ObjectPtr>(e.value);
+        if (!obj) return;
+        const std::string types = spec.type;
+        size_t begin = 0;
+        while (begin <= types.size()) {
+            const size_t end = std::min(types.find('|', begin), types.size());
+            if (types.compare(begin, end - begin, kind_tag(obj->kind())) == 0) return;
+            begin = end + 1;
+        }
+        throw SceneError(
+            e.location, fmt::format("<{}> named \"{}\": parameter \"{}\" of <{} type=\"{}\"> "
+                                    "takes {}, not a <{}> (an object's name is the parameter "
+                                    "it binds to)",
+                                    kind_tag(obj->kind()), e.name, e.name, node.tag, desc.type_name,
+                                    types, kind_tag(obj->kind())));
     }
 
     void report_unread(const Properties& props, const XmlNode& node) {
@@ -506,18 +531,35 @@ public:
         std::vector<std::shared_ptr<Emitter>> emitters;
         root_ = &root;
         index_ids(root);
+        Properties scene_props("scene", root.location);
+        std::map<std::string, SourceLocation> object_names;
+        int arg_index = 0;
         for (const auto& c : root.children) {
             if (c.tag == "alias") {
                 resolve(c);  // the object it names must exist
                 continue;
             }
+            if (kPropertyTags.count(c.tag)) {
+                add_child(scene_props, c, arg_index);
+                continue;
+            }
             PluginKind kind;
             if (!kind_from_tag(c.tag, kind))
                 throw SceneError(c.location,
-                                 fmt::format("unknown tag <{}> in <scene>; valid: {} alias", c.tag,
-                                             kObjectTags));
-            if (c.attribute("name"))
-                throw SceneError(c.location, "top-level objects take no name attribute");
+                                 fmt::format("unknown tag <{}> in <scene>; valid: {} alias path "
+                                             "and the property tags",
+                                             c.tag, kObjectTags));
+            // Mitsuba 3 keys the scene's children by name: a name is accepted (it has no
+            // meaning for femto's scene) but must be unique, as Mitsuba requires.
+            if (const std::string* name = c.attribute("name")) {
+                if (name->empty()) throw SceneError(c.location, "empty name");
+                const auto [it, fresh] = object_names.emplace(*name, c.location);
+                if (!fresh)
+                    throw SceneError(c.location,
+                                     fmt::format("name \"{}\" is given to two objects of the "
+                                                 "scene (first at {})",
+                                                 *name, it->second.str()));
+            }
             ObjectPtr obj = build(c, kind);
             switch (kind) {
                 case PluginKind::Integrator:
@@ -545,6 +587,7 @@ public:
                     break;
             }
         }
+        check_scene_properties(scene_props);
         if (!sensor) throw SceneError(root.location, "the scene has no <sensor>: add a camera");
         if (shapes.empty() && emitters.empty())
             throw SceneError(root.location, "the scene is empty: it has no shapes and no emitters");
@@ -552,6 +595,53 @@ public:
             integrator = std::static_pointer_cast<Integrator>(
                 create_default(PluginKind::Integrator, "path", root.location));
         return std::make_unique<Scene>(integrator, sensor, std::move(shapes), std::move(emitters));
+    }
+
+    // Properties written directly in <scene>: Mitsuba's scene reads only the settings of its
+    // acceleration structure (0.6 and 3's kd-tree, 3's Embree), which femto's own Embree BVH
+    // has no use for. They are accepted with a note; any other name is an unknown parameter.
+    void check_scene_properties(const Properties& props) const {
+        static const std::map<std::string, Properties::Type> kKnown = {
+            {"kd_intersection_cost", Properties::Type::Float},
+            {"kd_traversal_cost", Properties::Type::Float},
+            {"kd_empty_space_bonus", Properties::Type::Float},
+            {"kd_stop_prims", Properties::Type::Integer},
+            {"kd_max_depth", Properties::Type::Integer},
+            {"kd_exact_primitive_threshold", Properties::Type::Integer},
+            {"kd_min_max_bins", Properties::Type::Integer},
+            {"kd_max_bad_refines", Properties::Type::Integer},
+            {"kd_clip", Properties::Type::Bool},
+            {"kd_retract", Properties::Type::Bool},
+            {"kd_retract_bad_splits", Properties::Type::Bool},
+            {"kd_parallel_build", Properties::Type::Bool},
+            {"embree_use_robust_intersections", Properties::Type::Bool},
+        };
+        std::vector<std::string> names;
+        for (const auto& [k, v] : kKnown) names.push_back(k);
+        for (const auto& e : props.entries()) {
+            auto it = kKnown.find(e.name);
+            if (it == kKnown.end()) {
+                reject_unless_lenient(
+                    options_.lenient, e.location,
+                    fmt::format("<scene> has no property \"{}\"{}; valid (Mitsuba's "
+                                "acceleration settings, which femto ignores): {}",
+                                e.name, did_you_mean(e.name, names), join(names)));
+                continue;
+            }
+            const bool number =
+                it->second == Properties::Type::Float && e.type == Properties::Type::Integer;
+            if (e.type != it->second && !number)
+                throw SceneError(
+                    e.location,
+                    fmt::format("scene property \"{}\" must be {}", e.name,
+                                it->second == Properties::Type::Bool      ? "a <boolean>"
+                                : it->second == Properties::Type::Integer ? "an <integer>"
+                                                                          : "a <float>"));
+            log_note(e.location, fmt::format("femto ignores scene property \"{}\" (it tunes "
+                                             "Mitsuba's acceleration structure; femto builds "
+                                             "an Embree BVH)",
+                                             e.name));
+        }
     }
 
 private:
