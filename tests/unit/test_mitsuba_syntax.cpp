@@ -324,3 +324,48 @@ TEST(MitsubaSyntax, SceneLevelProperties) {
     EXPECT_TRUE(contains(msg, "<string>:3:1: scene property \"kd_clip\" must be a <boolean>"))
         << msg;
 }
+
+// 7, 8: film and camera parameters of Mitsuba 0.6 and 3 that change nothing in femto's image.
+TEST(MitsubaSyntax, AcceptedFilmAndCameraParameters) {
+    const std::string film =
+        "<boolean name=\"banner\" value=\"true\"/><boolean name=\"high_quality_edges\" "
+        "value=\"true\"/><string name=\"component_format\" value=\"float16\"/>";
+    const std::string camera = "<float name=\"focus_distance\" value=\"3\"/>";
+    expect_same_image(
+        render_string(scene(sensor_xml(camera, film) + kRedBsdf + kShapeRefRed + kLight)),
+        render_string(native_scene()), "banner, high_quality_edges, focus_distance", "native");
+    const std::string msg = load_error(scene(
+        sensor_xml("", "\n<string name=\"component_format\" value=\"int8\"/>") + kShapeRefRed));
+    EXPECT_TRUE(contains(msg, "<string>:3:1:")) << msg;
+    EXPECT_TRUE(contains(msg, "component_format must be float16, float32 or uint32")) << msg;
+}
+
+// 8: Mitsuba 3's principal point offset: a pixel looks where the pixel `offset` image widths
+// (heights) further used to, so the optical axis moves from the image centre to
+// (0.5 - offset_x) W, (0.5 - offset_y) H.
+TEST(MitsubaSyntax, PrincipalPointOffsetMovesTheOpticalAxis) {
+    const double ox = 0.25, oy = -0.125;
+    const std::string camera =
+        "<float name=\"principal_point_offset_x\" value=\"0.25\"/>"
+        "<float name=\"principal_point_offset_y\" value=\"-0.125\"/>";
+    auto shifted = load_scene_string(scene(sensor_xml(camera) + kRedBsdf + kShapeRefRed + kLight));
+    auto centred = load_scene_string(native_scene());
+    const Sensor& s = shifted->sensor();
+    const Sensor& c = centred->sensor();
+    const float W = 16, H = 16;
+    // The camera looks down -z from z = 4: the optical axis is (0, 0, -1).
+    const Ray axis = s.sample_ray({float((0.5 - ox) * W), float((0.5 - oy) * H)}, {0.5f, 0.5f});
+    EXPECT_NEAR(axis.d.x, 0.f, 1e-6f);
+    EXPECT_NEAR(axis.d.y, 0.f, 1e-6f);
+    EXPECT_NEAR(axis.d.z, -1.f, 1e-6f);
+    const Ray centre = c.sample_ray({W / 2, H / 2}, {0.5f, 0.5f});
+    EXPECT_NEAR(centre.d.z, -1.f, 1e-6f);
+    // Every other pixel moves by the same offset.
+    for (const Vec2 p : {Vec2{1.5f, 2.5f}, Vec2{13.f, 7.25f}}) {
+        const Ray a = s.sample_ray(p, {0.5f, 0.5f});
+        const Ray b = c.sample_ray({p.x + float(ox * W), p.y + float(oy * H)}, {0.5f, 0.5f});
+        EXPECT_NEAR(a.d.x, b.d.x, 1e-6f);
+        EXPECT_NEAR(a.d.y, b.d.y, 1e-6f);
+        EXPECT_NEAR(a.d.z, b.d.z, 1e-6f);
+    }
+}
