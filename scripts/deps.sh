@@ -5,7 +5,7 @@ set -euo pipefail
 PACKAGES=(
   g++ cmake ninja-build pkg-config git
   libembree-dev libtbb-dev libpugixml-dev libfmt-dev libcli11-dev libtinyobjloader-dev
-  libopenimageio-dev openimageio-tools libopenexr-dev libopencolorio-dev
+  libopenimageio-dev openimageio-tools libopenexr-dev libopencolorio-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-matplotlib
 )

@@ -21,4 +21,4 @@ ctest --test-dir build --output-on-failure -j "$JOBS"
 cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFEMTO_TESTS=ON -DFEMTO_SANITIZE=ON
 cmake --build build-sanitize -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j "$JOBS" \
-  -R '^(Mutation|Loader|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^StreakFilm\.EqualsTransientRowsKernel|^cli\.(bad|unknown|missing|unwritable|compat)' 
+  -R '^(Mutation|Loader|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^StreakFilm\.EqualsTransientRowsKernel|^cli\.(bad|unknown|missing|unwritable|compat)' 

@@ -20,10 +20,10 @@ public:
                 femto::ContributionList& out) const override {
         // The clock applies femto's time rules: the first vertex's distance is the sensor
         // distance (world-time films and depth need it), and the value lands at its time.
-        femto::PathClock clock(scene, out);
+        femto::PathClock clock(scene, out, ray.o);
         femto::Hit hit;
         if (!scene.intersect(ray, hit)) return;
-        clock.travel(hit.t, 1.0);
+        clock.travel_to(hit.p, 1.0);
         clock.reach_vertex();
         // Occlusion is measured on the side the camera sees.
         const femto::Vec3 n = femto::dot(hit.ng, ray.d) < 0 ? hit.ng : -hit.ng;

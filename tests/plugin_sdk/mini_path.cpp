@@ -26,16 +26,16 @@ public:
 
     void sample(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
                 ContributionList& out) const override {
-        PathClock clock(scene, out);  // time: optical length, delays, emission, window
-        Throughput beta;              // path weight, colour transfers included
-        MediumTracker index;          // refractive index (dielectrics change it)
+        PathClock clock(scene, out, camera_ray.o);  // time: optical length, delays, emission
+        Throughput beta;                            // path weight, colour transfers included
+        MediumTracker index;                        // refractive index (dielectrics change it)
         Ray ray = camera_ray;
         float bsdf_pdf = 0.f;  // density of the direction that led here (0: a delta, or camera)
         Vec3 from;
         for (int64_t depth = 1;; ++depth) {
             Hit hit;
             if (!scene.intersect(ray, hit)) return;
-            clock.travel(hit.t, index.eta());
+            clock.travel_to(hit.p, index.eta());  // from the last vertex, not the ray origin
             const Bsdf& bsdf = *hit.shape->bsdf();
             if (!bsdf.is_null()) clock.reach_vertex();
             if (clock.expired()) return;

@@ -13,9 +13,9 @@ public:
     explicit ConstantPath(const femto::Properties& props)
         : value_(float(props.get_float("value", SHADOW_VALUE))) {}
 
-    void sample(const femto::Scene& scene, femto::Sampler&, const femto::Ray&,
+    void sample(const femto::Scene& scene, femto::Sampler&, const femto::Ray& ray,
                 femto::ContributionList& out) const override {
-        femto::PathClock clock(scene, out);
+        femto::PathClock clock(scene, out, ray.o);
         clock.record(femto::Color(value_));
     }
 

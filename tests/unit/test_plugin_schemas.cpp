@@ -5,6 +5,7 @@
 // round) fails here instead of misleading a user of `femto plugins NAME` or docs/plugins.md.
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -65,6 +66,26 @@ bool same_default(const std::string& schema, const std::string& used) {
     return true;
 }
 
+// A Mitsuba .serialized file (version 4, single precision) of one triangle.
+void write_serialized_triangle(const fs::path& path) {
+    std::string body;
+    auto put = [&](const auto& v) { body.append(reinterpret_cast<const char*>(&v), sizeof v); };
+    put(uint32_t(0x1000));
+    body += '\0';  // the mesh's name
+    put(uint64_t(3)), put(uint64_t(1));
+    for (const float c : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put(c);
+    for (const uint32_t i : {0u, 1u, 2u}) put(i);
+    uLongf size = compressBound(uLong(body.size()));
+    std::string packed(size, '\0');
+    compress(reinterpret_cast<Bytef*>(packed.data()), &size,
+             reinterpret_cast<const Bytef*>(body.data()), uLong(body.size()));
+    packed.resize(size);
+    std::ofstream out(path, std::ios::binary);
+    const uint16_t header[2] = {0x041C, 4};
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+    out.write(packed.data(), std::streamsize(packed.size()));
+}
+
 // Small input files for the plugins that read one.
 struct Inputs {
     fs::path dir;
@@ -78,6 +99,7 @@ struct Inputs {
                                           "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
         std::ofstream(dir / "pixel.ppm", std::ios::binary) << "P6\n1 1\n255\n"
                                                            << std::string("\x80\x80\x80", 3);
+        write_serialized_triangle(dir / "tri.serialized");
         femto::test::VolFile vol;
         vol.data = {1.f};
         femto::test::write_bytes(dir / "density.vol", vol.bytes());
@@ -99,6 +121,8 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
     return {
         {"shape obj", [&](Properties& p) { p.set_string("filename", in("tri.obj")); }},
         {"shape ply", [&](Properties& p) { p.set_string("filename", in("tri.ply")); }},
+        {"shape serialized",
+         [&](Properties& p) { p.set_string("filename", in("tri.serialized")); }},
         {"texture bitmap", [&](Properties& p) { p.set_string("filename", in("pixel.ppm")); }},
         {"medium heterogeneous",
          [&](Properties& p) { p.set_string("density", in("density.vol")); }},

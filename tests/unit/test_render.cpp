@@ -52,6 +52,30 @@ TEST(Render, FurnaceMatchesGeometricSeries) {
     }
 }
 
+TEST(Render, WorldTimeWindowEndsUnboundedPaths) {
+    // In a closed sphere nothing but the film's window ends a path of transient_path with
+    // max_depth -1 (no roulette). In world time the window's end is known in camera time only
+    // from the first vertex on (end + sensor distance): the render must finish, and equal the
+    // one with a depth limit far beyond the window (paths of 200 segments of >= 0.1 in a
+    // sphere of radius 3 outlast a window of 10), with the same random numbers.
+    auto scene_with = [](int depth) {
+        std::string xml = furnace_scene(
+            0.9, 1.0,
+            "<integrator type=\"transient_path\"><integer name=\"max_depth\" value=\"" +
+                std::to_string(depth) + "\"/></integrator>");
+        const std::string steady = "<film type=\"hdrfilm\">";
+        xml.replace(xml.find(steady), steady.size(),
+                    "<film type=\"transient\"><float name=\"bin_width\" value=\"0.5\"/>"
+                    "<integer name=\"bins\" value=\"20\"/><boolean name=\"world_time\" "
+                    "value=\"true\"/>");
+        return load_scene_string(xml);
+    };
+    auto unbounded = scene_with(-1), bounded = scene_with(200);
+    femto::testing::expect_same_image(femto::testing::render_steady(*bounded, 3),
+                                      femto::testing::render_steady(*unbounded, 3), "max_depth 200",
+                                      "max_depth -1");
+}
+
 TEST(Render, PointLightOverLambertianPlane) {
     // L(x) = rho/pi * I * cos(theta) / d^2 with cos(theta) = h/d, viewed orthographically.
     const double I = 5, h = 1.5, rho = 0.6;

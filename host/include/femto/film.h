@@ -115,8 +115,12 @@ public:
     virtual uint32_t pilot_samples() const { return 0; }
     virtual void begin_pilot() {}
     virtual void end_pilot() {}
-    /// Latest path length (scene units) this film records; paths beyond it may stop.
+    /// Latest path length (scene units, camera time) this film records; paths beyond it may
+    /// stop.
     virtual double max_time() const;
+    /// Latest world time (camera time minus the sensor distance) this film records, for a
+    /// film in world time; infinite otherwise.
+    virtual double max_world_time() const;
     /// Bytes a block keeps per pixel of its area, when that is as much as the film keeps per
     /// pixel (a transient film's blocks hold every bin); 0 when blocks are small. The renderer
     /// then picks tiles small enough that blocks in flight stay a small share of the film's

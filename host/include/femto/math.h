@@ -16,8 +16,11 @@ inline constexpr float kPi = 3.14159265358979323846f;
 inline constexpr float kInvPi = 0.31830988618379067154f;
 inline constexpr float kInvTwoPi = 0.15915494309189533577f;
 inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
-/// Relative offset used to move ray origins off surfaces (scaled by the hit's magnitude).
-inline constexpr float kRayEpsilon = 1e-4f;
+/// How far a ray leaving a surface starts off it, as a fraction of the magnitude of the
+/// coordinates its hit point was computed from (Hit::p_error; docs/precision.md): 64 float
+/// ulps, a few times the rounding of the hit point and of Embree's intersection test, and
+/// scale-free, so a scene behaves the same at every size.
+inline constexpr float kRayOffsetScale = 64.f * std::numeric_limits<float>::epsilon() / 2.f;
 
 struct Vec2 {
     float x = 0, y = 0;
@@ -108,10 +111,23 @@ struct Ray {
     Vec3 at(float t) const { return o + d * t; }
 };
 
-/// Origin offset along the geometric normal, so a ray leaving a surface does not re-hit it.
-inline Vec3 offset_origin(const Vec3& p, const Vec3& ng, const Vec3& dir) {
-    const float scale = kRayEpsilon * std::max(1.f, max_abs_component(p));
-    return p + ng * (dot(ng, dir) >= 0 ? scale : -scale);
+/// Origin offset by `offset` along the geometric normal, to the side `dir` leaves on, so a
+/// ray leaving a surface does not re-hit it (offset: Hit::p_error).
+inline Vec3 offset_origin(const Vec3& p, const Vec3& ng, const Vec3& dir, float offset) {
+    return p + ng * (dot(ng, dir) >= 0 ? offset : -offset);
+}
+
+/// Length of a shadow ray toward a light point `target` at distance `dist`: short of it by
+/// 1e-4 of the distance and by the point's own offset scale, so that it does not hit the
+/// surface the point lies on.
+inline float shadow_ray_length(float dist, const Vec3& target) {
+    return std::max(0.f, dist * (1.f - 1e-4f) - kRayOffsetScale * max_abs_component(target));
+}
+
+/// |b - a| in double: path lengths (time) are measured between the actual vertices.
+inline double distance_between(const Vec3& a, const Vec3& b) {
+    const double x = double(b.x) - a.x, y = double(b.y) - a.y, z = double(b.z) - a.z;
+    return std::sqrt(x * x + y * y + z * z);
 }
 
 template <typename T>

@@ -5,7 +5,8 @@
 // lets it do every time computation, so that each contribution lands at the right time and
 // every integrator follows the same rules:
 //   - time is optical length: a segment of length d at refractive index eta takes eta * d
-//     (travel());
+//     (travel_to()); d is measured between the vertices' actual positions, never from a
+//     spawned ray's origin, which starts a little off its surface (docs/precision.md);
 //   - materials and phase functions may hold light at a vertex (fluorescence): delay();
 //   - the first scattering vertex (a surface that is not `null`, or a medium vertex) fixes the
 //     sensor distance, which world-time films subtract (eq. 4.1) and store as the pixel's depth
@@ -26,21 +27,28 @@ namespace femto {
 
 class PathClock {
 public:
-    /// Starts a camera path at the sensor (time 0); contributions go to `out`.
-    PathClock(const Scene& scene, ContributionList& out)
-        : window_(scene.time_window()), out_(out) {}
+    /// Starts a camera path at the sensor point `origin` (the camera ray's origin) at time 0;
+    /// contributions go to `out`.
+    PathClock(const Scene& scene, ContributionList& out, const Vec3& origin)
+        : window_(scene.time_window()), out_(out), position_(origin) {}
 
     /// Optical length travelled so far plus the vertices' delays (scene units).
     double time() const { return time_; }
     const TimeWindow& window() const { return window_; }
     /// Optical length the path may still travel before nothing it carries can reach the film
     /// (infinite with a steady film; negative once expired).
-    double remaining() const { return window_.path_cut() - time_; }
+    double remaining() const { return cut() - time_; }
     /// True when the path is past the window: no light it could still carry arrives in time.
-    bool expired() const { return time_ > window_.path_cut(); }
+    bool expired() const { return time_ > cut(); }
 
-    /// The path travels `distance` at refractive index `eta`.
-    void travel(double distance, double eta) { time_ += distance * eta; }
+    /// Where the path is: its latest vertex (or the sensor point).
+    const Vec3& position() const { return position_; }
+    /// The path moves to its next vertex `p` (a surface hit's Hit::p, a point in a medium)
+    /// through a medium of refractive index `eta`: the time grows by eta * |p - position()|.
+    void travel_to(const Vec3& p, double eta) {
+        time_ += distance_between(position_, p) * eta;
+        position_ = p;
+    }
     /// A vertex holds the light for `delay` (VertexEvent::delay).
     void delay(double delay) { time_ += delay; }
     /// The path scatters here (a surface that is not `null`, or a medium vertex); the first
@@ -69,8 +77,12 @@ public:
     }
 
 private:
+    // In world time the cut moves with the sensor distance, known from the first vertex on.
+    double cut() const { return window_.path_cut(out_.sensor_distance()); }
+
     TimeWindow window_;
     ContributionList& out_;
+    Vec3 position_;
     double time_ = 0.0;
 };
 

@@ -25,7 +25,8 @@ namespace femto {
 /// Bumped whenever a public header changes in a way that breaks compiled plugins.
 /// (6: schemas carry the base classes' parameters, ParamSpec::inherited_from.)
 /// (7: Object::location(); Film::block_bytes_per_pixel().)
-inline constexpr uint32_t kPluginAbiVersion = 7;
+/// (8: Hit::p_error; PathClock::travel_to() measures time between actual vertices.)
+inline constexpr uint32_t kPluginAbiVersion = 8;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -31,11 +31,19 @@ struct Hit {
     Vec3 wi;              ///< direction toward the ray origin, in the shading frame
     const Shape* shape = nullptr;
     uint32_t prim = 0;  ///< triangle index (0 for spheres)
+    /// How far rays leaving this hit start off the surface: kRayOffsetScale times the largest
+    /// coordinate p was computed from (the triangle's vertices, or the sphere's centre plus
+    /// radius), which bounds p's rounding and Embree's (docs/precision.md).
+    float p_error = 0.f;
 
     Vec3 to_world(const Vec3& v) const { return sh.to_world(v); }
     Vec3 to_local(const Vec3& v) const { return sh.to_local(v); }
-    /// A ray leaving this hit in world direction `d`, offset against self-intersection.
-    Ray spawn(const Vec3& d) const { return Ray{offset_origin(p, ng, d), d, 0.f, kInfinity}; }
+    /// A ray leaving this hit in world direction `d`, its origin offset by p_error against
+    /// self-intersection. Measure path lengths from p, not from the ray's origin
+    /// (PathClock::travel_to does).
+    Ray spawn(const Vec3& d) const {
+        return Ray{offset_origin(p, ng, d, p_error), d, 0.f, kInfinity};
+    }
     /// A shadow ray from this hit toward point `target` (stops just short of it).
     Ray spawn_to(const Vec3& target) const;
 };

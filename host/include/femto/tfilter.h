@@ -218,6 +218,7 @@ public:
     /// The grid's end plus the filter's reach in camera time; unbounded in world time (the
     /// sensor segment is subtracted after the path ends, so the integrator cannot cut it).
     double max_time() const override;
+    double max_world_time() const override;
 
     const TimeGrid& grid() const { return grid_; }
     const TemporalFilter& tfilter() const { return *tfilter_; }

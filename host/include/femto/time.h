@@ -4,6 +4,8 @@
 // distance d inside a medium of index eta counts as eta * d). Films bin it on a TimeGrid.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -59,11 +61,22 @@ struct TimeWindow {
     /// Latest time (optical path length, camera time) the film records: the window's end plus
     /// the temporal filter's reach; infinite for steady films and in world time.
     double end = std::numeric_limits<double>::infinity();
+    /// Latest world time the film records (a world-time film's `end`); infinite otherwise. A
+    /// camera path learns how much camera time that allows at its first scattering vertex.
+    double world_end = std::numeric_limits<double>::infinity();
     /// Earliest emission time of any emitter (PulseProfile::earliest).
     double earliest_emission = 0.0;
     /// Longest optical length a camera path may have travelled and still bring light to the
-    /// film: light leaving an emitter no earlier than earliest_emission must arrive by `end`.
-    double path_cut() const { return end - earliest_emission; }
+    /// film: light leaving an emitter no earlier than earliest_emission must arrive by `end`,
+    /// or by world_end after the path's sensor distance `sensor_distance` (negative: unknown
+    /// yet, the path has not scattered).
+    double path_cut(double sensor_distance = -1.0) const {
+        const double world = sensor_distance >= 0 ? world_end + sensor_distance
+                                                  : std::numeric_limits<double>::infinity();
+        return std::min(end, world) - earliest_emission;
+    }
+    /// Whether the window ends every path (camera time, or world time once a path scatters).
+    bool bounded() const { return std::isfinite(end) || std::isfinite(world_end); }
 };
 
 /// The time a film records for a contribution that arrives at camera time `time`: camera

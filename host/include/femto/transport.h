@@ -117,8 +117,11 @@ struct ShadowConnection {
 
 /// The shadow ray `ray` (from ray.o to ray.o + ray.d * ray.tmax) starting in `medium`: passes
 /// null surfaces (media boundaries), changing media there, and multiplies each medium's
-/// transmittance; blocked at any other surface.
-ShadowConnection trace_shadow(const Scene& scene, Ray ray, MediumTracker medium, Sampler& sampler);
+/// transmittance; blocked at any other surface. `from` and `to` are the connection's actual
+/// end points (the ray starts off a surface and stops short of the light): the optical length
+/// is measured between them and the boundaries crossed.
+ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, const Vec3& to,
+                              MediumTracker medium, Sampler& sampler);
 
 /// The shadow connection from surface vertex `from` to light sample `light`. Without media in
 /// the scene it is an occlusion test and light crosses `light.distance` in vacuum (a shadow

@@ -28,13 +28,12 @@ MonteCarloIntegrator::MonteCarloIntegrator(const Properties& props, int64_t defa
 }
 
 void MonteCarloIntegrator::preprocess(const Scene& scene) {
-    if (max_depth_ < 0 && rr_depth_ == 0 && !std::isfinite(scene.time_window().end))
+    if (max_depth_ < 0 && rr_depth_ == 0 && !scene.time_window().bounded())
         throw SceneError(location_,
                          type_name() +
                              " with max_depth=-1 and no Russian roulette (rr_depth=0) needs a "
-                             "time window that ends its paths: a transient or streak film in "
-                             "camera time (in world time the sensor segment is only known after "
-                             "the path ends); set max_depth otherwise");
+                             "time window that ends its paths (a transient or streak film); set "
+                             "max_depth or rr_depth otherwise");
 }
 
 }  // namespace femto

@@ -74,6 +74,11 @@ double TimeResolvedFilm::max_time() const {
                         : grid_.end() + tfilter_->max_radius();
 }
 
+double TimeResolvedFilm::max_world_time() const {
+    return world_time() ? grid_.end() + tfilter_->max_radius()
+                        : std::numeric_limits<double>::infinity();
+}
+
 std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, int w, int h) const {
     if (!pilot_) return nullptr;
     return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time());

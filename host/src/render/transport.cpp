@@ -18,14 +18,26 @@ void Throughput::transfer(const ColorMatrix& t) {
     colour_ = Color(1.f);
 }
 
-ShadowConnection trace_shadow(const Scene& scene, Ray ray, MediumTracker medium, Sampler& sampler) {
+namespace {
+// How far light travels from `from` to the light sample: between the actual points, in double
+// (the shadow ray starts off the surface and stops short of the light).
+double light_distance(const Vec3& from, const EmitterSample& light) {
+    return std::isfinite(light.distance) ? distance_between(from, light.p) : double(light.distance);
+}
+}  // namespace
+
+ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, const Vec3& to,
+                              MediumTracker medium, Sampler& sampler) {
     ShadowConnection c;
+    Vec3 last = from;  // the latest actual point: lengths are measured between these
     for (int crossings = 0; crossings < 256; ++crossings) {
         Hit hit;
         const bool found = scene.intersect(ray, hit);
         const double segment = found ? double(hit.t) : double(ray.tmax);
         if (medium.medium) c.transmittance *= medium.medium->transmittance(ray, segment, sampler);
-        c.optical_length += segment * medium.eta();
+        const Vec3 next = found ? hit.p : to;
+        c.optical_length += distance_between(last, next) * medium.eta();
+        last = next;
         if (!found) return c;
         if (!hit.shape->bsdf()->is_null() || c.blocked()) return {Color(0.f), 0.0};
         medium.cross(hit, ray.d);
@@ -41,18 +53,17 @@ ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const Emi
     const Ray ray = from.spawn_to(light.p);
     if (!scene.has_media()) {
         if (scene.occluded(ray)) return {Color(0.f), 0.0};
-        return {Color(1.f), double(light.distance)};
+        return {Color(1.f), light_distance(from.p, light)};
     }
     MediumTracker beyond = medium;
     beyond.medium = medium.beyond(from, light.wi);
-    return trace_shadow(scene, ray, beyond, sampler);
+    return trace_shadow(scene, ray, from.p, light.p, beyond, sampler);
 }
 
 ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const EmitterSample& light,
                                   const MediumTracker& medium, Sampler& sampler) {
-    // Stops just short of the light point, as Hit::spawn_to does for surfaces.
-    return trace_shadow(scene, Ray{x, light.wi, 0.f, light.distance * (1.f - 1e-4f)}, medium,
-                        sampler);
+    const Ray ray{x, light.wi, 0.f, shadow_ray_length(light.distance, light.p)};
+    return trace_shadow(scene, ray, x, light.p, medium, sampler);
 }
 
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,

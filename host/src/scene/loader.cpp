@@ -16,6 +16,7 @@
 #include "femto/sensor.h"
 #include "femto/shape.h"
 #include "plugin/registry.h"
+#include "scene/spectrum_tags.h"
 #include "util/lenient.h"
 #include "util/strings.h"
 #include "xml/parser.h"
@@ -38,9 +39,9 @@ struct OptionsScope {
     ~OptionsScope() { t_options = saved; }
 };
 
-const std::set<std::string> kPropertyTags = {"boolean",  "integer",  "float", "string",
-                                             "point",    "vector",   "rgb",   "srgb",
-                                             "spectrum", "transform"};
+const std::set<std::string> kPropertyTags = {"boolean",  "integer",   "float",    "string",
+                                             "point",    "vector",    "rgb",      "srgb",
+                                             "spectrum", "blackbody", "transform"};
 const char* const kObjectTags =
     "integrator sensor film sampler rfilter tfilter shape bsdf emitter medium phase texture "
     "volume distance connection angular";
@@ -240,10 +241,6 @@ Color parse_color(const XmlNode& node) {
         }
         return c;
     }
-    if (node.tag == "spectrum" && value.find(':') != std::string::npos)
-        throw SceneError(node.location,
-                         "femto renders in RGB: sampled spectra (wavelength:value pairs) are not "
-                         "supported; give an rgb value or a single spectrum value");
     auto n = parse_numbers(node, value, node.tag.c_str());
     Color c;
     if (n.size() == 1)
@@ -277,7 +274,7 @@ public:
         Properties props(type, node.location);
         if (const std::string* id = node.attribute("id")) props.set_id(*id);
         int arg_index = 0;
-        for (const auto& child : node.children) add_child(props, child, arg_index);
+        for (const auto& child : node.children) add_child(props, child, node.tag, arg_index);
 
         const PluginDescriptor& desc = find_plugin(kind, type, options_.plugin_dirs, node.location);
         check_schema(props, desc, node);
@@ -456,7 +453,8 @@ public:
                          c.location);
     }
 
-    void add_child(Properties& props, const XmlNode& c, int& arg_index) {
+    void add_child(Properties& props, const XmlNode& c, const std::string& parent_tag,
+                   int& arg_index) {
         PluginKind kind;
         if (kind_from_tag(c.tag, kind)) {
             add_object(props, c, build(c, kind), arg_index);
@@ -477,6 +475,12 @@ public:
         const std::string& name = require_attr(c, "name");
         if (name.empty()) throw SceneError(c.location, "empty parameter name");
         refuse_duplicate(props, name, c);
+        if (c.tag == "spectrum" || c.tag == "blackbody") {
+            // Converted here: how a spectrum becomes RGB depends on the object it is in.
+            props.set(name, Properties::Type::Color, parse_spectrum_tag(c, parent_tag, name),
+                      c.location);
+            return;
+        }
         if (c.tag != "transform") check_no_children(c);
         if (c.tag == "boolean") {
             check_attributes(c, {"name", "value"});
@@ -513,7 +517,7 @@ public:
             check_attributes(c, {"name", "value", "x", "y", "z"});
             props.set(name, c.tag == "point" ? Properties::Type::Point : Properties::Type::Vector,
                       parse_xyz(c, 0.f), c.location);
-        } else if (c.tag == "rgb" || c.tag == "srgb" || c.tag == "spectrum") {
+        } else if (c.tag == "rgb" || c.tag == "srgb") {
             check_attributes(c, {"name", "value"});
             props.set(name, Properties::Type::Color, parse_color(c), c.location);
         } else if (c.tag == "transform") {
@@ -540,7 +544,7 @@ public:
                 continue;
             }
             if (kPropertyTags.count(c.tag)) {
-                add_child(scene_props, c, arg_index);
+                add_child(scene_props, c, root.tag, arg_index);
                 continue;
             }
             PluginKind kind;

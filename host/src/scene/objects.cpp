@@ -77,5 +77,6 @@ Film::Film(const Properties& props) {
 }
 
 double Film::max_time() const { return std::numeric_limits<double>::infinity(); }
+double Film::max_world_time() const { return std::numeric_limits<double>::infinity(); }
 
 }  // namespace femto

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "femto/bsdf.h"
@@ -13,10 +14,10 @@ namespace femto {
 
 Ray Hit::spawn_to(const Vec3& target) const {
     const Vec3 d0 = target - p;
-    const Vec3 o = offset_origin(p, ng, d0);
+    const Vec3 o = offset_origin(p, ng, d0, p_error);
     const Vec3 d = target - o;
     const float dist = length(d);
-    return Ray{o, d / dist, 0.f, dist * (1.f - 1e-4f)};
+    return Ray{o, d / dist, 0.f, shadow_ray_length(dist, target)};
 }
 
 std::vector<ParamSpec> Shape::inherited_params() {
@@ -121,6 +122,7 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
     if (is_sphere_) {
         const Vec3 local = normalize(ray.at(t) - center_);
         hit.p = center_ + local * radius_;
+        hit.p_error = kRayOffsetScale * (max_abs_component(center_) + radius_);
         hit.ng = local;
         ns = local;
         const float phi = std::atan2(local.y, local.x);
@@ -132,6 +134,8 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         const Vec3 &p0 = mesh_.positions[i0], &p1 = mesh_.positions[i1], &p2 = mesh_.positions[i2];
         const float w = 1.f - u - v;
         hit.p = p0 * w + p1 * u + p2 * v;
+        hit.p_error = kRayOffsetScale * std::max({max_abs_component(p0), max_abs_component(p1),
+                                                  max_abs_component(p2)});
         Vec3 ng = cross(p1 - p0, p2 - p0);
         const float l = length(ng);
         hit.ng = l > 0 ? ng / l : Vec3(0, 0, 1);

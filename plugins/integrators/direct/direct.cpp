@@ -39,7 +39,7 @@ public:
 
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
                 ContributionList& out) const override {
-        PathClock clock(scene, out);
+        PathClock clock(scene, out, ray.o);
         Throughput throughput;
         Hit hit;
         if (!first_vertex(scene, sampler, ray, clock, hit)) return;
@@ -76,7 +76,8 @@ public:
             const bool delta = (bs.sampled_lobe & kBsdfDelta) != 0;
             const float w =
                 delta ? 1.f : power_heuristic(nb, bs.pdf, ne, scene.pdf_emitter(*em, hit.p, lit));
-            clock.record(throughput(bs.weight * Le * (w / nb)), *em, sampler, double(lit.t));
+            clock.record(throughput(bs.weight * Le * (w / nb)), *em, sampler,
+                         distance_between(hit.p, lit.p));
         }
     }
 
@@ -88,7 +89,7 @@ private:
         Ray r = ray;
         for (int crossings = 0; crossings < 64; ++crossings) {
             if (!scene.intersect(r, hit)) return false;
-            clock.travel(double(hit.t), 1.0);
+            clock.travel_to(hit.p, 1.0);
             const bool scatters = !hit.shape->bsdf()->is_null();
             if (scatters) clock.reach_vertex();
             if (const Emitter* em = hit.shape->emitter(); em && !hide_emitters_)

@@ -59,7 +59,7 @@ struct PathState {
 
     PathState(const Scene& scene, const Ray& camera_ray, ContributionList& out)
         : ray(camera_ray),
-          clock(scene, out),
+          clock(scene, out, camera_ray.o),
           medium(MediumTracker::at_sensor(scene)),
           prev_p(camera_ray.o) {}
     void aim_at(const EmitterSample& light) {
@@ -117,7 +117,7 @@ private:
     bool surface_vertex(const Scene& scene, Sampler& sampler, PathState& path,
                         const Hit& hit) const {
         const Bsdf& bsdf = *hit.shape->bsdf();
-        path.clock.travel(double(hit.t), path.medium.eta());
+        path.clock.travel_to(hit.p, path.medium.eta());
         if (!bsdf.is_null()) path.clock.reach_vertex();
         if (path.clock.expired()) return false;
         if (const Emitter* emitter = hit.shape->emitter())
@@ -214,7 +214,7 @@ private:
         const DistanceSample ds = sample_distance(medium, path.ray, tmax, strategy, u, sampler);
         path.throughput *= ds.weight;
         if (ds.scattered) {
-            path.clock.travel(ds.distance, medium.eta());
+            path.clock.travel_to(path.ray.at(float(ds.distance)), medium.eta());
             path.clock.reach_vertex();
             if (path.clock.expired() || path.throughput.is_black() || !may_scatter)
                 return SegmentEnd::Stop;
@@ -260,7 +260,7 @@ private:
             const Color w =
                 medium.transmittance(path.ray, r, sampler) * medium.sigma_s(x) * float(1.0 / pc);
             PathClock at_x = path.clock;
-            at_x.travel(r, medium.eta());
+            at_x.travel_to(x, medium.eta());
             medium_light(scene, sampler, path, at_x, x, -path.ray.d, w, true, share);
         }
         return connects;
