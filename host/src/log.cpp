@@ -20,6 +20,14 @@ void log_warning(const SourceLocation& loc, const std::string& message) {
         std::fprintf(stderr, "warning: %s: %s\n", loc.str().c_str(), message.c_str());
 }
 
+void log_note(const SourceLocation& loc, const std::string& message) {
+    std::lock_guard<std::mutex> lock(g_log_mutex);
+    if (loc.file.empty())
+        std::fprintf(stderr, "note: %s\n", message.c_str());
+    else
+        std::fprintf(stderr, "note: %s: %s\n", loc.str().c_str(), message.c_str());
+}
+
 int warning_count() { return g_warnings.load(); }
 
 }  // namespace femto

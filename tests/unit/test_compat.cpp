@@ -37,12 +37,11 @@ TEST(Compat, Mitsuba06CornellBoxMeanIsStableAcrossSeeds) {
     SKIP_WITHOUT_COMPAT_SCENES();
     const std::string path = kCompat + "/mitsuba06-cbox/mts1-cbox-rgb.xml";
     ASSERT_TRUE(std::filesystem::exists(path)) << path;
-    LoadOptions opt;
-    opt.lenient = true;  // the sensor's focusDistance is ignored (a warning)
+    LoadOptions opt;  // strict: every parameter of the file is accepted (focusDistance too)
     opt.defines = {{"res", "64"}};
     const int warnings_before = warning_count();
     auto a = load_scene(path, opt);
-    EXPECT_EQ(warning_count() - warnings_before, 1);
+    EXPECT_EQ(warning_count() - warnings_before, 0);
     EXPECT_EQ(a->shapes().size(), 8u);
     EXPECT_EQ(a->emitters().size(), 1u);
     EXPECT_EQ(a->sensor().film().width(), 64);

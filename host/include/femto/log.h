@@ -13,4 +13,8 @@ inline void log_warning(const std::string& message) { log_warning(SourceLocation
 /// Number of warnings printed so far in this process.
 int warning_count();
 
+/// Prints "note: <loc>: <message>": input femto accepts but gives no meaning (a Mitsuba
+/// parameter that has no effect in femto). Not a warning: warning_count() is unchanged.
+void log_note(const SourceLocation& loc, const std::string& message);
+
 }  // namespace femto

@@ -260,9 +260,17 @@ class Instantiator {
 public:
     explicit Instantiator(const LoadOptions& options) : options_(options) {}
 
+    // An object is built once: where it is written, or earlier when a reference needs it.
     ObjectPtr build(const XmlNode& node, PluginKind kind) {
+        if (auto it = built_.find(&node); it != built_.end()) return it->second;
         check_attributes(node, {"type", "id", "name"});
         const std::string& type = require_attr(node, "type");
+        if (building_.size() >= kMaxBuildDepth)
+            throw SceneError(node.location,
+                             fmt::format("objects and the references they follow nest more than "
+                                         "{} levels deep",
+                                         kMaxBuildDepth));
+        building_.push_back(&node);
         Properties props(type, node.location);
         if (const std::string* id = node.attribute("id")) props.set_id(*id);
         int arg_index = 0;
@@ -272,7 +280,8 @@ public:
         check_schema(props, desc, node);
         ObjectPtr obj = construct(desc, props, node);
         report_unread(props, node);
-        if (const std::string* id = node.attribute("id")) register_id(*id, obj, node);
+        building_.pop_back();
+        built_.emplace(&node, obj);
         return obj;
     }
 
@@ -304,13 +313,38 @@ public:
         }
         for (const auto& e : props.entries()) {
             if (e.name.rfind("_arg_", 0) == 0) continue;
-            if (std::find(names.begin(), names.end(), e.name) != names.end()) continue;
+            if (auto it = std::find(names.begin(), names.end(), e.name); it != names.end()) {
+                if (e.type == Properties::Type::Object)
+                    check_object_fits(e, desc.params[size_t(it - names.begin())], desc, node);
+                continue;
+            }
             const std::string msg = fmt::format(
                 "<{} type=\"{}\"> has no parameter \"{}\"{}; valid: {}", node.tag, desc.type_name,
                 e.name, did_you_mean(e.name, names), names.empty() ? "(none)" : join(names));
             reject_unless_lenient(options_.lenient, e.location, msg);
             e.read = true;  // reported already; the plugin never sees it read
         }
+    }
+
+    // An object's name is the parameter it binds to, so the parameter must take an object of
+    // its kind ("color|texture" takes a <texture>, "film" a <film>).
+    static void check_object_fits(const Properties::Entry& e, const ParamSpec& spec,
+                                  const PluginDescriptor& desc, const XmlNode& node) {
+        const ObjectPtr& obj = std::get<ObjectPtr>(e.value);
+        if (!obj) return;
+        const std::string types = spec.type;
+        size_t begin = 0;
+        while (begin <= types.size()) {
+            const size_t end = std::min(types.find('|', begin), types.size());
+            if (types.compare(begin, end - begin, kind_tag(obj->kind())) == 0) return;
+            begin = end + 1;
+        }
+        throw SceneError(
+            e.location, fmt::format("<{}> named \"{}\": parameter \"{}\" of <{} type=\"{}\"> "
+                                    "takes {}, not a <{}> (an object's name is the parameter "
+                                    "it binds to)",
+                                    kind_tag(obj->kind()), e.name, e.name, node.tag, desc.type_name,
+                                    types, kind_tag(obj->kind())));
     }
 
     void report_unread(const Properties& props, const XmlNode& node) {
@@ -327,24 +361,79 @@ public:
         }
     }
 
-    void register_id(const std::string& id, const ObjectPtr& obj, const XmlNode& node) {
-        if (id.empty()) throw SceneError(node.location, "empty id");
-        if (!ids_.emplace(id, obj).second)
-            throw SceneError(node.location, fmt::format("id \"{}\" is defined twice", id));
+    // A file a plugin reads: a name found nowhere is reported here, with the folders tried.
+    std::string find_input_file(const XmlNode& c, const std::string& name) const {
+        const FileSearch found = find_file(c, name, search_dirs_);
+        if (!found.found && !found.searched.empty())
+            throw SceneError(c.location, fmt::format("file \"{}\" not found (searched: {})", name,
+                                                     join(found.searched)));
+        return found.path;
     }
 
-    ObjectPtr resolve(const XmlNode& node) {
-        const std::string& id = require_attr(node, "id");
-        auto it = ids_.find(id);
-        if (it == ids_.end()) {
-            std::vector<std::string> known;
-            for (const auto& [k, v] : ids_) known.push_back(k);
-            throw SceneError(node.location,
-                             fmt::format("no object with id \"{}\" is defined before "
-                                         "this reference{}",
-                                         id, did_you_mean(id, known)));
+    // Every id of the scene, before anything is built: a reference may name an object
+    // written after it (Mitsuba 3 resolves references once the whole file is read).
+    void index_ids(const XmlNode& node) {
+        for (const auto& c : node.children) {
+            PluginKind kind;
+            if (c.tag == "alias" && &node == root_) {
+                check_attributes(c, {"id", "as"});
+                check_no_children(c);
+                add_id(require_attr(c, "as"), c, require_attr(c, "id"));
+            } else if (kind_from_tag(c.tag, kind)) {
+                if (const std::string* id = c.attribute("id")) add_id(*id, c, {});
+                index_ids(c);
+            }
         }
-        return it->second;
+    }
+
+    void add_id(const std::string& id, const XmlNode& node, const std::string& alias_of) {
+        if (id.empty()) throw SceneError(node.location, "empty id");
+        const auto [it, fresh] = ids_.emplace(id, IdTarget{&node, alias_of});
+        if (!fresh)
+            throw SceneError(node.location, fmt::format("id \"{}\" is defined twice (first at {})",
+                                                        id, it->second.node->location.str()));
+    }
+
+    // The object `node` (a <ref> or an <alias>) names by its id, built now if need be.
+    ObjectPtr resolve(const XmlNode& node) {
+        std::string id = require_attr(node, "id");
+        for (size_t hops = 0;; ++hops) {
+            auto it = ids_.find(id);
+            if (it == ids_.end()) {
+                std::vector<std::string> known;
+                for (const auto& [k, v] : ids_) known.push_back(k);
+                throw SceneError(node.location,
+                                 fmt::format("no object with id \"{}\" is defined in the "
+                                             "scene{}",
+                                             id, did_you_mean(id, known)));
+            }
+            const IdTarget& target = it->second;
+            if (target.alias_of.empty()) {
+                PluginKind kind;
+                kind_from_tag(target.node->tag, kind);
+                refuse_cycle(*target.node, id, node);
+                return build(*target.node, kind);
+            }
+            if (hops > ids_.size())
+                throw SceneError(node.location,
+                                 fmt::format("the aliases of \"{}\" form a cycle", id));
+            id = target.alias_of;
+        }
+    }
+
+    // A reference to an object still being built (itself or one holding it) can never be
+    // satisfied; the message lists the chain of ids.
+    void refuse_cycle(const XmlNode& target, const std::string& id, const XmlNode& ref) const {
+        auto it = std::find(building_.begin(), building_.end(), &target);
+        if (it == building_.end()) return;
+        std::string chain;
+        for (; it != building_.end(); ++it)
+            if (const std::string* i = (*it)->attribute("id"))
+                chain += fmt::format("\"{}\" ({}) -> ", *i, (*it)->location.str());
+        throw SceneError(ref.location,
+                         fmt::format("reference cycle: {}\"{}\": an object cannot contain "
+                                     "itself",
+                                     chain, id));
     }
 
     // A name given twice in one object is a mistake whichever value was meant (Mitsuba 3
@@ -422,7 +511,7 @@ public:
         } else if (c.tag == "string") {
             check_attributes(c, {"name", "value"});
             std::string v = require_attr(c, "value");
-            if (name == "filename" && !v.empty()) v = resolve_path(c, v);
+            if (name == "filename" && !v.empty()) v = find_input_file(c, v);
             props.set(name, Properties::Type::String, v, c.location);
         } else if (c.tag == "point" || c.tag == "vector") {
             check_attributes(c, {"name", "value", "x", "y", "z"});
@@ -439,25 +528,42 @@ public:
 
     std::unique_ptr<Scene> build_scene(const XmlNode& root) {
         check_attributes(root, {"version"});
+        search_dirs_ = root.search_dirs;
         std::shared_ptr<Integrator> integrator;
         std::shared_ptr<Sensor> sensor;
         std::vector<std::shared_ptr<Shape>> shapes;
         std::vector<std::shared_ptr<Emitter>> emitters;
+        root_ = &root;
+        index_ids(root);
+        Properties scene_props("scene", root.location);
+        std::map<std::string, SourceLocation> object_names;
+        int arg_index = 0;
         for (const auto& c : root.children) {
             if (c.tag == "alias") {
-                check_attributes(c, {"id", "as"});
-                check_no_children(c);
-                ObjectPtr obj = resolve(c);
-                register_id(require_attr(c, "as"), obj, c);
+                resolve(c);  // the object it names must exist
+                continue;
+            }
+            if (kPropertyTags.count(c.tag)) {
+                add_child(scene_props, c, root.tag, arg_index);
                 continue;
             }
             PluginKind kind;
             if (!kind_from_tag(c.tag, kind))
                 throw SceneError(c.location,
-                                 fmt::format("unknown tag <{}> in <scene>; valid: {} alias", c.tag,
-                                             kObjectTags));
-            if (c.attribute("name"))
-                throw SceneError(c.location, "top-level objects take no name attribute");
+                                 fmt::format("unknown tag <{}> in <scene>; valid: {} alias path "
+                                             "and the property tags",
+                                             c.tag, kObjectTags));
+            // Mitsuba 3 keys the scene's children by name: a name is accepted (it has no
+            // meaning for femto's scene) but must be unique, as Mitsuba requires.
+            if (const std::string* name = c.attribute("name")) {
+                if (name->empty()) throw SceneError(c.location, "empty name");
+                const auto [it, fresh] = object_names.emplace(*name, c.location);
+                if (!fresh)
+                    throw SceneError(c.location,
+                                     fmt::format("name \"{}\" is given to two objects of the "
+                                                 "scene (first at {})",
+                                                 *name, it->second.str()));
+            }
             ObjectPtr obj = build(c, kind);
             switch (kind) {
                 case PluginKind::Integrator:
@@ -485,6 +591,7 @@ public:
                     break;
             }
         }
+        check_scene_properties(scene_props);
         if (!sensor) throw SceneError(root.location, "the scene has no <sensor>: add a camera");
         if (shapes.empty() && emitters.empty())
             throw SceneError(root.location, "the scene is empty: it has no shapes and no emitters");
@@ -494,9 +601,68 @@ public:
         return std::make_unique<Scene>(integrator, sensor, std::move(shapes), std::move(emitters));
     }
 
+    // Properties written directly in <scene>: Mitsuba's scene reads only the settings of its
+    // acceleration structure (0.6 and 3's kd-tree, 3's Embree), which femto's own Embree BVH
+    // has no use for. They are accepted with a note; any other name is an unknown parameter.
+    void check_scene_properties(const Properties& props) const {
+        static const std::map<std::string, Properties::Type> kKnown = {
+            {"kd_intersection_cost", Properties::Type::Float},
+            {"kd_traversal_cost", Properties::Type::Float},
+            {"kd_empty_space_bonus", Properties::Type::Float},
+            {"kd_stop_prims", Properties::Type::Integer},
+            {"kd_max_depth", Properties::Type::Integer},
+            {"kd_exact_primitive_threshold", Properties::Type::Integer},
+            {"kd_min_max_bins", Properties::Type::Integer},
+            {"kd_max_bad_refines", Properties::Type::Integer},
+            {"kd_clip", Properties::Type::Bool},
+            {"kd_retract", Properties::Type::Bool},
+            {"kd_retract_bad_splits", Properties::Type::Bool},
+            {"kd_parallel_build", Properties::Type::Bool},
+            {"embree_use_robust_intersections", Properties::Type::Bool},
+        };
+        std::vector<std::string> names;
+        for (const auto& [k, v] : kKnown) names.push_back(k);
+        for (const auto& e : props.entries()) {
+            auto it = kKnown.find(e.name);
+            if (it == kKnown.end()) {
+                reject_unless_lenient(
+                    options_.lenient, e.location,
+                    fmt::format("<scene> has no property \"{}\"{}; valid (Mitsuba's "
+                                "acceleration settings, which femto ignores): {}",
+                                e.name, did_you_mean(e.name, names), join(names)));
+                continue;
+            }
+            const bool number =
+                it->second == Properties::Type::Float && e.type == Properties::Type::Integer;
+            if (e.type != it->second && !number)
+                throw SceneError(
+                    e.location,
+                    fmt::format("scene property \"{}\" must be {}", e.name,
+                                it->second == Properties::Type::Bool      ? "a <boolean>"
+                                : it->second == Properties::Type::Integer ? "an <integer>"
+                                                                          : "a <float>"));
+            log_note(e.location, fmt::format("femto ignores scene property \"{}\" (it tunes "
+                                             "Mitsuba's acceleration structure; femto builds "
+                                             "an Embree BVH)",
+                                             e.name));
+        }
+    }
+
 private:
+    // Bounds the recursion through nested objects and the references they follow, so that a
+    // long chain of forward references cannot overflow the stack.
+    static constexpr size_t kMaxBuildDepth = 1000;
+    struct IdTarget {
+        const XmlNode* node;   // the object, or the <alias>
+        std::string alias_of;  // for an <alias>: the id it stands for
+    };
+
     const LoadOptions& options_;
-    std::map<std::string, ObjectPtr> ids_;
+    const XmlNode* root_ = nullptr;
+    std::map<std::string, IdTarget> ids_;
+    std::map<const XmlNode*, ObjectPtr> built_;
+    std::vector<const XmlNode*> building_;  // objects under construction, outermost first
+    std::vector<std::string> search_dirs_;  // the scene's <path> folders
 };
 
 }  // namespace

@@ -131,8 +131,13 @@ std::pair<int, int> parse_version(const XmlNode& scene) {
     return {major, minor};
 }
 
+// A <default> keeps its name: it names a $parameter and a -D, not a plugin parameter, and
+// `$maxDepth` in the same file must still find it (Mitsuba 3 skips defaults too). The 0.x
+// transform operation <lookAt> is <lookat>.
 void upgrade_tree(XmlNode& node) {
-    if (std::string* name = node.attribute("name")) *name = upgrade_parameter_name(*name);
+    if (node.tag == "lookAt") node.tag = "lookat";
+    if (node.tag != "default")
+        if (std::string* name = node.attribute("name")) *name = upgrade_parameter_name(*name);
     if (std::string* type = node.attribute("type")) *type = upgrade_plugin_type(node.tag, *type);
     for (auto& c : node.children) upgrade_tree(c);
 }
@@ -188,72 +193,13 @@ XmlNode parse_text(const std::string& text, const std::string& file, const std::
     return scene;
 }
 
-// `depth` is the nesting level of `node`.
-void expand_includes(XmlNode& node, std::vector<std::string>& stack, int depth) {
-    std::vector<XmlNode> out;
-    out.reserve(node.children.size());
-    for (auto& child : node.children) {
-        if (child.tag != "include") {
-            expand_includes(child, stack, depth + 1);
-            out.push_back(std::move(child));
-            continue;
-        }
-        const std::string* filename = child.attribute("filename");
-        if (!filename || child.attributes.size() != 1 || !child.children.empty())
-            throw SceneError(child.location, "<include> takes exactly one attribute, filename");
-        const fs::path p = resolve_path(child, *filename);
-        std::error_code ec;
-        const fs::path canon = fs::weakly_canonical(p, ec);
-        const std::string key = ec ? p.string() : canon.string();
-        if (std::find(stack.begin(), stack.end(), key) != stack.end())
-            throw SceneError(child.location,
-                             fmt::format("\"{}\" includes itself (include cycle)", *filename));
-        if (stack.size() >= size_t(kMaxIncludeDepth))
-            throw SceneError(child.location,
-                             "includes are nested too deeply (more than 32 levels)");
-        const std::string text = read_file(p.string(), child.location);
-        XmlNode included =
-            parse_text(text, p.string(), p.parent_path().string(), child.location, depth);
-        set_root_dir(included, child.root_dir);
-        stack.push_back(key);
-        expand_includes(included, stack, depth);
-        stack.pop_back();
-        for (auto& c : included.children) out.push_back(std::move(c));
-    }
-    node.children = std::move(out);
-}
-
 bool is_identifier_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
 bool is_identifier_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
 
-// Moves the <default>s into `params` (a -D wins) and their names into `scene_params`.
-void collect_defaults(XmlNode& node, std::map<std::string, std::string>& params,
-                      const std::map<std::string, std::string>& defines,
-                      std::set<std::string>& scene_params) {
-    std::vector<XmlNode> kept;
-    for (auto& c : node.children) {
-        if (c.tag == "default") {
-            const std::string* name = c.attribute("name");
-            const std::string* value = c.attribute("value");
-            if (!name || !value || c.attributes.size() != 2 || !c.children.empty())
-                throw SceneError(c.location,
-                                 "<default> takes exactly the attributes name and value");
-            if (name->empty() || !is_identifier_start((*name)[0]) ||
-                !std::all_of(name->begin(), name->end(), is_identifier_char))
-                throw SceneError(c.location, fmt::format("invalid parameter name \"{}\"", *name));
-            if (!defines.count(*name) && !params.count(*name)) params[*name] = *value;
-            scene_params.insert(*name);
-            continue;
-        }
-        collect_defaults(c, params, defines, scene_params);
-        kept.push_back(std::move(c));
-    }
-    node.children = std::move(kept);
-}
-
-// Replaces every $name by its value and adds the name to `scene_params`.
-void substitute(XmlNode& node, const std::map<std::string, std::string>& params,
-                std::set<std::string>& scene_params) {
+// Replaces every $name in the attributes of `node` (not its children) and adds the names to
+// `scene_params`. `where` completes the message for an undefined name.
+void substitute_attributes(XmlNode& node, const std::map<std::string, std::string>& params,
+                           std::set<std::string>& scene_params, const char* where = "") {
     for (auto& a : node.attributes) {
         if (a.value.find('$') == std::string::npos) continue;
         std::string out;
@@ -271,15 +217,122 @@ void substitute(XmlNode& node, const std::map<std::string, std::string>& params,
                 throw SceneError(
                     node.location,
                     fmt::format("parameter ${} is not defined: add <default name=\"{}\" "
-                                "value=\"...\"/> or pass -D {}=...",
-                                name, name, name));
+                                "value=\"...\"/>{} or pass -D {}=...",
+                                name, name, where, name));
             out += it->second;
             scene_params.insert(name);
             i = j - 1;
         }
         a.value = std::move(out);
     }
+}
+
+void substitute(XmlNode& node, const std::map<std::string, std::string>& params,
+                std::set<std::string>& scene_params) {
+    substitute_attributes(node, params, scene_params);
     for (auto& c : node.children) substitute(c, params, scene_params);
+}
+
+// State of the expansion pass, which visits the elements in document order as Mitsuba does:
+// a <default> or <path> counts for the <include>s after it.
+struct Expansion {
+    std::vector<std::string> include_stack;  // canonical paths of the files being read
+    const std::map<std::string, std::string>& defines;
+    std::map<std::string, std::string> params;  // -D values, then <default>s seen so far
+    std::set<std::string>& scene_params;
+    std::vector<std::string> search_dirs;  // <path> folders, the latest first
+};
+
+// Records a <default> (a -D or an earlier <default> of the same name wins).
+void add_default(const XmlNode& c, Expansion& ex) {
+    const std::string* name = c.attribute("name");
+    const std::string* value = c.attribute("value");
+    if (!name || !value || c.attributes.size() != 2 || !c.children.empty())
+        throw SceneError(c.location, "<default> takes exactly the attributes name and value");
+    if (name->empty() || !is_identifier_start((*name)[0]) ||
+        !std::all_of(name->begin(), name->end(), is_identifier_char))
+        throw SceneError(c.location, fmt::format("invalid parameter name \"{}\"", *name));
+    if (!ex.defines.count(*name) && !ex.params.count(*name)) ex.params[*name] = *value;
+    ex.scene_params.insert(*name);
+}
+
+// <path value="dir"/> (Mitsuba 3): a folder where the files named later are looked up, before
+// the scene's own folders. A relative folder is taken next to the file that names it, else
+// looked up as any file is.
+void add_search_dir(XmlNode& c, Expansion& ex, bool scene_root) {
+    if (!scene_root) throw SceneError(c.location, "<path> can only be a child of <scene>");
+    substitute_attributes(c, ex.params, ex.scene_params, " before this <path>");
+    const std::string* value = c.attribute("value");
+    if (!value || c.attributes.size() != 1 || !c.children.empty())
+        throw SceneError(c.location, "<path> takes exactly one attribute, value");
+    if (value->empty()) throw SceneError(c.location, "<path> has an empty value");
+    std::vector<std::string> first_here{c.base_dir};
+    first_here.insert(first_here.end(), ex.search_dirs.begin(), ex.search_dirs.end());
+    const FileSearch found = find_file(c, *value, first_here);
+    std::error_code ec;
+    if (!found.found)
+        throw SceneError(c.location, fmt::format("<path>: folder \"{}\" not found (searched: {})",
+                                                 *value, join(found.searched)));
+    if (!fs::is_directory(found.path, ec))
+        throw SceneError(c.location, fmt::format("<path>: \"{}\" is not a folder", found.path));
+    fs::path dir(found.path);
+    if (!dir.has_filename()) dir = dir.parent_path();  // "meshes/" -> "meshes"
+    auto& dirs = ex.search_dirs;
+    dirs.erase(std::remove(dirs.begin(), dirs.end(), dir.string()), dirs.end());
+    dirs.insert(dirs.begin(), dir.string());
+}
+
+void expand(XmlNode& node, Expansion& ex, int depth, bool scene_root);
+
+// Reads the file an <include> names and returns its root, expanded.
+XmlNode read_include(XmlNode& inc, Expansion& ex, int depth) {
+    substitute_attributes(inc, ex.params, ex.scene_params, " before this <include>");
+    const std::string* filename = inc.attribute("filename");
+    if (!filename || inc.attributes.size() != 1 || !inc.children.empty())
+        throw SceneError(inc.location, "<include> takes exactly one attribute, filename");
+    const FileSearch found = find_file(inc, *filename, ex.search_dirs);
+    if (!found.found && !found.searched.empty())
+        throw SceneError(inc.location, fmt::format("included file \"{}\" not found (searched: {})",
+                                                   *filename, join(found.searched)));
+    const fs::path p = found.path;
+    std::error_code ec;
+    const fs::path canon = fs::weakly_canonical(p, ec);
+    const std::string key = ec ? p.string() : canon.string();
+    auto& stack = ex.include_stack;
+    if (std::find(stack.begin(), stack.end(), key) != stack.end())
+        throw SceneError(inc.location,
+                         fmt::format("\"{}\" includes itself (include cycle)", *filename));
+    if (stack.size() >= size_t(kMaxIncludeDepth))
+        throw SceneError(inc.location, "includes are nested too deeply (more than 32 levels)");
+    const std::string text = read_file(p.string(), inc.location);
+    XmlNode included = parse_text(text, p.string(), p.parent_path().string(), inc.location, depth);
+    set_root_dir(included, inc.root_dir);
+    stack.push_back(key);
+    expand(included, ex, depth, true);
+    stack.pop_back();
+    return included;
+}
+
+// Moves the <default>s into the parameters, the <path>s into the search folders and replaces
+// each <include> by the children of the file's root. `depth` is the nesting level of `node`;
+// `scene_root`: `node` is the <scene> of a file.
+void expand(XmlNode& node, Expansion& ex, int depth, bool scene_root) {
+    std::vector<XmlNode> out;
+    out.reserve(node.children.size());
+    for (auto& child : node.children) {
+        if (child.tag == "default") {
+            add_default(child, ex);
+        } else if (child.tag == "path") {
+            add_search_dir(child, ex, scene_root);
+        } else if (child.tag == "include") {
+            XmlNode included = read_include(child, ex, depth);
+            for (auto& c : included.children) out.push_back(std::move(c));
+        } else {
+            expand(child, ex, depth + 1, false);
+            out.push_back(std::move(child));
+        }
+    }
+    node.children = std::move(out);
 }
 
 // A -D the scene never reads is most likely a typo (-D sppp=4 would otherwise render with the
@@ -301,30 +354,53 @@ void check_defines_used(const std::vector<std::pair<std::string, std::string>>& 
 
 XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::string>>& defines,
                    const std::string& top_file, bool lenient) {
-    std::vector<std::string> stack;
     std::error_code ec;
-    stack.push_back(top_file.empty() ? std::string() : fs::weakly_canonical(top_file, ec).string());
-    set_root_dir(scene, scene.base_dir);
-    expand_includes(scene, stack, 1);
-    std::map<std::string, std::string> define_map(defines.begin(), defines.end());
-    std::map<std::string, std::string> params = define_map;
+    const std::map<std::string, std::string> define_map(defines.begin(), defines.end());
     std::set<std::string> scene_params;
-    collect_defaults(scene, params, define_map, scene_params);
-    substitute(scene, params, scene_params);
+    Expansion ex{{}, define_map, define_map, scene_params, {}};
+    ex.include_stack.push_back(top_file.empty() ? std::string()
+                                                : fs::weakly_canonical(top_file, ec).string());
+    set_root_dir(scene, scene.base_dir);
+    expand(scene, ex, 1, true);
+    substitute(scene, ex.params, scene_params);
     check_defines_used(defines, scene_params, top_file, lenient);
+    scene.search_dirs = std::move(ex.search_dirs);
     return scene;
 }
 
 }  // namespace
 
-std::string resolve_path(const XmlNode& node, const std::string& name) {
+FileSearch find_file(const XmlNode& node, const std::string& name,
+                     const std::vector<std::string>& search_dirs) {
+    FileSearch out;
     const fs::path p(name);
-    if (p.is_absolute()) return name;
-    const fs::path first = (fs::path(node.base_dir) / p).lexically_normal();
-    std::error_code ec;
-    if (fs::exists(first, ec) || node.root_dir.empty()) return first.string();
-    const fs::path second = (fs::path(node.root_dir) / p).lexically_normal();
-    return fs::exists(second, ec) ? second.string() : first.string();
+    if (p.is_absolute()) {
+        out.path = name;
+        std::error_code ec;
+        out.found = fs::exists(p, ec);
+        return out;
+    }
+    std::vector<std::string> dirs = search_dirs;
+    for (const std::string* d : {&node.base_dir, &node.root_dir})
+        if (!d->empty() && std::find(dirs.begin(), dirs.end(), *d) == dirs.end())
+            dirs.push_back(*d);
+    for (const auto& dir : dirs) {
+        const fs::path candidate = (fs::path(dir) / p).lexically_normal();
+        out.searched.push_back(dir);
+        std::error_code ec;
+        if (fs::exists(candidate, ec)) {
+            out.path = candidate.string();
+            out.found = true;
+            return out;
+        }
+    }
+    // None exists: name the candidate next to the file that named it.
+    out.path = (fs::path(node.base_dir) / p).lexically_normal().string();
+    return out;
+}
+
+std::string resolve_path(const XmlNode& node, const std::string& name) {
+    return find_file(node, name, {}).path;
 }
 
 std::string upgrade_parameter_name(const std::string& name) {

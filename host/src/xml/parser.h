@@ -21,6 +21,8 @@ struct XmlNode {
     SourceLocation location;
     std::string base_dir;  ///< folder of the file this element came from
     std::string root_dir;  ///< folder of the top-level scene file
+    /// On the root <scene> only: the <path> folders (Mitsuba 3), the latest first.
+    std::vector<std::string> search_dirs;
 
     const std::string* attribute(const std::string& name) const;
     std::string* attribute(const std::string& name);
@@ -37,9 +39,18 @@ XmlNode parse_scene_string(const std::string& xml, const std::string& base_dir,
                            const std::vector<std::pair<std::string, std::string>>& defines,
                            bool lenient = false);
 
-/// Resolves a relative file name written in `node` as Mitsuba does: next to the file that
-/// names it, else next to the top-level scene file. Returns the first candidate that exists
-/// (or the first candidate when none does, so that the error names it).
+/// Where a file name written in `node` was looked up, and what was found.
+struct FileSearch {
+    std::string path;  ///< the file found, or the candidate next to the naming file
+    bool found = false;
+    std::vector<std::string> searched;  ///< the folders tried, in order (none when absolute)
+};
+/// Looks a relative file name up as Mitsuba does: in the <path> folders (`search_dirs`,
+/// Mitsuba 3), next to the file that names it, then next to the top-level scene file.
+FileSearch find_file(const XmlNode& node, const std::string& name,
+                     const std::vector<std::string>& search_dirs);
+/// find_file() without <path> folders: the file found, or the candidate next to the naming
+/// file (for files read while the tree is converted, before the <path>s are known).
 std::string resolve_path(const XmlNode& node, const std::string& name);
 
 /// camelCase -> snake_case with Mitsuba's irregular names (intIOR -> int_ior, ...).

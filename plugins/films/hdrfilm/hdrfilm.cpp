@@ -76,8 +76,19 @@ public:
             props.fail("file_format",
                        "file_format must be openexr or png (femto always writes both "
                        "name.exr and a name.png preview)");
+        // Mitsuba 0.6 parameters that change nothing femto writes: accepted with a note.
         if (props.get_bool("banner", false))
-            props.fail("banner", "femto does not draw banners; use banner=false");
+            log_note(props.location_of("banner"), "femto ignores banner=true (it draws no banner)");
+        if (props.get_bool("high_quality_edges", false))
+            log_note(props.location_of("high_quality_edges"),
+                     "femto ignores high_quality_edges=true (camera samples stay inside the film)");
+        const std::string cf = props.get_string("component_format", "float32");
+        if (cf != "float32" && cf != "float16" && cf != "uint32")
+            props.fail("component_format",
+                       "component_format must be float16, float32 or uint32, not \"" + cf + "\"");
+        if (cf != "float32")
+            log_note(props.location_of("component_format"),
+                     "femto ignores component_format=" + cf + " (its EXR is always float32)");
         exposure_ = float(props.get_float("exposure", 0.0));
         border_ = std::max(0, int(std::ceil(rfilter_->radius() - 0.5f)));
         pixels_.resize(size_t(width_) * size_t(height_));
@@ -142,4 +153,10 @@ FEMTO_PLUGIN(HdrFilm, femto::PluginKind::Film, "hdrfilm",
               {"pixel_format", "string", "rgb", "accepted for Mitsuba compatibility; only rgb"},
               {"file_format", "string", "openexr",
                "accepted for Mitsuba compatibility; EXR and PNG are always written"},
-              {"banner", "boolean", "false", "accepted for Mitsuba compatibility; must be false"}})
+              {"banner", "boolean", "false",
+               "accepted for Mitsuba compatibility; femto draws no banner"},
+              {"high_quality_edges", "boolean", "false",
+               "accepted for Mitsuba 0.6 compatibility; samples stay inside the film"},
+              {"component_format", "string", "float32",
+               "float16, float32 or uint32, accepted for Mitsuba compatibility; the EXR is "
+               "always float32"}})

@@ -14,6 +14,8 @@ public:
         far_ = props.get_float("far_clip", 10000.0);
         if (!(near_ >= 0) || !(far_ > near_))
             props.fail("near_clip", "need 0 <= near_clip < far_clip");
+        // Read by Mitsuba's projective cameras for depth of field, which this camera has not.
+        if (props.has("focus_distance")) props.get_float("focus_distance");
         inv_aspect_ = float(film_->height()) / float(film_->width());
         // Rays start anywhere on the film's rectangle: its corners must be in range too.
         for (const float x : {-1.f, 1.f})
@@ -42,4 +44,6 @@ private:
 FEMTO_PLUGIN(Orthographic, femto::PluginKind::Sensor, "orthographic",
              "Orthographic camera; to_world's scale sets the visible extent",
              {{"near_clip", "float", "0.01", "near clipping distance"},
-              {"far_clip", "float", "10000", "far clipping distance"}})
+              {"far_clip", "float", "10000", "far clipping distance"},
+              {"focus_distance", "float", "",
+               "accepted for Mitsuba compatibility; no effect (no depth of field)"}})

@@ -56,11 +56,19 @@ public:
         far_ = props.get_float("far_clip", 10000.0);
         if (!(near_ > 0) || !(far_ > near_))
             props.fail("near_clip", "need 0 < near_clip < far_clip");
+        // Mitsuba's projective cameras read it for the thin lens; a pinhole is in focus at
+        // every distance, so it changes nothing here either.
+        if (props.has("focus_distance")) props.get_float("focus_distance");
+        // Mitsuba 3: the principal point moves by this fraction of the image, the image
+        // content by as much the other way (a pixel looks where pixel + offset used to).
+        shift_x_ = props.get_float("principal_point_offset_x", 0.0);
+        shift_y_ = props.get_float("principal_point_offset_y", 0.0);
         origin_ = to_world_.point(Vec3(0.f));
     }
 
     Ray sample_ray(Vec2 pos, Vec2) const override {
-        const float nx = pos.x / float(film_->width()), ny = pos.y / float(film_->height());
+        const double nx = pos.x / double(film_->width()) + shift_x_;
+        const double ny = pos.y / double(film_->height()) + shift_y_;
         const Vec3 d_cam{float((1 - 2 * nx) * tan_x_), float((1 - 2 * ny) * tan_y_), 1.f};
         const Vec3 d_world = to_world_.vector(d_cam);
         const float len = length(d_world);
@@ -68,7 +76,7 @@ public:
     }
 
 private:
-    double tan_x_ = 0, tan_y_ = 0, near_ = 0, far_ = 0;
+    double tan_x_ = 0, tan_y_ = 0, near_ = 0, far_ = 0, shift_x_ = 0, shift_y_ = 0;
     Vec3 origin_;
 };
 
@@ -81,4 +89,10 @@ FEMTO_PLUGIN(Perspective, femto::PluginKind::Sensor, "perspective",
               {"focal_length", "string", "50mm",
                "35 mm-equivalent focal length, when fov is absent"},
               {"near_clip", "float", "0.01", "near clipping distance"},
-              {"far_clip", "float", "10000", "far clipping distance"}})
+              {"far_clip", "float", "10000", "far clipping distance"},
+              {"focus_distance", "float", "",
+               "accepted for Mitsuba compatibility; no effect on a pinhole camera"},
+              {"principal_point_offset_x", "float", "0",
+               "principal point shift along x, as a fraction of the image width (Mitsuba 3)"},
+              {"principal_point_offset_y", "float", "0",
+               "principal point shift along y, as a fraction of the image height (Mitsuba 3)"}})
