@@ -69,12 +69,15 @@ summarize() {
 }
 
 if [ -n "$REPLAY" ]; then
-  log="$BUILD/fuzz-run/replay-$REPLAY_TARGET.log"
-  mkdir -p "$BUILD/fuzz-run"
+  # -runs=0 runs each file once (and an empty input); libFuzzer's leak check would run some
+  # twice, skewing the tally.
+  work="$BUILD/fuzz-run/replay-$REPLAY_TARGET"
+  rm -rf "$work"
+  mkdir -p "$work/artifacts"
   status=0
-  "$BUILD/bin/femto_fuzz_$REPLAY_TARGET" -runs=0 -timeout=10 -rss_limit_mb=2048 \
-    -print_final_stats=1 -artifact_prefix="$BUILD/fuzz-run/replay-" "$REPLAY" 2>"$log" || status=$?
-  summarize "$REPLAY_TARGET" "$log" "$BUILD/fuzz-run" "$status"
+  "$BUILD/bin/femto_fuzz_$REPLAY_TARGET" -runs=0 -detect_leaks=0 -timeout=10 -rss_limit_mb=2048 \
+    -print_final_stats=1 -artifact_prefix="$work/artifacts/" "$REPLAY" 2>"$work/log" || status=$?
+  summarize "$REPLAY_TARGET" "$work/log" "$work/artifacts" "$status"
   exit
 fi
 
