@@ -7,6 +7,7 @@ PACKAGES=(
   libembree-dev libtbb-dev libpugixml-dev libfmt-dev libcli11-dev libtinyobjloader-dev
   libopenimageio-dev openimageio-tools libopenexr-dev libopencolorio-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev
   python3 python3-numpy python3-matplotlib
 )
 missing=()

@@ -22,3 +22,7 @@ cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFEMTO_
 cmake --build build-sanitize -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j "$JOBS" \
   -R '^(Mutation|Loader|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^StreakFilm\.EqualsTransientRowsKernel|^cli\.(bad|unknown|missing|unwritable|compat)' 
+# Fuzzing (fuzz/, docs/fuzzing.md): each libFuzzer harness (the scene loader, the PLY, OBJ,
+# serialized and .vol readers) for 30 s on its seed corpus, clang with ASan + UBSan, in
+# build-fuzz.
+scripts/fuzz.sh 30

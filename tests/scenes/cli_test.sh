@@ -350,6 +350,11 @@ viz_bad_input)
   expect_exit 2 'level must be a positive number' -- "$femto" viz peak-time out/cb.exr -o out/p.png --level 0
   expect_exit 2 'must end in \.exr' -- "$femto" viz unwarp out/cb.exr -o out/u.png --to world
   expect_exit 2 'needs a viz command' -- "$femto" viz
+  # A FIFO (of either name) is refused at once, not read: opening it would block forever.
+  mkfifo cube.npy cube.exr || fail "mkfifo"
+  for f in cube.npy cube.exr; do
+    expect_exit 2 "\"$f\": it is not a regular file" -- timeout 10 "$femto" viz peak-time $f -o out/p.png
+  done
   [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;
 streak_film)
   streak_scene > streak.xml

@@ -199,6 +199,23 @@ TEST(Npy, StreamedPixelsAndWriteErrorsSayWhy) {
     }
 }
 
+TEST(Npy, AShapeLargerThanTheFileIsRefusedBeforeAllocating) {
+    // 2^16 x 2^16 x 2 floats (32 GiB, more than a test machine has) in a file of 128 bytes.
+    const auto dir = temp_dir("npy-short");
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (65536, 65536, 2), }";
+    header.resize(128 - 10 - 1, ' ');
+    header += '\n';
+    const std::string pre("\x93NUMPY\x01\x00", 8);
+    write_text(dir / "big.npy", pre + char(header.size()) + char(0) + header);
+    std::vector<size_t> shape;
+    try {
+        io::read_npy((dir / "big.npy").string(), shape);
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("is truncated"), std::string::npos) << e.what();
+    }
+}
+
 TEST(OutputSet, FilesAppearTogetherOnCommit) {
     const auto dir = temp_dir("output-set");
     write_text(dir / "a.npy", "old a");

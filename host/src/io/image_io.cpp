@@ -616,6 +616,9 @@ int int_attribute(const Attributes& attributes, const std::string& name) {
 }  // namespace
 
 Cube read_exr_cube(const std::string& path) {
+    // OpenEXR opens the file itself: refuse first what would block it (a FIFO) or never end.
+    if (const std::string problem = input_file_problem(path); !problem.empty())
+        throw SceneError(fmt::format("cannot read transient EXR \"{}\": {}", path, problem));
     Cube cube;
     try {
         Imf::MultiPartInputFile file(path.c_str());
@@ -750,15 +753,16 @@ void write_npy(const std::string& path, const std::vector<size_t>& shape, const 
 }
 
 std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape) {
-    std::ifstream in(path, std::ios::binary);
+    // InputFile refuses a FIFO or a device, which would block the reader or never end.
+    InputFile in(path, SourceLocation{});
     char pre[10];
-    if (!in.read(pre, 10) || std::memcmp(pre, "\x93NUMPY", 6) != 0)
+    if (in.read(pre, 10) != 10 || std::memcmp(pre, "\x93NUMPY", 6) != 0)
         throw SceneError(fmt::format("\"{}\" is not a .npy file", path));
     if (pre[6] != 1)
         throw SceneError(fmt::format("\"{}\": only .npy version 1.0 is supported", path));
     const size_t len = size_t(uint8_t(pre[8])) | (size_t(uint8_t(pre[9])) << 8);
     std::string header(len, '\0');
-    if (!in.read(header.data(), std::streamsize(len)))
+    if (in.read(header.data(), len) != len)
         throw SceneError(fmt::format("\"{}\" is truncated", path));
     if (header.find("'descr': '<f4'") == std::string::npos ||
         header.find("'fortran_order': False") == std::string::npos)
@@ -784,8 +788,11 @@ std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape)
         if (comma == std::string::npos) break;
         pos = comma + 1;
     }
+    // Checked before allocating: a header may declare far more data than the file holds.
+    if (count * sizeof(float) > in.size() - 10 - len)
+        throw SceneError(fmt::format("\"{}\" is truncated", path));
     std::vector<float> data(count);
-    if (!in.read(reinterpret_cast<char*>(data.data()), std::streamsize(count * sizeof(float))))
+    if (in.read(data.data(), count * sizeof(float)) != count * sizeof(float))
         throw SceneError(fmt::format("\"{}\" is truncated", path));
     return data;
 }

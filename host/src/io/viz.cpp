@@ -10,12 +10,12 @@
 #include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <mutex>
 #include <optional>
 
 #include "femto/error.h"
+#include "femto/input_file.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
 
@@ -195,10 +195,8 @@ io::Cube load_cube(const std::string& path) {
     if (fs::is_directory(path, ec))
         throw SceneError(fmt::format("\"{}\" is a folder, not a cube file", path));
     char magic[8] = {};
-    {
-        std::ifstream in(path, std::ios::binary);
-        in.read(magic, 8);
-    }
+    // A FIFO would block here (and in the readers below) forever: InputFile refuses it.
+    InputFile(path, SourceLocation{}).read(magic, 8);
     if (std::string(magic, 6) != "\x93NUMPY") {
         // A single-part OpenEXR file (the version field's multi-part bit, 0x1000, is clear)
         // may be a streak image; a cube has a frames part and (usually) a depth part.

@@ -1,0 +1,25 @@
+// Shared by the libFuzzer harnesses: running one input and classifying its outcome, the
+// tallies printed at exit, and the scratch file the binary readers' inputs are written to.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+namespace femto::fuzz {
+
+/// Runs `load` on one input. The expected outcomes are: it returns (the input is accepted),
+/// or it throws a femto::SceneError whose message has a file:line:col location (the CLI's
+/// exit 2). Anything else, a SceneError without a location or another exception type, is a
+/// finding: it is printed and the process aborts, so libFuzzer keeps the input as a crash.
+void run(const std::function<void()>& load);
+
+/// This process's scratch folder (created on first use, removed at exit).
+const std::string& scratch_dir();
+
+/// Writes `size` bytes to a file named `name` in a scratch folder of this process (removed
+/// at exit) and returns its absolute path: femto's readers take files, not memory.
+std::string write_scratch(const std::string& name, const uint8_t* data, size_t size);
+
+}  // namespace femto::fuzz

@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,vol}.
+
+xml: every scenes/*/scene.xml of the repository (as <folder>.xml) with its film shrunk to 8 x 8
+pixels and 8 time bins (loading allocates the film: at the scenes' sizes, up to 200 MB, a load
+takes 0.5 s under AddressSanitizer), plus meshes.xml, a small scene that reads one seed of each
+binary kind (by names relative to the scene), so that mutated scenes reach those readers.
+ply, obj, vol: small valid files of each variant the readers handle (scenes/ holds none).
+
+Usage: make_seeds.py REPO_DIR OUT_DIR
+"""
+import pathlib
+import re
+import shutil
+import struct
+import sys
+
+# A unit square pyramid: 5 vertices, 4 triangles and a quad base.
+POSITIONS = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0), (0, 0, 1)]
+NORMALS = [(0, 0, 1)] * 5
+UVS = [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0.5)]
+FACES = [(0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4), (3, 2, 1, 0)]
+
+
+def ply_header(fmt, normals, uvs, extra=""):
+    lines = ["ply", f"format {fmt} 1.0", "comment femto fuzz seed", f"element vertex {len(POSITIONS)}",
+             "property float x", "property float y", "property float z"]
+    if normals:
+        lines += ["property float nx", "property float ny", "property float nz"]
+    if uvs:
+        lines += ["property float u", "property float v"]
+    lines += [f"element face {len(FACES)}", "property list uchar int vertex_indices"]
+    return ("\n".join(lines) + "\n" + extra + "end_header\n").encode()
+
+
+def ply_ascii(normals=True, uvs=True):
+    body = []
+    for i, p in enumerate(POSITIONS):
+        row = list(p) + (list(NORMALS[i]) if normals else []) + (list(UVS[i]) if uvs else [])
+        body.append(" ".join(str(v) for v in row))
+    for f in FACES:
+        body.append(" ".join(str(v) for v in (len(f),) + f))
+    return ply_header("ascii", normals, uvs) + ("\n".join(body) + "\n").encode()
+
+
+def ply_binary(endian):
+    fmt = "binary_little_endian" if endian == "<" else "binary_big_endian"
+    # An extra element with a list and a scalar that the reader must skip.
+    extra = "element material 1\nproperty list uchar float weights\nproperty double id\n"
+    out = ply_header(fmt, True, True, extra)
+    for i, p in enumerate(POSITIONS):
+        out += struct.pack(endian + "8f", *p, *NORMALS[i], *UVS[i])
+    for f in FACES:
+        out += struct.pack(endian + "B" + "i" * len(f), len(f), *f)
+    out += struct.pack(endian + "B2fd", 2, 0.25, 0.75, 7.0)
+    return out
+
+
+def obj(normals, uvs):
+    lines = ["# femto fuzz seed", "o pyramid"] + [f"v {x} {y} {z}" for x, y, z in POSITIONS]
+    if uvs:
+        lines += [f"vt {u} {v}" for u, v in UVS]
+    if normals:
+        lines += [f"vn {x} {y} {z}" for x, y, z in NORMALS]
+    for f in FACES:
+        corners = []
+        for i in f:
+            k = i + 1
+            corners.append(f"{k}/{k}/{k}" if normals and uvs else f"{k}//{k}" if normals
+                           else f"{k}/{k}" if uvs else f"{k}")
+        lines.append("f " + " ".join(corners))
+    return ("\n".join(lines) + "\n").encode()
+
+
+def vol(res, values, bbox=(0, 0, 0, 1, 1, 1)):
+    # Mitsuba gridvolume: "VOL", version 3, encoding 1 (float32), resolution, 1 channel, bbox.
+    out = b"VOL" + bytes([3]) + struct.pack("<i3ii6f", 1, *res, 1, *bbox)
+    return out + struct.pack(f"<{len(values)}f", *values)
+
+
+MESHES_XML = """<scene version="3.0.0">
+    <sensor type="perspective">
+        <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>
+    </sensor>
+    <emitter type="point"><point name="position" x="0" y="0" z="3"/></emitter>
+    <shape type="ply"><string name="filename" value="ply/ascii.ply"/></shape>
+    <shape type="obj">
+        <string name="filename" value="obj/full.obj"/>
+        <transform name="to_world"><translate x="3"/></transform>
+    </shape>
+    <medium type="heterogeneous" id="smoke">
+        <string name="density" value="vol/ramp.vol"/>
+        <float name="scale" value="2"/>
+    </medium>
+    <shape type="cube">
+        <bsdf type="null"/>
+        <ref name="interior" id="smoke"/>
+    </shape>
+</scene>
+"""
+
+
+def main():
+    repo, out = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
+    files = {
+        "ply/ascii.ply": ply_ascii(),
+        "ply/ascii-plain.ply": ply_ascii(normals=False, uvs=False),
+        "ply/binary-le.ply": ply_binary("<"),
+        "ply/binary-be.ply": ply_binary(">"),
+        "obj/full.obj": obj(True, True),
+        "obj/normals.obj": obj(True, False),
+        "obj/uvs.obj": obj(False, True),
+        "obj/plain.obj": obj(False, False),
+        "vol/one.vol": vol((1, 1, 1), [0.5]),
+        "vol/ramp.vol": vol((2, 2, 2), [0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7], (-1, -1, -1, 1, 1, 1)),
+        "vol/slab.vol": vol((3, 1, 2), [1, 2, 3, 0, 0, 0], (0, 0, 0, 2, 0.5, 1)),
+        "xml/meshes.xml": MESHES_XML.encode(),
+    }
+    for scene in sorted(repo.glob("scenes/*/scene.xml")):
+        text = re.sub(r'(<default name="(res|bins)" value=")[0-9]+"', r'\g<1>8"', scene.read_text())
+        files[f"xml/{scene.parent.name}.xml"] = text.encode()
+    if out.exists():
+        shutil.rmtree(out)
+    for name, data in files.items():
+        path = out / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(data)
+
+
+if __name__ == "__main__":
+    main()
