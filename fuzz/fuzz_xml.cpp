@@ -10,13 +10,13 @@
 
 namespace {
 
-// The scene goes to a file next to copies of the seed meshes and grids (ply/, obj/, vol/; see
-// make_seeds.py), so that mutated scenes naming them reach the PLY, OBJ and .vol readers by
-// relative names, as real scenes do.
+// The scene goes to a file next to copies of the seed meshes and grids (ply/, obj/,
+// serialized/, vol/; see make_seeds.py), so that mutated scenes naming them reach the mesh and
+// .vol readers by relative names, as real scenes do.
 std::string prepare_scene_dir() {
     namespace fs = std::filesystem;
     const fs::path dir = femto::fuzz::scratch_dir();
-    for (const char* kind : {"ply", "obj", "vol"})
+    for (const char* kind : {"ply", "obj", "serialized", "vol"})
         fs::copy(fs::path(FEMTO_FUZZ_SEED_DIR) / kind, dir / kind,
                  fs::copy_options::recursive | fs::copy_options::overwrite_existing);
     return dir.string();

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,vol}.
+"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,serialized,vol}.
 
 xml: every scenes/*/scene.xml of the repository (as <folder>.xml) with its film shrunk to 8 x 8
 pixels and 8 time bins (loading allocates the film: at the scenes' sizes, up to 200 MB, a load
@@ -14,12 +14,14 @@ import re
 import shutil
 import struct
 import sys
+import zlib
 
 # A unit square pyramid: 5 vertices, 4 triangles and a quad base.
 POSITIONS = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0), (0, 0, 1)]
 NORMALS = [(0, 0, 1)] * 5
 UVS = [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0.5)]
 FACES = [(0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4), (3, 2, 1, 0)]
+TRIANGLES = [f for f in FACES if len(f) == 3] + [(3, 2, 1), (3, 1, 0)]
 
 
 def ply_header(fmt, normals, uvs, extra=""):
@@ -78,12 +80,39 @@ def vol(res, values, bbox=(0, 0, 0, 1, 1, 1)):
     return out + struct.pack(f"<{len(values)}f", *values)
 
 
+def serialized(version, wide, normals, uvs, meshes=1):
+    # Mitsuba .serialized: per mesh uint16 0x041C, uint16 version, then a zlib stream (flags,
+    # the name in version 4, counts, positions, normals, uvs, uint32 indices); a dictionary
+    # of the meshes' offsets and their count ends the file.
+    fmt = "d" if wide else "f"
+    out, offsets = b"", []
+    for m in range(meshes):
+        flags = (0x2000 if wide else 0x1000) | (0x1 if normals else 0) | (0x2 if uvs else 0)
+        body = struct.pack("<I", flags) + (b"mesh\0" if version >= 4 else b"")
+        body += struct.pack("<QQ", len(POSITIONS), len(TRIANGLES))
+        body += struct.pack(f"<{3 * len(POSITIONS)}{fmt}", *[c + m for p in POSITIONS for c in p])
+        if normals:
+            body += struct.pack(f"<{3 * len(POSITIONS)}{fmt}", *([0.0, 0.0, 1.0] * len(POSITIONS)))
+        if uvs:
+            body += struct.pack(f"<{2 * len(POSITIONS)}{fmt}", *([0.5, 0.5] * len(POSITIONS)))
+        body += struct.pack(f"<{3 * len(TRIANGLES)}I", *[i for t in TRIANGLES for i in t])
+        offsets.append(len(out))
+        out += struct.pack("<HH", 0x041C, version) + zlib.compress(body)
+    out += struct.pack(f"<{len(offsets)}{'Q' if version >= 4 else 'I'}", *offsets)
+    return out + struct.pack("<I", meshes)
+
+
 MESHES_XML = """<scene version="3.0.0">
     <sensor type="perspective">
         <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>
     </sensor>
     <emitter type="point"><point name="position" x="0" y="0" z="3"/></emitter>
     <shape type="ply"><string name="filename" value="ply/ascii.ply"/></shape>
+    <shape type="serialized">
+        <string name="filename" value="serialized/v3-three.serialized"/>
+        <integer name="shape_index" value="2"/>
+        <transform name="to_world"><translate x="-3"/></transform>
+    </shape>
     <shape type="obj">
         <string name="filename" value="obj/full.obj"/>
         <transform name="to_world"><translate x="3"/></transform>
@@ -111,6 +140,9 @@ def main():
         "obj/normals.obj": obj(True, False),
         "obj/uvs.obj": obj(False, True),
         "obj/plain.obj": obj(False, False),
+        "serialized/v4.serialized": serialized(4, False, True, True),
+        "serialized/v4-double.serialized": serialized(4, True, False, False),
+        "serialized/v3-three.serialized": serialized(3, False, True, False, meshes=3),
         "vol/one.vol": vol((1, 1, 1), [0.5]),
         "vol/ramp.vol": vol((2, 2, 2), [0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7], (-1, -1, -1, 1, 1, 1)),
         "vol/slab.vol": vol((3, 1, 2), [1, 2, 3, 0, 0, 0], (0, 0, 0, 2, 0.5, 1)),
