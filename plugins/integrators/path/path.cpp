@@ -225,9 +225,8 @@ private:
                 const double pc = connection_->pdf(cq, ds.distance);
                 share = mis_ ? float(balance_heuristic(ds.pdf, pc)) : (pc > 0 ? 0.f : 1.f);
             }
-            return medium_vertex(scene, sampler, path, strategy, ds.distance, share)
-                       ? SegmentEnd::Scattered
-                       : SegmentEnd::Stop;
+            return medium_vertex(scene, sampler, path, strategy, share) ? SegmentEnd::Scattered
+                                                                        : SegmentEnd::Stop;
         }
         if (!found || path.throughput.is_black()) return SegmentEnd::Stop;
         return SegmentEnd::Surface;
@@ -266,11 +265,11 @@ private:
         return connects;
     }
 
-    // A vertex in the medium at `distance` along the ray: a light sample (weighted by `share`),
+    // The vertex in the medium the clock just reached: a light sample (weighted by `share`),
     // then the direction out by the angular strategy. Returns false when the path ends.
     bool medium_vertex(const Scene& scene, Sampler& sampler, PathState& path,
-                       const DistanceMixture& strategy, double distance, float share) const {
-        const Vec3 p = path.ray.o + path.ray.d * float(distance), wi = -path.ray.d;
+                       const DistanceMixture& strategy, float share) const {
+        const Vec3 p = path.clock.position(), wi = -path.ray.d;
         // Time angular sampling needs the next distance before the direction.
         double next_distance = kInfinity;
         if (!steady_angular_) {
