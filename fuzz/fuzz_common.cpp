@@ -10,6 +10,8 @@
 #include <typeinfo>
 
 #include "femto/error.h"
+#include "femto/host.h"
+#include "femto/properties.h"
 
 namespace femto::fuzz {
 namespace {
@@ -85,6 +87,16 @@ std::string write_scratch(const std::string& name, const uint8_t* data, size_t s
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
     if (!out) finding("cannot write the scratch file", path.c_str());
     return path.string();
+}
+
+void read_plugin_file(PluginKind kind, const std::string& type, const std::string& parameter,
+                      const std::string& file_name, const uint8_t* data, size_t size) {
+    const std::string path = write_scratch(file_name, data, size);
+    run([&] {
+        Properties props(type, {"fuzz.xml", 1, 1});
+        props.set(parameter, Properties::Type::String, path, {"fuzz.xml", 2, 5});
+        create_object(kind, type, props);
+    });
 }
 
 }  // namespace femto::fuzz

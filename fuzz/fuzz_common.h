@@ -7,6 +7,8 @@
 #include <functional>
 #include <string>
 
+#include "femto/object.h"
+
 namespace femto::fuzz {
 
 /// Runs `load` on one input. The expected outcomes are: it returns (the input is accepted),
@@ -21,5 +23,11 @@ const std::string& scratch_dir();
 /// Writes `size` bytes to a file named `name` in a scratch folder of this process (removed
 /// at exit) and returns its absolute path: femto's readers take files, not memory.
 std::string write_scratch(const std::string& name, const uint8_t* data, size_t size);
+
+/// One input of a binary reader: writes the bytes to the scratch file `file_name` and, under
+/// run(), creates plugin `type` of `kind` (as the loader does, schema checked) with its
+/// parameter `parameter` naming that file at a location, so that errors are located.
+void read_plugin_file(PluginKind kind, const std::string& type, const std::string& parameter,
+                      const std::string& file_name, const uint8_t* data, size_t size);
 
 }  // namespace femto::fuzz

@@ -2,18 +2,11 @@
 // loader creates it, with its schema checked). The file name's location makes errors located.
 #include <cstddef>
 #include <cstdint>
-#include <string>
 
-#include "femto/host.h"
-#include "femto/properties.h"
 #include "fuzz_common.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    const std::string path = femto::fuzz::write_scratch("input.ply", data, size);
-    femto::fuzz::run([&] {
-        femto::Properties props("ply", {"fuzz.xml", 1, 1});
-        props.set("filename", femto::Properties::Type::String, path, {"fuzz.xml", 2, 5});
-        femto::create_object(femto::PluginKind::Shape, "ply", props);
-    });
+    femto::fuzz::read_plugin_file(femto::PluginKind::Shape, "ply", "filename", "input.ply", data,
+                                  size);
     return 0;
 }
