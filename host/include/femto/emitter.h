@@ -40,12 +40,45 @@ struct EmitterSample {
     const class Emitter* emitter = nullptr;  ///< which emitter (set by Scene::sample_emitter)
 };
 
+/// Light leaving an emitter, sampled to start a light path (light tracing, BDPT).
+struct EmissionSample {
+    Vec3 p;                     ///< where the light leaves
+    Vec3 n;                     ///< the surface normal there (zero for point-like emitters)
+    Vec3 d;                     ///< unit direction it leaves in
+    float p_error = 0.f;        ///< for a surface point: its offset scale (Hit::p_error)
+    float pdf_position = 0.f;   ///< area density of p (1 for a delta position: point, spot)
+    float pdf_direction = 0.f;  ///< solid-angle density of d at p (1 for a delta direction)
+    /// eval_direction(d) / (pdf_position x pdf_direction): the light path's starting weight
+    /// (power per unit of whatever the deltas leave).
+    Color weight;
+    bool delta_position = false;   ///< point, spot: the light leaves from a single point
+    bool delta_direction = false;  ///< collimated: the light leaves in a single direction
+    bool valid() const { return pdf_position > 0.f && pdf_direction > 0.f; }
+};
+
 class Emitter : public Object {
 public:
     PluginKind kind() const override { return PluginKind::Emitter; }
 
     /// Samples incident light at `ref` (the shadow ray is the caller's job).
     virtual EmitterSample sample_direct(const Vec3& ref, Vec2 u) const = 0;
+    /// Samples where and in which direction light leaves (a light path's first segment):
+    /// `u_position` picks the point, `u_direction` the direction. The default fails (an
+    /// emitter that light paths cannot start from; light tracers refuse it).
+    virtual EmissionSample sample_emission(Vec2 /*u_position*/, Vec2 /*u_direction*/) const {
+        return {};
+    }
+    /// What leaves point `at.p` (a sample_emission() result) per unit solid angle toward
+    /// world direction `d`: radiance x |cos| for surfaces, intensity for point-like emitters;
+    /// zero for a delta direction (no connection can follow it).
+    virtual Color eval_direction(const EmissionSample& /*at*/, const Vec3& /*d*/) const {
+        return {};
+    }
+    /// Densities with which sample_emission() returns point `at.p` and direction `d`.
+    virtual void pdf_emission(const EmissionSample& /*at*/, const Vec3& /*d*/, float& pdf_position,
+                              float& pdf_direction) const {
+        pdf_position = pdf_direction = 0.f;
+    }
     /// Solid-angle pdf that sample_direct(ref) picks the point `hit` on this emitter.
     virtual float pdf_direct(const Vec3& /*ref*/, const Hit& /*hit*/) const { return 0.f; }
     /// Radiance leaving the emitter's surface at `hit` toward world direction `w`.

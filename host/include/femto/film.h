@@ -24,6 +24,36 @@ struct Contribution {
     double time = 0.0;
 };
 
+/// A contribution an integrator adds at a film position of its choice (a light path seen by
+/// the camera): `radiance` arrives at camera time `time` at film position `pos` (pixels,
+/// origin top-left) after a last segment of optical length `sensor_distance` from the sensor
+/// (what world-time films subtract and store as depth).
+struct Splat {
+    Vec2 pos;
+    Color radiance;
+    uint32_t sample_index = 0;  ///< of the sample that made it (a progressive filter's iteration)
+    double time = 0.0;
+    double sensor_distance = -1.0;
+};
+
+/// The splats of some samples, in the order they were made (the renderer merges them into the
+/// film in that order, so renders do not depend on the thread count).
+class SplatList {
+public:
+    void add(const Splat& s) {
+        if (!s.radiance.is_black()) items_.push_back(s);
+    }
+    void clear() { items_.clear(); }
+    const std::vector<Splat>& items() const { return items_; }
+    /// Index of the sample that adds the next splats, set by the renderer.
+    void set_sample_index(uint32_t index) { sample_index_ = index; }
+    uint32_t sample_index() const { return sample_index_; }
+
+private:
+    std::vector<Splat> items_;
+    uint32_t sample_index_ = 0;
+};
+
 /// What the integrator reports for one camera sample.
 class ContributionList {
 public:
@@ -45,10 +75,27 @@ public:
     void set_sensor_distance(double d) { sensor_distance_ = d; }
     double sensor_distance() const { return sensor_distance_; }
 
+    /// Adds radiance at another film position (a bidirectional integrator's light subpath
+    /// seen by the camera). Only for integrators whose splats() is true: the renderer then
+    /// gives every camera sample a splat list (splat_list()).
+    void splat(Vec2 pos, const Color& radiance, double time, double sensor_distance) {
+        if (splats_) splats_->add({pos, radiance, sample_index_, time, sensor_distance});
+    }
+    /// The list splat() adds to (set by the renderer), or null.
+    void set_splat_list(SplatList* splats) { splats_ = splats; }
+    SplatList* splat_list() const { return splats_; }
+
+    /// True when this list is one splat, not a camera sample: films add its radiance to the
+    /// bins but no filter weight (Film::add_splat_weight() normalises splats).
+    void set_is_splat(bool splat) { is_splat_ = splat; }
+    bool is_splat() const { return is_splat_; }
+
 private:
     std::vector<Contribution> items_;
     double sensor_distance_ = -1.0;
     uint32_t sample_index_ = 0;
+    SplatList* splats_ = nullptr;
+    bool is_splat_ = false;
 };
 
 /// Metadata recorded into every output file.
@@ -129,6 +176,14 @@ public:
     /// Whether pixel row y receives any sample (a streak film records only a few rows);
     /// the renderer skips the others.
     virtual bool row_active(int /*y*/) const { return true; }
+    /// Called once before rendering when the integrator splats: `light_only` when it has no
+    /// camera samples (a light tracer). A film that cannot take splats throws a SceneError.
+    virtual void prepare_splats(bool /*light_only*/) {}
+    /// A light tracer's pass of `samples_per_pixel` x pixels light paths is done: adds to every
+    /// pixel the filter weight that many camera samples per pixel would have added in
+    /// expectation (filter_weight_integral()), so that splats are normalised as camera samples
+    /// are. The default throws: the film does not support light tracing.
+    virtual void add_splat_weight(double samples_per_pixel);
     /// The current image integrated over time: linear RGB, row-major, top row first, normalised
     /// by the reconstruction-filter weights (what name.exr holds for a steady film).
     virtual std::vector<float> steady_image() const = 0;
@@ -140,6 +195,11 @@ public:
     static std::vector<ParamSpec> inherited_params();
 
 protected:
+    /// For each pixel column (`horizontal`) or row, the integral of the reconstruction filter
+    /// centred on it over the film's extent: camera samples drawn uniformly over the film give a
+    /// pixel (x, y) the expected weight spp x integral_x[x] x integral_y[y].
+    std::vector<double> filter_weight_integrals(bool horizontal) const;
+
     /// Reads `width`, `height` and the <rfilter> child (default `gaussian`); validates sizes.
     explicit Film(const class Properties& props);
 

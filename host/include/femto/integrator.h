@@ -1,6 +1,9 @@
-// femto public API: integrators. The host's renderer runs passes over image tiles and calls
-// sample() once per camera sample; the integrator reports each radiance contribution with
-// its optical path length (so the same integrator feeds steady and transient films).
+// femto public API: integrators. The host's renderer runs passes and, in each, calls
+// sample() once per camera sample (over image tiles) or, for an integrator whose samples start
+// at the lights, sample_light() once per light path; the integrator reports each radiance
+// contribution with its optical path length (so the same integrator feeds steady and transient
+// films), at its camera sample's pixel or, as a splat, at any film position.
+// docs/writing-plugins.md explains splatting and the per-pass hook.
 #pragma once
 
 #include <cstdint>
@@ -14,14 +17,46 @@
 
 namespace femto {
 
+/// Where an integrator's samples start.
+enum class SampleSource {
+    /// sample() once per camera sample: samples_per_pixel per pixel, over image tiles.
+    Camera,
+    /// sample_light() samples_per_pixel x pixels times per render, each adding splats only (a
+    /// light tracer has no camera samples). The film normalises the splats by the filter
+    /// weight that as many camera samples would carry (Film::add_splat_weight()).
+    Light,
+};
+
+/// The pass the renderer is about to run (Integrator::begin_pass()).
+struct PassInfo {
+    uint32_t pass = 0;          ///< 0, 1, ...
+    uint64_t seed = 0;          ///< the render's seed (another one for a pilot pass)
+    uint32_t sample_begin = 0;  ///< the pass draws sample indices [sample_begin, sample_end)
+    uint32_t sample_end = 0;    ///< of every pixel (or light paths sample index x pixels)
+    bool pilot = false;         ///< a temporal filter's pilot pass, not part of the image
+};
+
 class Integrator : public Object {
 public:
     PluginKind kind() const override { return PluginKind::Integrator; }
     /// Called once before rendering, after the scene is built.
     virtual void preprocess(const Scene& /*scene*/) {}
-    /// Estimates the radiance arriving along the camera ray `ray` (unit direction).
+    /// Where this integrator's samples start (default: at the camera).
+    virtual SampleSource source() const { return SampleSource::Camera; }
+    /// True when sample() adds splats (ContributionList::splat()); light tracers always do.
+    /// The renderer then collects them and merges them into the film in a fixed order.
+    virtual bool splats() const { return source() == SampleSource::Light; }
+    /// Called once before each pass, from one thread, after the film's start_pass() (e.g. a
+    /// photon pass that the pass's samples then query; it may use TBB itself).
+    virtual void begin_pass(const Scene& /*scene*/, const PassInfo& /*pass*/) {}
+    /// Estimates the radiance arriving along the camera ray `ray` (unit direction). Camera
+    /// integrators implement it; the default throws std::logic_error.
     virtual void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
-                        ContributionList& out) const = 0;
+                        ContributionList& out) const;
+    /// Traces one light path and adds what the camera sees of it to `out` (SampleSource::Light
+    /// integrators implement it; the default throws std::logic_error). The sampler is started
+    /// for (seed, path index modulo pixels, path index / pixels).
+    virtual void sample_light(const Scene& scene, Sampler& sampler, SplatList& out) const;
 };
 
 /// Base of integrators that follow paths of bounded depth (Mitsuba's MonteCarloIntegrator):

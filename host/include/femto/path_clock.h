@@ -18,6 +18,10 @@
 // pass), never from the film per sample.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
+#include "femto/emitter.h"
 #include "femto/film.h"
 #include "femto/sampler.h"
 #include "femto/scene.h"
@@ -84,6 +88,54 @@ private:
     ContributionList& out_;
     Vec3 position_;
     double time_ = 0.0;
+};
+
+/// The time rules of a light path (light tracing, a bidirectional integrator's light subpaths):
+/// PathClock's, from the other end. The path starts when its emitter's pulse says; each segment
+/// adds eta x its length between actual vertices, each vertex its delay; a connection to the
+/// sensor adds its optical length, which is also the splat's sensor distance (the segment
+/// world-time films remove, eq. 4.1).
+class LightClock {
+public:
+    /// Starts a light path at `origin` on `emitter`, drawing its emission time (one number
+    /// from `sampler` unless the pulse is a delta).
+    LightClock(const Scene& scene, const Emitter& emitter, const Vec3& origin, Sampler& sampler)
+        : window_(scene.time_window()),
+          position_(origin),
+          time_(PathClock::emission_time(emitter, sampler)) {}
+
+    /// Emission time plus the optical length travelled and the vertices' delays.
+    double time() const { return time_; }
+    const Vec3& position() const { return position_; }
+    /// The path moves to its next vertex `p` through a medium of refractive index `eta`.
+    void travel_to(const Vec3& p, double eta) {
+        time_ += distance_between(position_, p) * eta;
+        position_ = p;
+    }
+    /// A vertex holds the light for `delay` (VertexEvent::delay).
+    void delay(double delay) { time_ += delay; }
+    /// True when nothing the path carries can reach the film any more: past the window's end
+    /// (a connection to the sensor only adds time) or, in world time, past its world end (a
+    /// light path's world time is its own time: the connection is the sensor segment).
+    bool expired() const { return time_ > cut(); }
+    /// Whether light leaving the current vertex over at least `distance` more optical length
+    /// still arrives within the window (check it before tracing a connection).
+    bool arrives_in_time(double distance) const {
+        return std::isfinite(window_.world_end) ? time_ <= window_.world_end
+                                                : time_ + distance <= window_.end;
+    }
+    /// Adds `radiance` that reaches the sensor at film position `pos` from the current vertex
+    /// over a connection of optical length `connection` (ShadowConnection::optical_length).
+    void record(SplatList& out, Vec2 pos, const Color& radiance, double connection) const {
+        out.add({pos, radiance, out.sample_index(), time_ + connection, connection});
+    }
+
+private:
+    double cut() const { return std::min(window_.end, window_.world_end); }
+
+    TimeWindow window_;
+    Vec3 position_;
+    double time_;
 };
 
 }  // namespace femto

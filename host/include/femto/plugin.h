@@ -26,7 +26,9 @@ namespace femto {
 /// (6: schemas carry the base classes' parameters, ParamSpec::inherited_from.)
 /// (7: Object::location(); Film::block_bytes_per_pixel().)
 /// (8: Hit::p_error; PathClock::travel_to() measures time between actual vertices.)
-inline constexpr uint32_t kPluginAbiVersion = 8;
+/// (9: splats and light paths: Integrator::source()/sample_light()/begin_pass(), SplatList,
+///  Film::add_splat_weight(), Sensor::sample_direct(), Emitter::sample_emission().)
+inline constexpr uint32_t kPluginAbiVersion = 9;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -48,6 +48,10 @@ public:
     /// Picks an emitter uniformly (u_select) and samples it for `ref`; the pdf and weight
     /// include the selection probability.
     EmitterSample sample_emitter(const Vec3& ref, float u_select, Vec2 u) const;
+    /// Picks the emitter a light path starts from with one uniform number, as
+    /// sample_emitter() does (uniformly); `pmf` is the probability of the pick. Null when the
+    /// scene has no emitters.
+    const Emitter* select_emitter(float u, float& pmf) const;
     /// Density of sample_emitter() choosing `hit` on `emitter`, with the selection probability.
     float pdf_emitter(const Emitter& emitter, const Vec3& ref, const Hit& hit) const;
 

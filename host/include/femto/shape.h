@@ -61,7 +61,8 @@ struct TriangleMesh {
 struct ShapeSample {
     Vec3 p, n;
     Vec2 uv;
-    float pdf = 0.f;  ///< solid-angle density at the reference point (0 = failed)
+    float pdf = 0.f;      ///< solid-angle density at the reference point (0 = failed)
+    float p_error = 0.f;  ///< sample_area(): how far rays leaving p start off (Hit::p_error)
 };
 
 class Shape : public Object {

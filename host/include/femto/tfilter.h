@@ -127,6 +127,10 @@ struct PixelSums {
         for (int c = 0; c < 3; ++c) spill[c] += o.spill[c];
         return *this;
     }
+    /// True when no sample has added anything (filter weight, depth or spill) to the pixel.
+    bool empty() const {
+        return weight == 0 && depth_weight == 0 && spill[0] == 0 && spill[1] == 0 && spill[2] == 0;
+    }
     /// The filter-weighted mean sensor distance of the samples that hit something; -1 where
     /// none did.
     float depth() const { return depth_weight > 0 ? float(depth_sum / depth_weight) : -1.f; }
@@ -173,8 +177,9 @@ protected:
     TimeResolvedBlock(const TimeResolvedFilm& film, int x0, int y0, int w, int h);
 
     /// Splats one camera sample at film position `pos`: for every block pixel (x, y) within the
-    /// reconstruction filter's reach (weight w) that `storage` holds, adds w (and the sample's
-    /// sensor distance when it hit something) to the pixel's PixelSums and w x the temporal
+    /// reconstruction filter's reach (weight w) that `storage` holds, adds w (unless the sample
+    /// is a splat: ContributionList::is_splat()) and the sample's sensor distance when it hit
+    /// something to the pixel's PixelSums and w x the temporal
     /// filter's bin values (splat_sample) to its bins. `Storage` provides
     ///     size_t slot(int x, int y);        // pixel (x, y) in the storage; SIZE_MAX: not held
     ///     PixelSums& sums(size_t slot);
@@ -242,6 +247,10 @@ protected:
         rejected_ += block.rejected();
         arrivals_ += block.arrivals();
     }
+    /// Film::add_splat_weight() for pixel sums `sums` kept row by row (width() per row): of
+    /// every row, or of the pixel rows `rows` (sums row i is pixel row rows[i]).
+    void add_expected_weight(double samples_per_pixel, std::vector<PixelSums>& sums,
+                             const std::vector<int>* rows = nullptr) const;
     /// Logs a warning with the number of rejected samples, if any, and one when no light
     /// arrived within the time window (with the times it arrived at instead).
     void warn_rejected() const;
@@ -284,8 +293,10 @@ void TimeResolvedBlock::splat(Vec2 pos, const ContributionList& sample, Storage&
             const size_t slot = storage.slot(x, y);
             if (slot == SIZE_MAX) return;
             PixelSums& sums = storage.sums(slot);
-            sums.weight += w;
-            sums.weight2 += double(w) * w;
+            if (!sample.is_splat()) {  // splats are normalised by Film::add_splat_weight()
+                sums.weight += w;
+                sums.weight2 += double(w) * w;
+            }
             if (sensor >= 0) {
                 sums.depth_sum += w * sensor;
                 sums.depth_weight += w;

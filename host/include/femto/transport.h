@@ -24,6 +24,7 @@
 #include "femto/path_clock.h"
 #include "femto/sampler.h"
 #include "femto/scene.h"
+#include "femto/sensor.h"
 #include "femto/time_sampling.h"
 
 namespace femto {
@@ -132,6 +133,47 @@ ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const Emi
 /// The shadow connection from a point `x` inside `medium.medium` to light sample `light`.
 ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const EmitterSample& light,
                                   const MediumTracker& medium, Sampler& sampler);
+
+// ---- light paths -----------------------------------------------------------------------------
+
+/// The medium at point `p` as a camera path would find it: the sensor's medium, changed at
+/// every surface with media (MediumTracker::cross) on the straight line from the sensor to p.
+/// (Paths track media from the sensor; emitters rarely name the medium they sit in.)
+MediumTracker medium_at(const Scene& scene, const Vec3& p);
+
+/// The medium light leaving emission sample `es` of `emitter` in direction `d` travels in
+/// (refractive index 1 outside media): an area emitter's shape's medium on the side d points
+/// to when the shape bounds media, else the emitter's own medium if it names one, else
+/// `surrounding` (e.g. medium_at() the emitter, found once).
+MediumTracker medium_at_emission(const Emitter& emitter, const EmissionSample& es, const Vec3& d,
+                                 const Medium* surrounding);
+
+/// The first ray of a light path: from es.p (off its surface by es.p_error) along es.d.
+inline Ray emission_ray(const EmissionSample& es) {
+    const Vec3 o = es.p_error > 0 ? offset_origin(es.p, es.n, es.d, es.p_error) : es.p;
+    return Ray{o, es.d, 0.f, kInfinity};
+}
+
+/// The connection from surface vertex `from` to the sensor point of `sensor` (a light path
+/// seen by the camera), as connect_to_light() traces it: its transmittance and optical length
+/// (the splat's sensor distance).
+ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,
+                                   const MediumTracker& medium, Sampler& sampler);
+/// The same from a point `x` inside `medium.medium` or, with p_error > 0, on a surface of
+/// geometric normal `n` (an emitter's point: EmissionSample::n and p_error).
+ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const SensorSample& sensor,
+                                   const MediumTracker& medium, Sampler& sampler,
+                                   const Vec3& n = Vec3(), float p_error = 0.f);
+
+/// Light paths see shading normals differently from camera paths (Veach 1997, sec. 5.3.2):
+/// a BSDF weight (eval() or a sample's weight, which use the shading cosine of `wo`) for light
+/// arriving at `hit` from world direction `wi` and leaving toward `wo` is multiplied by
+/// |wi.ns| |wo.ng| / (|wi.ng| |wo.ns|); 0 when wi grazes the geometric surface.
+inline float adjoint_shading_factor(const Hit& hit, const Vec3& wi, const Vec3& wo) {
+    const float num = std::abs(dot(wi, hit.sh.n)) * std::abs(dot(wo, hit.ng));
+    const float den = std::abs(dot(wi, hit.ng)) * std::abs(dot(wo, hit.sh.n));
+    return den > 0.f ? num / den : 0.f;
+}
 
 // ---- distance sampling in media (ch. 5.6.1) -------------------------------------------------
 

@@ -92,6 +92,12 @@ EmitterSample Scene::sample_emitter(const Vec3& ref, float u_select, Vec2 u) con
     return s;
 }
 
+const Emitter* Scene::select_emitter(float u, float& pmf) const {
+    const size_t n = emitter_list_.size();
+    pmf = n ? 1.f / float(n) : 0.f;
+    return n ? emitter_list_[std::min(size_t(u * float(n)), n - 1)] : nullptr;
+}
+
 float Scene::pdf_emitter(const Emitter& emitter, const Vec3& ref, const Hit& hit) const {
     const size_t n = emitter_list_.size();
     return n ? emitter.pdf_direct(ref, hit) / float(n) : 0.f;

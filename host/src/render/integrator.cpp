@@ -2,11 +2,22 @@
 #include "femto/integrator.h"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "femto/error.h"
 #include "femto/properties.h"
 
 namespace femto {
+
+void Integrator::sample(const Scene&, Sampler&, const Ray&, ContributionList&) const {
+    throw std::logic_error(type_name() + " has no camera samples (it does not implement sample())");
+}
+
+void Integrator::sample_light(const Scene&, Sampler&, SplatList&) const {
+    throw std::logic_error(type_name() +
+                           " traces no light paths (it does not implement "
+                           "sample_light())");
+}
 
 std::vector<ParamSpec> MonteCarloIntegrator::inherited_params() {
     return inherit_params(

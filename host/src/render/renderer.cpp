@@ -126,11 +126,13 @@ std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H, int tile) {
 // pass size): the samples taken are merged, so the pixels keep valid, if unequal, estimates.
 // Returns the number of camera samples taken.
 uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0, uint32_t s1,
-                     Sampler& sampler, ContributionList& list, const std::atomic<bool>* stop) {
+                     Sampler& sampler, ContributionList& list, SplatList* splats,
+                     const std::atomic<bool>* stop) {
     const Sensor& sensor = scene.sensor();
     Film& film = sensor.film();
     const Integrator& integrator = scene.integrator();
     auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
+    list.set_splat_list(splats);
     uint64_t taken = 0;
     for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
         if (!film.row_active(y)) continue;
@@ -157,12 +159,92 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
     return taken;
 }
 
+// The tiles of the film in a grid (tile index = row * columns + column), each with its colour
+// group, for merging splats: splats land anywhere, so they are bucketed by the tile that holds
+// their film position and merged tile by tile in the same 2x2 colouring as camera samples.
+class SplatMerger {
+public:
+    SplatMerger(int W, int H, int tile)
+        : W_(W), H_(H), tile_(tile), columns_((W + tile - 1) / tile) {
+        by_colour_ = tiles_by_colour(W, H, tile);
+        rows_ = (H + tile - 1) / tile;
+    }
+
+    // Merges the splats of `lists` into the film, in list order and, within a list, in the
+    // order they were made: every pixel receives them in the same order whatever the thread
+    // count. Splats outside the film are dropped.
+    void merge(Film& film, const std::vector<const SplatList*>& lists) {
+        const size_t tiles = size_t(columns_) * size_t(rows_);
+        start_.assign(tiles + 1, 0);
+        for (const SplatList* list : lists)
+            for (const Splat& s : list->items())
+                if (const int64_t t = tile_of(s.pos); t >= 0) ++start_[size_t(t) + 1];
+        for (size_t t = 0; t < tiles; ++t) start_[t + 1] += start_[t];
+        order_.resize(start_[tiles]);
+        std::vector<size_t> fill(start_.begin(), start_.end() - 1);
+        for (const SplatList* list : lists)
+            for (const Splat& s : list->items())
+                if (const int64_t t = tile_of(s.pos); t >= 0) order_[fill[size_t(t)]++] = &s;
+        for (const auto& group : by_colour_)
+            tbb::parallel_for(size_t(0), group.size(), [&](size_t i) {
+                const Tile& tile = group[i];
+                const size_t t =
+                    size_t(tile.y0 / tile_) * size_t(columns_) + size_t(tile.x0 / tile_);
+                if (start_[t] == start_[t + 1]) return;
+                auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
+                ContributionList one;
+                one.set_is_splat(true);
+                for (size_t k = start_[t]; k < start_[t + 1]; ++k) {
+                    const Splat& s = *order_[k];
+                    one.clear();
+                    one.add(s.radiance, s.time);
+                    one.set_sensor_distance(s.sensor_distance);
+                    one.set_sample_index(s.sample_index);
+                    block->put(s.pos, one);
+                }
+                film.merge(*block);
+            });
+    }
+
+private:
+    int64_t tile_of(Vec2 pos) const {
+        if (!(pos.x >= 0 && pos.x < float(W_) && pos.y >= 0 && pos.y < float(H_))) return -1;
+        const int x = std::min(W_ - 1, int(pos.x)), y = std::min(H_ - 1, int(pos.y));
+        return int64_t(y / tile_) * columns_ + x / tile_;
+    }
+
+    int W_, H_, tile_, columns_, rows_ = 0;
+    std::array<std::vector<Tile>, 4> by_colour_;
+    std::vector<size_t> start_;
+    std::vector<const Splat*> order_;
+};
+
+// Light paths [first, last) of a pass that starts at sample index s0: path k is sample
+// s0 + k / pixels of "pixel" k % pixels, so that its random numbers depend on (seed, k) alone.
+// Returns the number of paths traced (fewer when stopped).
+uint64_t trace_light_paths(const Scene& scene, uint64_t seed, uint32_t s0, uint64_t pixels,
+                           uint64_t first, uint64_t last, Sampler& sampler, SplatList& splats,
+                           const std::atomic<bool>* stop) {
+    const Integrator& integrator = scene.integrator();
+    uint64_t taken = 0;
+    for (uint64_t k = first; k < last; ++k) {
+        if (stop && stop->load(std::memory_order_relaxed)) break;
+        const uint32_t s = s0 + uint32_t(k / pixels);
+        sampler.start(seed, k % pixels, s);
+        splats.set_sample_index(s);
+        integrator.sample_light(scene, sampler, splats);
+        ++taken;
+    }
+    return taken;
+}
+
 }  // namespace
 
 RenderStats render(Scene& scene, const RenderOptions& options) {
     const Sensor& sensor = scene.sensor();
     Film& film = sensor.film();
     const Sampler& prototype = sensor.sampler();
+    const Integrator& integrator = scene.integrator();
     const uint32_t spp = options.spp ? options.spp : prototype.sample_count();
     if (spp == 0) throw SceneError("the number of samples per pixel must be positive");
     if (options.threads < 0) throw SceneError("the thread count must be positive (0 = all cores)");
@@ -173,9 +255,13 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                                                       size_t(options.threads));
     enable_flush_to_zero();
     scene.integrator().preprocess(scene);
+    const bool from_lights = integrator.source() == SampleSource::Light;
+    const bool splatting = from_lights || integrator.splats();
+    if (splatting) film.prepare_splats(from_lights);
 
     const int W = film.width(), H = film.height();
-    const auto by_colour = tiles_by_colour(W, H, tile_size_for(film));
+    const int tile = tile_size_for(film);
+    const auto by_colour = tiles_by_colour(W, H, tile);
     if (film.rfilter().radius() > kTileSize / 2)
         throw SceneError(
             film.rfilter().location(),
@@ -184,32 +270,74 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                         film.rfilter().radius(), kTileSize / 2));
 
     // Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
-    // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp.
+    // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp; camera
+    // integrators that splat keep a pass's splats in memory, so theirs are smaller.
     const uint64_t pixels = uint64_t(W) * uint64_t(H);
-    constexpr uint64_t kMaxPassSamples = uint64_t(1) << 22;
+    const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 18 : 22);
     const uint32_t pass_spp = uint32_t(
-        std::max<uint64_t>(1, std::min<uint64_t>((spp + 15) / 16, kMaxPassSamples / pixels)));
+        std::max<uint64_t>(1, std::min<uint64_t>((spp + 15) / 16, max_pass_samples / pixels)));
     const uint32_t pilot_spp = film.pilot_samples();
     Progress progress(options.progress, pixels * (uint64_t(spp) + pilot_spp));
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
         [&] { return prototype.clone(); });
     tbb::enumerable_thread_specific<ContributionList> lists;
+    SplatMerger merger(W, H, tile);
 
-    // Samples [s0, s1) of every pixel, tiles of one colour at a time; returns the share of
-    // the pass's samples taken (1 unless stopped).
+    // Camera samples [s0, s1) of every pixel, tiles of one colour at a time, the splats of each
+    // colour's tiles merged after it; returns the share of the pass's samples taken (1 unless
+    // stopped).
     uint64_t active_pixels = 0;
     for (int y = 0; y < H; ++y) active_pixels += film.row_active(y) ? uint64_t(W) : 0;
-    auto run_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1) {
+    std::vector<SplatList> tile_splats;
+    auto run_camera_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1) {
         std::atomic<uint64_t> taken{0};
         for (const auto& tiles : by_colour) {
+            if (splatting) tile_splats.resize(std::max(tile_splats.size(), tiles.size()));
             tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
                 enable_flush_to_zero();
+                SplatList* splats = splatting ? &tile_splats[t] : nullptr;
+                if (splats) splats->clear();
                 taken += render_tile(scene, tiles[t], seed, s0, s1, *samplers.local(),
-                                     lists.local(), options.stop);
+                                     lists.local(), splats, options.stop);
                 progress.advance(uint64_t(tiles[t].w) * uint64_t(tiles[t].h) * (s1 - s0));
             });
+            if (!splatting) continue;
+            std::vector<const SplatList*> in_order;
+            for (size_t t = 0; t < tiles.size(); ++t) in_order.push_back(&tile_splats[t]);
+            merger.merge(film, in_order);
         }
         return double(taken.load()) / double(std::max<uint64_t>(1, active_pixels * (s1 - s0)));
+    };
+
+    // Light paths of samples [s0, s1): pixels x (s1 - s0) of them, in waves of fixed chunks
+    // whose splats merge in chunk order after each wave (so memory holds one wave's splats).
+    constexpr uint64_t kChunk = 4096, kWaveChunks = 64;
+    std::vector<SplatList> chunk_splats(from_lights ? kWaveChunks : 0);
+    auto run_light_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
+        const uint64_t total = pixels * (s1 - s0);
+        std::atomic<uint64_t> taken{0};
+        for (uint64_t first = 0; first < total; first += kChunk * kWaveChunks) {
+            const uint64_t chunks = std::min(kWaveChunks, (total - first + kChunk - 1) / kChunk);
+            tbb::parallel_for(uint64_t(0), chunks, [&](uint64_t c) {
+                enable_flush_to_zero();
+                const uint64_t a = first + c * kChunk, b = std::min(total, a + kChunk);
+                chunk_splats[c].clear();
+                taken += trace_light_paths(scene, seed, s0, pixels, a, b, *samplers.local(),
+                                           chunk_splats[c], options.stop);
+                progress.advance(b - a);
+            });
+            std::vector<const SplatList*> in_order;
+            for (uint64_t c = 0; c < chunks; ++c) in_order.push_back(&chunk_splats[c]);
+            merger.merge(film, in_order);
+            if (options.stop && options.stop->load()) break;
+        }
+        // Normalise the pass's splats as as many camera samples per pixel would be (a pilot
+        // pass only collects arrival times).
+        if (!pilot) film.add_splat_weight(double(taken.load()) / double(pixels));
+        return double(taken.load()) / double(std::max<uint64_t>(1, total));
+    };
+    auto run_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
+        return from_lights ? run_light_pass(seed, s0, s1, pilot) : run_camera_pass(seed, s0, s1);
     };
 
     const uint64_t rays_before = scene.rays_traced();
@@ -219,9 +347,11 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     auto stopped = [&] { return options.stop && options.stop->load(); };
     if (pilot_spp > 0) {
         // The pilot's random streams are independent of the image's (another seed).
+        const uint64_t pilot_seed = options.seed ^ 0x9E3779B97F4A7C15ull;
         film.begin_pilot();
         scene.refresh_time_window();
-        run_pass(options.seed ^ 0x9E3779B97F4A7C15ull, 0, pilot_spp);
+        scene.integrator().begin_pass(scene, PassInfo{0, pilot_seed, 0, pilot_spp, true});
+        run_pass(pilot_seed, 0, pilot_spp, true);
         film.end_pilot();  // a stopped pilot still leaves the film a usable (rougher) estimate
     }
     uint32_t pass = 0;
@@ -229,7 +359,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         const uint32_t s1 = std::min(spp, s0 + pass_spp);
         film.start_pass(pass);
         scene.refresh_time_window();
-        const double share = run_pass(options.seed, s0, s1);
+        scene.integrator().begin_pass(scene, PassInfo{pass, options.seed, s0, s1, false});
+        const double share = run_pass(options.seed, s0, s1, false);
         // Stopped within the pass, some pixels have s1 samples and others s0: the mean.
         stats.spp_done = share >= 1 ? s1 : s0 + uint32_t(double(s1 - s0) * share);
     }

@@ -103,4 +103,15 @@ bool TimeResolvedFilm::merge_pilot(const FilmBlock& block) {
     return true;
 }
 
+void TimeResolvedFilm::add_expected_weight(double samples_per_pixel, std::vector<PixelSums>& sums,
+                                           const std::vector<int>* rows) const {
+    const std::vector<double> wx = filter_weight_integrals(true),
+                              wy = filter_weight_integrals(false);
+    const size_t W = size_t(width_), n_rows = rows ? rows->size() : size_t(height_);
+    for (size_t r = 0; r < n_rows; ++r) {
+        const double row = samples_per_pixel * wy[rows ? size_t((*rows)[r]) : r];
+        for (size_t x = 0; x < W; ++x) sums[r * W + x].weight += row * wx[x];
+    }
+}
+
 }  // namespace femto

@@ -66,6 +66,55 @@ ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const Emitt
     return trace_shadow(scene, ray, x, light.p, medium, sampler);
 }
 
+MediumTracker medium_at(const Scene& scene, const Vec3& p) {
+    MediumTracker medium = MediumTracker::at_sensor(scene);
+    if (!scene.has_media()) return medium;
+    const Vec3 o = scene.sensor().to_world().point(Vec3(0.f));
+    const float dist = length(p - o);
+    if (!(dist > 0)) return medium;
+    Ray ray{o, (p - o) / dist, 0.f, dist};
+    for (int crossings = 0; crossings < 256; ++crossings) {
+        Hit hit;
+        if (!scene.intersect(ray, hit)) break;
+        medium.cross(hit, ray.d);
+        const float left = ray.tmax - hit.t;
+        ray = hit.spawn(ray.d);
+        ray.tmax = left;
+    }
+    return medium;
+}
+
+MediumTracker medium_at_emission(const Emitter& emitter, const EmissionSample& es, const Vec3& d,
+                                 const Medium* surrounding) {
+    const Shape* shape = emitter.shape();
+    if (shape && shape->has_media())
+        return {dot(d, es.n) < 0 ? shape->interior() : shape->exterior(), 1.0};
+    return {emitter.medium() ? emitter.medium() : surrounding, 1.0};
+}
+
+ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,
+                                   const MediumTracker& medium, Sampler& sampler) {
+    const Ray ray = from.spawn_to(sensor.p);
+    if (!scene.has_media()) {
+        if (scene.occluded(ray)) return {Color(0.f), 0.0};
+        return {Color(1.f), distance_between(from.p, sensor.p)};
+    }
+    MediumTracker beyond = medium;
+    beyond.medium = medium.beyond(from, sensor.wi);
+    return trace_shadow(scene, ray, from.p, sensor.p, beyond, sampler);
+}
+
+ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const SensorSample& sensor,
+                                   const MediumTracker& medium, Sampler& sampler, const Vec3& n,
+                                   float p_error) {
+    Ray ray{x, sensor.wi, 0.f, shadow_ray_length(float(sensor.distance), sensor.p)};
+    if (p_error > 0) {
+        ray.o = offset_origin(x, n, sensor.wi, p_error);
+        ray.tmax = shadow_ray_length(length(sensor.p - ray.o), sensor.p);
+    }
+    return trace_shadow(scene, ray, x, sensor.p, medium, sampler);
+}
+
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
                                const DistanceMixture& strategy, double u, Sampler& sampler) {
     DistanceSample ds;

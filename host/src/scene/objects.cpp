@@ -1,6 +1,9 @@
 // Base-class constructors of the plugin kinds whose common parameters the host reads.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "femto/film.h"
 #include "femto/medium.h"
 #include "femto/sampler.h"
@@ -74,6 +77,30 @@ Film::Film(const Properties& props) {
     height_ = int(h);
     rfilter_ = std::static_pointer_cast<ReconstructionFilter>(
         props.child(PluginKind::ReconstructionFilter, "gaussian"));
+}
+
+void Film::add_splat_weight(double) {
+    throw SceneError(location(), type_name() + " does not accept splats from a light tracer");
+}
+
+std::vector<double> Film::filter_weight_integrals(bool horizontal) const {
+    // Midpoint rule over each pixel within the filter's reach, as camera samples jittered
+    // uniformly within their pixels would weigh the pixel in expectation.
+    constexpr int kSteps = 256;
+    const int n = horizontal ? width_ : height_;
+    const float r = rfilter_->radius();
+    std::vector<double> integral(size_t(n), 0.0);
+    for (int i = 0; i < n; ++i) {
+        const double centre = i + 0.5;
+        const int k0 = std::max(0, int(std::floor(centre - r))),
+                  k1 = std::min(n - 1, int(std::ceil(centre + r)));
+        double sum = 0;
+        for (int k = k0; k <= k1; ++k)
+            for (int j = 0; j < kSteps; ++j)
+                sum += rfilter_->eval(float(k + (j + 0.5) / kSteps - centre));
+        integral[size_t(i)] = sum / kSteps;
+    }
+    return integral;
 }
 
 double Film::max_time() const { return std::numeric_limits<double>::infinity(); }

@@ -164,6 +164,7 @@ ShapeSample Shape::sample_area(Vec2 u) const {
         const Vec3 d = warp::square_to_uniform_sphere(u);
         s.p = center_ + d * radius_;
         s.n = flip_normals_ ? -d : d;
+        s.p_error = kRayOffsetScale * (max_abs_component(center_) + radius_);
     } else {
         float ux = u.x;
         const uint32_t tri =
@@ -176,6 +177,8 @@ ShapeSample Shape::sample_area(Vec2 u) const {
         const Vec3 n = normalize(cross(p1 - p0, p2 - p0));
         s.n = flip_normals_ ? -n : n;
         s.uv = b;
+        s.p_error = kRayOffsetScale *
+                    std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)});
     }
     s.pdf = 1.f / area_;
     return s;

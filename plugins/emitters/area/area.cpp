@@ -4,8 +4,12 @@
 // points to (the host has already flipped hit.ng and ShapeSample::n for flip_normals).
 // Points are sampled by the shape's own direct-lighting strategy (area sampling converted
 // to solid angle, or the visible cone for spheres), so pdf_direct() is the shape's pdf too.
+#include <algorithm>
+#include <cmath>
+
 #include "femto/emitter.h"
 #include "femto/plugin.h"
+#include "femto/warp.h"
 
 namespace femto {
 namespace {
@@ -47,6 +51,34 @@ public:
     }
 
     bool is_delta() const override { return false; }
+
+    // A uniform point on the shape, a cosine-weighted direction about its normal.
+    EmissionSample sample_emission(Vec2 u_position, Vec2 u_direction) const override {
+        EmissionSample es;
+        if (!shape_) return es;
+        const ShapeSample ss = shape_->sample_area(u_position);
+        if (!(ss.pdf > 0) || !std::isfinite(ss.pdf)) return es;
+        const Vec3 local = warp::square_to_cosine_hemisphere(u_direction);
+        const float pdf_dir = warp::cosine_hemisphere_pdf(local);
+        if (!(pdf_dir > 0)) return es;
+        es.p = ss.p;
+        es.n = ss.n;
+        es.p_error = ss.p_error;
+        es.d = Frame(ss.n).to_world(local);
+        es.pdf_position = ss.pdf;
+        es.pdf_direction = pdf_dir;
+        es.weight = radiance_ * float(M_PI / double(ss.pdf));  // L cos / (pdf_pos cos / pi)
+        return es;
+    }
+    Color eval_direction(const EmissionSample& at, const Vec3& d) const override {
+        const float c = dot(d, at.n);
+        return c > 0 ? radiance_ * c : Color();
+    }
+    void pdf_emission(const EmissionSample& at, const Vec3& d, float& pdf_position,
+                      float& pdf_direction) const override {
+        pdf_position = shape_ ? 1.f / shape_->surface_area() : 0.f;
+        pdf_direction = std::max(0.f, dot(d, at.n)) * float(kInvPi);
+    }
 
 private:
     Color radiance_;

@@ -13,6 +13,7 @@
 
 #include "femto/emitter.h"
 #include "femto/plugin.h"
+#include "femto/warp.h"
 
 namespace femto {
 namespace {
@@ -68,6 +69,25 @@ public:
     }
 
     bool is_delta() const override { return true; }
+
+    // A uniform point on the beam's disk at its origin plane, leaving along the beam.
+    EmissionSample sample_emission(Vec2 u_position, Vec2) const override {
+        EmissionSample es;
+        const Vec2 disk = warp::square_to_uniform_disk(u_position);
+        es.p = origin_ + Frame(dir_).to_world(Vec3(disk.x * radius_, disk.y * radius_, 0.f));
+        es.n = dir_;
+        es.d = dir_;
+        es.pdf_position = float(1.0 / (M_PI * double(radius_) * radius_));
+        es.pdf_direction = 1.f;
+        es.weight = irradiance_ * float(M_PI * double(radius_) * radius_);  // the beam's power
+        es.delta_direction = true;
+        return es;
+    }
+    void pdf_emission(const EmissionSample&, const Vec3&, float& pdf_position,
+                      float& pdf_direction) const override {
+        pdf_position = float(1.0 / (M_PI * double(radius_) * radius_));
+        pdf_direction = 1.f;
+    }
 
 private:
     Color irradiance_;

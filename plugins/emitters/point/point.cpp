@@ -7,6 +7,7 @@
 
 #include "femto/emitter.h"
 #include "femto/plugin.h"
+#include "femto/warp.h"
 
 namespace femto {
 namespace {
@@ -40,6 +41,23 @@ public:
     }
 
     bool is_delta() const override { return true; }
+
+    EmissionSample sample_emission(Vec2, Vec2 u_direction) const override {
+        EmissionSample es;
+        es.p = position_;
+        es.d = warp::square_to_uniform_sphere(u_direction);
+        es.pdf_position = 1.f;
+        es.pdf_direction = warp::uniform_sphere_pdf();
+        es.weight = intensity_ * float(4 * M_PI);
+        es.delta_position = true;
+        return es;
+    }
+    Color eval_direction(const EmissionSample&, const Vec3&) const override { return intensity_; }
+    void pdf_emission(const EmissionSample&, const Vec3&, float& pdf_position,
+                      float& pdf_direction) const override {
+        pdf_position = 1.f;
+        pdf_direction = warp::uniform_sphere_pdf();
+    }
 
 private:
     Color intensity_;

@@ -13,6 +13,7 @@
 #include "femto/emitter.h"
 #include "femto/log.h"
 #include "femto/plugin.h"
+#include "femto/warp.h"
 
 namespace femto {
 namespace {
@@ -47,6 +48,7 @@ public:
         const Transform to_world = read_to_world(props);
         position_ = to_world.point(Vec3(0.f));
         world_to_local_ = to_world.inverse();
+        local_to_world_ = to_world;
     }
 
     /// Mitsuba's falloff for a unit direction in the light's local frame.
@@ -81,12 +83,40 @@ public:
 
     bool is_delta() const override { return true; }
 
+    // A direction uniform in the cone of cutoff_angle (where the falloff is not zero).
+    EmissionSample sample_emission(Vec2, Vec2 u_direction) const override {
+        EmissionSample es;
+        const Vec3 local = warp::square_to_uniform_cone(u_direction, cos_cutoff_);
+        const float pdf = warp::uniform_cone_pdf(local, cos_cutoff_);
+        const Vec3 d = local_to_world_.vector(local);
+        if (!(pdf > 0) || !(length(d) > 0)) return es;
+        es.p = position_;
+        es.d = normalize(d);
+        es.pdf_position = 1.f;
+        es.pdf_direction = pdf;
+        es.weight = intensity_ * (falloff(local) / pdf);
+        es.delta_position = true;
+        return es;
+    }
+    Color eval_direction(const EmissionSample&, const Vec3& d) const override {
+        const Vec3 local = world_to_local_.vector(d);
+        const float len = length(local);
+        return len > 0 ? intensity_ * falloff(local / len) : Color();
+    }
+    void pdf_emission(const EmissionSample&, const Vec3& d, float& pdf_position,
+                      float& pdf_direction) const override {
+        const Vec3 local = world_to_local_.vector(d);
+        const float len = length(local);
+        pdf_position = 1.f;
+        pdf_direction = len > 0 ? warp::uniform_cone_pdf(local / len, cos_cutoff_) : 0.f;
+    }
+
 private:
     Color intensity_;
     double cutoff_ = 0, beam_ = 0;
     float cos_cutoff_ = 0, cos_beam_ = 0;
     Vec3 position_;
-    Transform world_to_local_;
+    Transform world_to_local_, local_to_world_;
 };
 
 }  // namespace

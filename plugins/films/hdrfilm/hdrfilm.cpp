@@ -53,7 +53,7 @@ public:
                 if (w == 0) continue;
                 PixelSum& p = pixels_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
                 for (int c = 0; c < 3; ++c) p.rgb[c] += double(w) * double(L[c]);
-                p.weight += w;
+                if (!sample.is_splat()) p.weight += w;  // splats: add_splat_weight()
             }
         }
     }
@@ -114,6 +114,15 @@ public:
                 dst.weight += src.weight;
             }
         }
+    }
+
+    void add_splat_weight(double samples_per_pixel) override {
+        const std::vector<double> wx = filter_weight_integrals(true),
+                                  wy = filter_weight_integrals(false);
+        for (int y = 0; y < height_; ++y)
+            for (int x = 0; x < width_; ++x)
+                pixels_[size_t(y) * size_t(width_) + size_t(x)].weight +=
+                    samples_per_pixel * wy[size_t(y)] * wx[size_t(x)];
     }
 
     std::vector<float> steady_image() const override {

@@ -140,13 +140,17 @@ public:
                 const size_t src = s * size_t(block.w()) + size_t(bx);
                 const size_t dst = slot * size_t(width_) + size_t(x);
                 const PixelSums& in_sums = block.sums_[src];
-                if (in_sums.weight == 0) continue;
+                if (in_sums.empty()) continue;
                 sums_[dst] += in_sums;
                 const float* in = &block.data_[src * T3];
                 float* out = &data_[dst * T3];
                 for (size_t i = 0; i < T3; ++i) out[i] += in[i];
             }
         }
+    }
+
+    void add_splat_weight(double samples_per_pixel) override {
+        add_expected_weight(samples_per_pixel, sums_, &rows_);
     }
 
     bool row_active(int y) const override {

@@ -101,6 +101,7 @@ class TransientFilm final : public TimeResolvedFilm {
 public:
     explicit TransientFilm(const Properties& props) : TimeResolvedFilm(props) {
         const std::string aovs = props.get_string("aovs", "");
+        aovs_location_ = props.location_of("aovs");
         for (size_t pos = 0; pos < aovs.size();) {
             size_t end = aovs.find(',', pos);
             if (end == std::string::npos) end = aovs.size();
@@ -149,6 +150,19 @@ public:
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
         if (auto pilot = make_pilot_block(x0, y0, w, h)) return pilot;
         return std::make_unique<CubeBlock>(*this, x0, y0, w, h);
+    }
+
+    // The variance AOV's formula is that of a weighted mean of camera samples; splats carry
+    // no per-sample weight.
+    void prepare_splats(bool) override {
+        if (variance_enabled_)
+            throw SceneError(aovs_location_,
+                             "aovs=\"variance\" needs an integrator whose "
+                             "samples are camera samples; this one splats "
+                             "light paths onto the film");
+    }
+    void add_splat_weight(double samples_per_pixel) override {
+        add_expected_weight(samples_per_pixel, weights_);
     }
 
     // A block stores every bin of its pixels (cube, second moment, counts, touched bits).
@@ -212,7 +226,7 @@ public:
         st.touched.clear();
         for (size_t local = 0; local < block_pixels; ++local) {
             PixelSums& s = st.weights[local];
-            if (s.weight == 0) continue;
+            if (s.empty()) continue;
             const size_t dst = dst_of[local];
             if (dst != SIZE_MAX) weights_[dst] += s;
             s = PixelSums();
@@ -300,6 +314,7 @@ public:
     }
 
     io::ExrCubeOptions exr_;
+    SourceLocation aovs_location_;
     bool count_enabled_ = false, variance_enabled_ = false;
     std::vector<float> cube_, count_, sq_;
     mutable std::mutex pool_mutex_;

@@ -64,6 +64,39 @@ public:
         shift_x_ = props.get_float("principal_point_offset_x", 0.0);
         shift_y_ = props.get_float("principal_point_offset_y", 0.0);
         origin_ = to_world_.point(Vec3(0.f));
+        to_local_ = to_world_.inverse();
+        // The image plane in world space (any affine to_world): a parallelogram at local z = 1
+        // with normal plane_n_, plane_distance_ from the origin, of area plane_area_.
+        const Vec3 ex = to_world_.vector({1, 0, 0}), ey = to_world_.vector({0, 1, 0});
+        const Vec3 n = cross(ex, ey);
+        plane_area_ = 4.0 * tan_x_ * tan_y_ * double(length(n));
+        plane_n_ = normalize(n);
+        plane_distance_ = std::abs(double(dot(to_world_.vector({0, 0, 1}), plane_n_)));
+    }
+
+    bool connectable() const override { return true; }
+
+    float pdf_direction(const Vec3& d) const override {
+        Vec2 pos;
+        if (!film_position(d, pos)) return 0.f;
+        const double c = std::abs(double(dot(d, plane_n_)));
+        // dA on the plane = t^2 / cos d(omega), with t = plane_distance_ / cos.
+        return float(plane_distance_ * plane_distance_ / (plane_area_ * c * c * c));
+    }
+
+    SensorSample sample_direct(const Vec3& ref, Vec2) const override {
+        SensorSample s;
+        const double z = double(to_local_.point(ref).z);  // depth in camera units
+        if (!(z >= near_ && z <= far_)) return s;
+        const Vec3 v = origin_ - ref;
+        const double dist = double(length(v));
+        if (!(dist > 0)) return s;
+        s.wi = v / float(dist);
+        if (!film_position(-s.wi, s.pos)) return s;
+        s.p = origin_;
+        s.distance = dist;
+        s.weight = float(double(pdf_direction(-s.wi)) / (dist * dist));
+        return s;
     }
 
     Ray sample_ray(Vec2 pos, Vec2) const override {
@@ -76,8 +109,22 @@ public:
     }
 
 private:
+    // Film position (pixels) of the camera ray leaving in world direction d (unit); false
+    // outside the film.
+    bool film_position(const Vec3& d, Vec2& pos) const {
+        const Vec3 l = to_local_.vector(d);
+        if (!(l.z > 0)) return false;
+        const double nx = 0.5 * (1 - double(l.x) / (double(l.z) * tan_x_)) - shift_x_;
+        const double ny = 0.5 * (1 - double(l.y) / (double(l.z) * tan_y_)) - shift_y_;
+        if (!(nx >= 0 && nx < 1 && ny >= 0 && ny < 1)) return false;
+        pos = Vec2{float(nx * film_->width()), float(ny * film_->height())};
+        return pos.x < float(film_->width()) && pos.y < float(film_->height());
+    }
+
     double tan_x_ = 0, tan_y_ = 0, near_ = 0, far_ = 0, shift_x_ = 0, shift_y_ = 0;
-    Vec3 origin_;
+    double plane_area_ = 0, plane_distance_ = 0;
+    Vec3 origin_, plane_n_;
+    Transform to_local_;
 };
 
 }  // namespace

@@ -1,0 +1,268 @@
+// transient_light: light tracing (particle tracing), every vertex of a light path connected to
+// the sensor and splatted onto the film at its own time (thesis ch. 5.4: the light subpaths of
+// the transient path integral, eq. 5.11-5.16, seen by the camera).
+//
+// A light path starts on an emitter chosen uniformly (as light samples choose them), at the
+// point and in the direction the emitter samples (Emitter::sample_emission()), at the time its
+// pulse says. It then alternates, as the path tracer's camera paths do:
+//   - medium_segment(): in a medium, a distance by mean-free-path sampling decides whether the
+//     light scatters before the next surface (medium_vertex(): connection to the sensor, then a
+//     direction by the phase function);
+//   - surface_vertex(): null boundaries passed, the material's vertex event (delay, colour
+//     transfer), a connection to the sensor (surface_to_sensor()), a BSDF sample to continue.
+// The emitter's own point is connected too (emitter_seen(): the emitters the camera sees,
+// unless hide_emitters), so a point light in view is a bright film point, which a path tracer
+// never finds.
+//
+// Normalisation: a render traces samples_per_pixel x pixels light paths; the sensor's
+// importance (SensorSample::weight) and Film::add_splat_weight() make each pixel estimate what
+// camera samples estimate, so this plugin and transient_path agree pixel by pixel.
+//
+// Time: LightClock (femto/path_clock.h) owns the rules; a splat's time is the light path's time
+// plus the connection's optical length, which is also its sensor distance for world time.
+// Light paths carry power, not importance, so BSDF weights use the adjoint shading-normal
+// factor (adjoint_shading_factor()); femto's materials are otherwise symmetric (no 1/eta^2 on
+// refraction, see the dielectric plugin).
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "femto/integrator.h"
+#include "femto/path_clock.h"
+#include "femto/plugin.h"
+#include "femto/sensor.h"
+#include "femto/transport.h"
+
+namespace {
+
+using namespace femto;
+
+// Everything one light path carries from vertex to vertex.
+struct LightPath {
+    Ray ray;
+    LightClock clock;
+    MediumTracker medium;
+    Color power;        // light the path carries (emitted / the densities that chose it)
+    float start = 1.f;  // its largest channel at the emitter, for Russian roulette
+    int64_t depth = 1;  // segments so far, the one being traced included
+};
+
+// What a segment through a medium ended in.
+enum class SegmentEnd { Surface, Scattered, Stop };
+
+// Light leaving a vertex whose event (fluorescence) transfers colour: transfer x light.
+Color leaving(const VertexEvent& event, const Color& light) {
+    return event.transfers ? event.transfer * light : light;
+}
+
+class LightTracer final : public MonteCarloIntegrator {
+public:
+    explicit LightTracer(const Properties& props) : MonteCarloIntegrator(props, 0) {
+        if (max_depth() == 0)
+            props.fail("max_depth",
+                       "transient_light needs max_depth >= 1 (or -1): a light path "
+                       "needs at least its segment to the sensor");
+    }
+
+    SampleSource source() const override { return SampleSource::Light; }
+
+    void preprocess(const Scene& scene) override {
+        MonteCarloIntegrator::preprocess(scene);
+        const Sensor& sensor = scene.sensor();
+        if (!sensor.connectable())
+            throw SceneError(sensor.location(),
+                             "transient_light cannot splat onto a \"" + sensor.type_name() +
+                                 "\" sensor: no light path can reach it by a connection (an "
+                                 "orthographic camera's rays are parallel); use a perspective "
+                                 "sensor or a camera-path integrator (transient_path)");
+        surrounding_.clear();
+        for (const Emitter* emitter : scene.emitters()) {
+            const EmissionSample es = emission_example(*emitter);
+            if (!es.valid())
+                throw SceneError(emitter->location(),
+                                 "transient_light cannot start light paths on a \"" +
+                                     emitter->type_name() +
+                                     "\" emitter (it does not sample its emission)");
+            // The medium around the emitter, where it names none: as a camera path finds it at
+            // a point just off the emitter.
+            const Vec3 off = es.p_error > 0 ? offset_origin(es.p, es.n, es.d, es.p_error) : es.p;
+            surrounding_[emitter] = medium_at(scene, off).medium;
+        }
+    }
+
+    void sample_light(const Scene& scene, Sampler& sampler, SplatList& out) const override {
+        float pmf = 0.f;
+        const Emitter* emitter = scene.select_emitter(sampler.next_1d(), pmf);
+        if (!emitter) return;
+        const Vec2 u_position = sampler.next_2d();
+        const EmissionSample es = emitter->sample_emission(u_position, sampler.next_2d());
+        if (!es.valid() || es.weight.is_black()) return;
+        LightPath path{emission_ray(es), LightClock(scene, *emitter, es.p, sampler),
+                       emission_medium(*emitter, es, es.d), es.weight / pmf};
+        path.start = path.power.max_component();
+        if (path.clock.expired()) return;
+        if (!hide_emitters()) emitter_seen(scene, sampler, path, *emitter, es, pmf, out);
+        for (;;) {
+            Hit hit;
+            const bool found = scene.intersect(path.ray, hit);
+            if (path.medium.medium) {
+                const SegmentEnd end = medium_segment(scene, sampler, path, found, hit, out);
+                if (end == SegmentEnd::Scattered) continue;
+                if (end == SegmentEnd::Stop) return;
+            }
+            if (!found || !surface_vertex(scene, sampler, path, hit, out)) return;
+        }
+    }
+
+private:
+    // A valid emission sample of `emitter`, if it has any (a plugin that does not implement
+    // sample_emission() never returns one).
+    static EmissionSample emission_example(const Emitter& emitter) {
+        for (const float u : {0.5f, 0.25f, 0.75f})
+            if (const EmissionSample es = emitter.sample_emission({u, u}, {u, 1.f - u}); es.valid())
+                return es;
+        return {};
+    }
+    // The medium light leaving `es` of `emitter` in direction d travels in.
+    MediumTracker emission_medium(const Emitter& emitter, const EmissionSample& es,
+                                  const Vec3& d) const {
+        const auto it = surrounding_.find(&emitter);
+        return medium_at_emission(emitter, es, d, it == surrounding_.end() ? nullptr : it->second);
+    }
+
+    // The emitter's point seen by the camera: emission toward the sensor over the connection.
+    void emitter_seen(const Scene& scene, Sampler& sampler, const LightPath& path,
+                      const Emitter& emitter, const EmissionSample& es, float pmf,
+                      SplatList& out) const {
+        const SensorSample ss = scene.sensor().sample_direct(es.p, sampler.next_2d());
+        if (!ss.valid() || !path.clock.arrives_in_time(ss.distance)) return;
+        const Color emitted = emitter.eval_direction(es, ss.wi);
+        if (emitted.is_black()) return;
+        const ShadowConnection c = connect_to_sensor(
+            scene, es.p, ss, emission_medium(emitter, es, ss.wi), sampler, es.n, es.p_error);
+        if (c.blocked()) return;
+        const float scale = ss.weight / (pmf * es.pdf_position);
+        path.clock.record(out, ss.pos, emitted * c.transmittance * scale, c.optical_length);
+    }
+
+    // ---- surfaces ----------------------------------------------------------------------------
+
+    // The light reaches surface `hit`. Returns false when the path ends there.
+    bool surface_vertex(const Scene& scene, Sampler& sampler, LightPath& path, const Hit& hit,
+                        SplatList& out) const {
+        const Bsdf& bsdf = *hit.shape->bsdf();
+        path.clock.travel_to(hit.p, path.medium.eta());
+        if (path.clock.expired()) return false;
+        if (bsdf.is_null()) {  // an index-matched boundary: not a scattering event
+            path.medium.cross(hit, path.ray.d);
+            path.ray = hit.spawn(path.ray.d);
+            return true;
+        }
+        if (depth_exhausted(path.depth)) return false;  // no segment left for the sensor
+        // The vertex's event (delay, colour transfer) applies to all light leaving it.
+        VertexEvent event;
+        if (bsdf.has_vertex_event()) event = bsdf.sample_vertex_event(hit, sampler.next_1d());
+        path.clock.delay(event.delay);
+        if (bsdf.flags() & kBsdfSmooth)
+            surface_to_sensor(scene, sampler, path, hit, bsdf, event, out);
+        return continue_from_surface(sampler, path, hit, bsdf, event);
+    }
+
+    // The connection from the surface vertex to the sensor.
+    void surface_to_sensor(const Scene& scene, Sampler& sampler, const LightPath& path,
+                           const Hit& hit, const Bsdf& bsdf, const VertexEvent& event,
+                           SplatList& out) const {
+        const SensorSample ss = scene.sensor().sample_direct(hit.p, sampler.next_2d());
+        if (!ss.valid() || !path.clock.arrives_in_time(ss.distance)) return;
+        const Color f = bsdf.eval(hit, hit.wi, hit.to_local(ss.wi));
+        if (f.is_black()) return;
+        const float adjoint = adjoint_shading_factor(hit, -path.ray.d, ss.wi);
+        if (!(adjoint > 0)) return;
+        const ShadowConnection c = connect_to_sensor(scene, hit, ss, path.medium, sampler);
+        if (c.blocked()) return;
+        const Color light = leaving(event, f * path.power) * c.transmittance;
+        path.clock.record(out, ss.pos, light * (adjoint * ss.weight), c.optical_length);
+    }
+
+    // Samples the BSDF for the next direction, then Russian roulette. Returns false when the
+    // path ends.
+    bool continue_from_surface(Sampler& sampler, LightPath& path, const Hit& hit, const Bsdf& bsdf,
+                               const VertexEvent& event) const {
+        const float u_lobe = sampler.next_1d();
+        const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
+        if (!bs.valid() || bs.weight.is_black()) return false;
+        const Vec3 wo = hit.to_world(bs.wo);
+        const float adjoint = adjoint_shading_factor(hit, -path.ray.d, wo);
+        path.power = leaving(event, bs.weight * path.power) * adjoint;
+        if (path.power.is_black()) return false;
+        path.medium.refract(bs);
+        path.medium.cross(hit, wo);
+        path.ray = hit.spawn(wo);
+        return survives(sampler, path);
+    }
+
+    // Russian roulette from rr_depth on, on the share of the emitted power the path still
+    // carries; then the path has one more segment.
+    bool survives(Sampler& sampler, LightPath& path) const {
+        if (rr_depth() > 0 && path.depth >= rr_depth()) {
+            const float q = std::min(path.power.max_component() / path.start, 0.95f);
+            if (!(sampler.next_1d() < q)) return false;
+            path.power *= 1.f / q;
+        }
+        ++path.depth;
+        return true;
+    }
+
+    // ---- media -------------------------------------------------------------------------------
+
+    // The light travels through a medium toward surface `hit` (if `found`): a distance drawn
+    // by mean-free-path sampling decides whether it scatters before reaching the surface.
+    SegmentEnd medium_segment(const Scene& scene, Sampler& sampler, LightPath& path, bool found,
+                              const Hit& hit, SplatList& out) const {
+        const Medium& medium = *path.medium.medium;
+        const DistanceMixture strategy(medium, nullptr, false, DistanceContext{kInfinity});
+        const double tmax = found ? double(hit.t) : kInfinity;
+        const double u = double(sampler.next_1d());
+        const DistanceSample ds = sample_distance(medium, path.ray, tmax, strategy, u, sampler);
+        path.power *= ds.weight;
+        if (ds.scattered) {
+            path.clock.travel_to(path.ray.at(float(ds.distance)), medium.eta());
+            if (path.clock.expired() || path.power.is_black() || depth_exhausted(path.depth))
+                return SegmentEnd::Stop;
+            return medium_vertex(scene, sampler, path, out) ? SegmentEnd::Scattered
+                                                            : SegmentEnd::Stop;
+        }
+        if (!found || path.power.is_black()) return SegmentEnd::Stop;
+        return SegmentEnd::Surface;
+    }
+
+    // The medium vertex the clock just reached: a connection to the sensor, then the direction
+    // out by the phase function (weight 1). Returns false when the path ends.
+    bool medium_vertex(const Scene& scene, Sampler& sampler, LightPath& path,
+                       SplatList& out) const {
+        const Vec3 p = path.clock.position(), wi = -path.ray.d;
+        const PhaseFunction& phase = path.medium.medium->phase();
+        const SensorSample ss = scene.sensor().sample_direct(p, sampler.next_2d());
+        if (ss.valid() && path.clock.arrives_in_time(ss.distance)) {
+            const float f = phase.eval(wi, ss.wi);
+            if (f > 0) {
+                const ShadowConnection c = connect_to_sensor(scene, p, ss, path.medium, sampler);
+                if (!c.blocked())
+                    path.clock.record(out, ss.pos, path.power * c.transmittance * (f * ss.weight),
+                                      c.optical_length);
+            }
+        }
+        path.ray = Ray{p, phase.sample(wi, sampler.next_2d()), 0.f, kInfinity};
+        return survives(sampler, path);
+    }
+
+    std::unordered_map<const Emitter*, const Medium*> surrounding_;  // preprocess()
+};
+
+}  // namespace
+
+FEMTO_PLUGIN(LightTracer, femto::PluginKind::Integrator, "transient_light",
+             "Transient light tracer: paths from the emitters, every vertex connected to the "
+             "sensor and splatted at its own time",
+             {{"rr_depth", "integer", "0",
+               "path depth at which Russian roulette starts; 0 = never (the window ends paths)"}})
