@@ -16,6 +16,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "femto/bsdf.h"
 #include "femto/color.h"
@@ -147,6 +150,19 @@ MediumTracker medium_at(const Scene& scene, const Vec3& p);
 /// `surrounding` (e.g. medium_at() the emitter, found once).
 MediumTracker medium_at_emission(const Emitter& emitter, const EmissionSample& es, const Vec3& d,
                                  const Medium* surrounding);
+
+/// Where light paths start, for integrators that trace them: prepare() checks that every
+/// emitter samples its emission (a located SceneError naming `integrator` otherwise) and finds
+/// once the medium around each emitter that names none (medium_at() a point just off it).
+class LightPathStarts {
+public:
+    void prepare(const Scene& scene, const std::string& integrator);
+    /// The medium light leaving emission sample `es` of `emitter` in direction `d` travels in.
+    MediumTracker medium(const Emitter& emitter, const EmissionSample& es, const Vec3& d) const;
+
+private:
+    std::vector<std::pair<const Emitter*, const Medium*>> surrounding_;
+};
 
 /// The first ray of a light path: from es.p (off its surface by es.p_error) along es.d.
 inline Ray emission_ray(const EmissionSample& es) {

@@ -92,6 +92,30 @@ MediumTracker medium_at_emission(const Emitter& emitter, const EmissionSample& e
     return {emitter.medium() ? emitter.medium() : surrounding, 1.0};
 }
 
+void LightPathStarts::prepare(const Scene& scene, const std::string& integrator) {
+    surrounding_.clear();
+    for (const Emitter* emitter : scene.emitters()) {
+        EmissionSample es;  // any valid sample: a plugin without sample_emission() has none
+        for (const float u : {0.5f, 0.25f, 0.75f})
+            if (es = emitter->sample_emission({u, u}, {u, 1.f - u}); es.valid()) break;
+        if (!es.valid())
+            throw SceneError(emitter->location(), integrator + " cannot start light paths on a \"" +
+                                                      emitter->type_name() +
+                                                      "\" emitter (it does not sample its "
+                                                      "emission)");
+        const Vec3 off = es.p_error > 0 ? offset_origin(es.p, es.n, es.d, es.p_error) : es.p;
+        surrounding_.push_back({emitter, medium_at(scene, off).medium});
+    }
+}
+
+MediumTracker LightPathStarts::medium(const Emitter& emitter, const EmissionSample& es,
+                                      const Vec3& d) const {
+    const Medium* around = nullptr;
+    for (const auto& [e, m] : surrounding_)
+        if (e == &emitter) around = m;
+    return medium_at_emission(emitter, es, d, around);
+}
+
 ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,
                                    const MediumTracker& medium, Sampler& sampler) {
     const Ray ray = from.spawn_to(sensor.p);

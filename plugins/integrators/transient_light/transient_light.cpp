@@ -25,7 +25,6 @@
 // refraction, see the dielectric plugin).
 #include <algorithm>
 #include <cmath>
-#include <unordered_map>
 
 #include "femto/integrator.h"
 #include "femto/path_clock.h"
@@ -75,19 +74,7 @@ public:
                                  "\" sensor: no light path can reach it by a connection (an "
                                  "orthographic camera's rays are parallel); use a perspective "
                                  "sensor or a camera-path integrator (transient_path)");
-        surrounding_.clear();
-        for (const Emitter* emitter : scene.emitters()) {
-            const EmissionSample es = emission_example(*emitter);
-            if (!es.valid())
-                throw SceneError(emitter->location(),
-                                 "transient_light cannot start light paths on a \"" +
-                                     emitter->type_name() +
-                                     "\" emitter (it does not sample its emission)");
-            // The medium around the emitter, where it names none: as a camera path finds it at
-            // a point just off the emitter.
-            const Vec3 off = es.p_error > 0 ? offset_origin(es.p, es.n, es.d, es.p_error) : es.p;
-            surrounding_[emitter] = medium_at(scene, off).medium;
-        }
+        starts_.prepare(scene, "transient_light");
     }
 
     void sample_light(const Scene& scene, Sampler& sampler, SplatList& out) const override {
@@ -98,7 +85,7 @@ public:
         const EmissionSample es = emitter->sample_emission(u_position, sampler.next_2d());
         if (!es.valid() || es.weight.is_black()) return;
         LightPath path{emission_ray(es), LightClock(scene, *emitter, es.p, sampler),
-                       emission_medium(*emitter, es, es.d), es.weight / pmf};
+                       starts_.medium(*emitter, es, es.d), es.weight / pmf};
         path.start = path.power.max_component();
         if (path.clock.expired()) return;
         if (!hide_emitters()) emitter_seen(scene, sampler, path, *emitter, es, pmf, out);
@@ -115,21 +102,6 @@ public:
     }
 
 private:
-    // A valid emission sample of `emitter`, if it has any (a plugin that does not implement
-    // sample_emission() never returns one).
-    static EmissionSample emission_example(const Emitter& emitter) {
-        for (const float u : {0.5f, 0.25f, 0.75f})
-            if (const EmissionSample es = emitter.sample_emission({u, u}, {u, 1.f - u}); es.valid())
-                return es;
-        return {};
-    }
-    // The medium light leaving `es` of `emitter` in direction d travels in.
-    MediumTracker emission_medium(const Emitter& emitter, const EmissionSample& es,
-                                  const Vec3& d) const {
-        const auto it = surrounding_.find(&emitter);
-        return medium_at_emission(emitter, es, d, it == surrounding_.end() ? nullptr : it->second);
-    }
-
     // The emitter's point seen by the camera: emission toward the sensor over the connection.
     void emitter_seen(const Scene& scene, Sampler& sampler, const LightPath& path,
                       const Emitter& emitter, const EmissionSample& es, float pmf,
@@ -139,7 +111,7 @@ private:
         const Color emitted = emitter.eval_direction(es, ss.wi);
         if (emitted.is_black()) return;
         const ShadowConnection c = connect_to_sensor(
-            scene, es.p, ss, emission_medium(emitter, es, ss.wi), sampler, es.n, es.p_error);
+            scene, es.p, ss, starts_.medium(emitter, es, ss.wi), sampler, es.n, es.p_error);
         if (c.blocked()) return;
         const float scale = ss.weight / (pmf * es.pdf_position);
         path.clock.record(out, ss.pos, emitted * c.transmittance * scale, c.optical_length);
@@ -256,7 +228,7 @@ private:
         return survives(sampler, path);
     }
 
-    std::unordered_map<const Emitter*, const Medium*> surrounding_;  // preprocess()
+    LightPathStarts starts_;  // preprocess(): emitters checked, the media they sit in
 };
 
 }  // namespace
