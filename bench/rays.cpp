@@ -469,7 +469,7 @@ public:
             const Vec3 local =
                 femto::warp::square_to_uniform_hemisphere({rng.next_float(), rng.next_float()});
             r.d = femto::Frame(s.n).to_world(local);
-            r.o = femto::offset_origin(s.p, s.n, r.d);
+            r.o = femto::offset_origin(s.p, s.n, r.d, s.p_error);
             r.tmax = femto::kInfinity;
         }
         return rays;
@@ -483,11 +483,11 @@ public:
         for (auto& r : rays) {
             const femto::ShapeSample s = sample_surface(surfaces_, surface_cdf_, rng);
             const femto::ShapeSample l = sample_surface(lights_, light_cdf_, rng);
-            r.o = femto::offset_origin(s.p, s.n, l.p - s.p);
+            r.o = femto::offset_origin(s.p, s.n, l.p - s.p, s.p_error);
             const Vec3 d = l.p - r.o;
             const float dist = femto::length(d);
             r.d = dist > 0 ? d / dist : s.n;
-            r.tmax = dist * (1.f - 1e-4f);
+            r.tmax = femto::shadow_ray_length(dist, l.p);
         }
         return rays;
     }

@@ -29,6 +29,8 @@
 
 namespace femto {
 
+class LightClock;
+
 class PathClock {
 public:
     /// Starts a camera path at the sensor point `origin` (the camera ray's origin) at time 0;
@@ -71,6 +73,13 @@ public:
         const double emitted = emission_time(emitter, sampler);
         out_.add(radiance, time_ + extra + emitted);
     }
+    /// Whether light that a light subpath brought to its vertex (`light`, its clock) can join
+    /// this path over a connection of at least `distance` and still arrive within the window
+    /// (check it before tracing the connection: bidirectional integrators).
+    bool arrives_in_time(const LightClock& light, double distance) const;
+    /// Adds `radiance` that a light subpath brought to its vertex (`light`) and that reaches the
+    /// current vertex over a connection of optical length `connection`.
+    void record(const Color& radiance, const LightClock& light, double connection) const;
     /// Adds a value measured at the current vertex that no emitter sent (ambient occlusion, a
     /// debugging quantity): it is recorded at the clock's time.
     void record(const Color& value) const { out_.add(value, time_); }
@@ -137,5 +146,15 @@ private:
     Vec3 position_;
     double time_;
 };
+
+inline bool PathClock::arrives_in_time(const LightClock& light, double distance) const {
+    // The light subpath's time includes its emission time: the cut is the window's own end.
+    return time_ + distance + light.time() <= cut() + window_.earliest_emission;
+}
+
+inline void PathClock::record(const Color& radiance, const LightClock& light,
+                              double connection) const {
+    out_.add(radiance, time_ + connection + light.time());
+}
 
 }  // namespace femto

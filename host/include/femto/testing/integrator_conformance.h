@@ -56,9 +56,9 @@ struct IntegratorCase {
     /// direct lighting); -1 when $max_depth sets it.
     int fixed_depth = -1;
     bool media = false;  ///< renders participating media
-    /// Its samples start at the lights (SampleSource::Light): the checks seen through an
-    /// orthographic camera, which no light path can reach, are skipped.
-    bool light_paths = false;
+    /// It connects light paths to the sensor (light tracing, BDPT) and so needs a pinhole: the
+    /// checks seen through an orthographic camera, which no connection can reach, are skipped.
+    bool connects_to_sensor = false;
 };
 
 /// How GoogleTest prints a case.
@@ -78,7 +78,7 @@ protected:
     }
     /// True (and the check is to skip) when the integrator cannot see through an orthographic
     /// camera.
-    bool needs_connectable_sensor() const { return GetParam().light_paths; }
+    bool needs_connectable_sensor() const { return GetParam().connects_to_sensor; }
     std::string integrator() const {
         return "<integrator type=\"" + GetParam().type + "\">" + GetParam().parameters +
                "</integrator>";

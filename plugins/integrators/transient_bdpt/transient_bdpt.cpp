@@ -1,0 +1,630 @@
+// transient_bdpt: bidirectional path tracing in time (thesis ch. 5.4: the transient path
+// integral sampled with eye and light subpaths), surfaces and media, every contribution at its
+// own time of flight. Veach's estimator as pbrt-v3 writes it: for each camera sample one camera
+// subpath and one light subpath, then every strategy (s, t) that joins the first s light
+// vertices to the first t camera vertices, weighted by the power (or balance) heuristic over
+// all strategies that could have made the same path.
+//
+// Reading order:
+//   - Vertex: what MIS and connections need of a subpath vertex (position, normal, material,
+//     the medium the path was in, the densities of sampling it from either side);
+//   - camera_subpath() / light_subpath(): random walks (mean-free-path distances in media,
+//     BSDF and phase sampling, no Russian roulette: max_depth or the window ends them); a
+//     camera vertex on an emitter adds the strategy s = 0 as soon as it is found;
+//   - connect(): the strategies with s >= 1 and t >= 1: the light sample (s = 1), the sensor
+//     connection (t = 1, a splat onto the film), and the general connection;
+//   - mis_weight(): the heuristic over the path's strategies, from the vertices' densities.
+// Time: each camera vertex keeps its PathClock and each light vertex its LightClock; a joined
+// path's time is the light subpath's, plus the connection's optical length, plus the camera
+// subpath's (femto/path_clock.h). The window is checked before a connection's shadow ray.
+// Only the steady time-sampling strategies are supported (distance=mean_free_path,
+// connection=deterministic, angular=phase); others are refused, since their densities would
+// have to join the MIS weights.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "femto/integrator.h"
+#include "femto/mis.h"
+#include "femto/path_clock.h"
+#include "femto/plugin.h"
+#include "femto/sensor.h"
+#include "femto/time_sampling.h"
+#include "femto/transport.h"
+
+namespace {
+
+using namespace femto;
+
+// A vertex of a camera or light subpath.
+struct Vertex {
+    enum class Kind : uint8_t { Camera, Light, Surface, Medium };
+    Kind kind = Kind::Surface;
+    Vec3 p;
+    Vec3 n;   // geometric normal of surface and area-light vertices; zero otherwise
+    Hit hit;  // surface vertices
+    const Bsdf* bsdf = nullptr;            // surface vertices
+    const PhaseFunction* phase = nullptr;  // medium vertices
+    const Emitter* emitter = nullptr;      // light vertices; surface vertices on an emitter
+    EmissionSample emission;               // light vertices
+    MediumTracker medium;                  // the medium the path was in when it arrived
+    VertexEvent event;                     // the material's event (light leaving carries it)
+    // Densities of sampling this vertex from its subpath's previous vertex (fwd) and from the
+    // next one (rev): area measure at surfaces, volume in media, per unit of area-light area.
+    float pdf_fwd = 0.f, pdf_rev = 0.f;
+    bool delta = false;  // scattered by a delta lobe: no connection can use it
+
+    bool on_surface() const {
+        return kind == Kind::Surface || (kind == Kind::Light && n != Vec3());
+    }
+    // A connection can end here (not a specular vertex).
+    bool connectible() const {
+        switch (kind) {
+            case Kind::Surface:
+                return (bsdf->flags() & kBsdfSmooth) != 0;
+            case Kind::Light:
+                return !emission.delta_direction;
+            default:
+                return true;
+        }
+    }
+};
+
+// A camera subpath with the weight and clock of each vertex, and a light subpath with the light
+// arriving at each vertex and its clock. Reused across samples (one per thread).
+struct Subpaths {
+    std::vector<Vertex> camera, light;
+    std::vector<Throughput> camera_beta;  // weight of light arriving, the vertex's event included
+    std::vector<PathClock> camera_clock;  // after the vertex's delay
+    std::vector<Color> light_power;       // light arriving (before the vertex's event and BSDF)
+    std::vector<LightClock> light_clock;  // after the vertex's delay
+    void clear() {
+        camera.clear(), light.clear(), camera_beta.clear(), camera_clock.clear();
+        light_power.clear(), light_clock.clear();
+    }
+};
+
+// pdf_dir (solid angle at `from`) as a density of `to`: area measure on a surface, volume
+// measure in a medium.
+float to_area(float pdf_dir, const Vertex& from, const Vertex& to) {
+    const Vec3 d = to.p - from.p;
+    const float d2 = squared_length(d);
+    if (!(d2 > 0.f)) return 0.f;
+    float pdf = pdf_dir / d2;
+    if (to.on_surface()) pdf *= std::abs(dot(to.n, d)) / std::sqrt(d2);
+    return pdf;
+}
+
+// Direction from a to b.
+Vec3 towards(const Vertex& a, const Vertex& b) { return normalize(b.p - a.p); }
+
+class Bdpt final : public MonteCarloIntegrator {
+public:
+    explicit Bdpt(const Properties& props) : MonteCarloIntegrator(props, 0) {
+        if (max_depth() == 0)
+            props.fail("max_depth", "transient_bdpt needs max_depth >= 1 (or -1)");
+        if (rr_depth() != 0)
+            props.fail("rr_depth",
+                       "transient_bdpt does not use Russian roulette: its paths end at "
+                       "max_depth or when they can no longer reach the window");
+        const std::string heuristic = props.get_string("heuristic", "power");
+        if (heuristic != "power" && heuristic != "balance")
+            props.fail("heuristic",
+                       "heuristic must be power or balance, not \"" + heuristic + "\"");
+        power_ = heuristic == "power";
+        only_s_ = int(props.get_int("strategy_s", -1));
+        only_t_ = int(props.get_int("strategy_t", -1));
+        if ((only_s_ < 0) != (only_t_ < 0) || only_s_ < -1 || only_t_ == 0 || only_t_ < -1)
+            props.fail("strategy_s",
+                       "strategy_s >= 0 and strategy_t >= 1 go together (or both "
+                       "-1: every strategy, weighted by MIS)");
+        check_steady(props, PluginKind::Distance, "distance", "mean_free_path");
+        check_steady(props, PluginKind::Connection, "connection", "deterministic");
+        check_steady(props, PluginKind::Angular, "angular", "phase");
+    }
+
+    bool splats() const override { return true; }
+
+    void preprocess(const Scene& scene) override {
+        MonteCarloIntegrator::preprocess(scene);
+        const Sensor& sensor = scene.sensor();
+        if (!sensor.connectable())
+            throw SceneError(sensor.location(),
+                             "transient_bdpt cannot connect light subpaths to a \"" +
+                                 sensor.type_name() +
+                                 "\" sensor (its rays are parallel); use a perspective sensor");
+        for (const Emitter* e : scene.emitters())
+            if (e->type_name() == "collimated")
+                throw SceneError(e->location(),
+                                 "transient_bdpt does not support collimated emitters yet (a "
+                                 "delta direction needs its own MIS densities); use "
+                                 "transient_path or transient_light");
+        starts_.prepare(scene, "transient_bdpt");
+    }
+
+    void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
+                ContributionList& out) const override {
+        thread_local Subpaths paths;
+        paths.clear();
+        camera_subpath(scene, sampler, ray, out, paths);
+        light_subpath(scene, sampler, paths);
+        const int nc = int(paths.camera.size()), nl = int(paths.light.size());
+        for (int t = 1; t <= nc; ++t)
+            for (int s = 1; s <= nl; ++s) {
+                if (max_depth() >= 0 && s + t - 1 > max_depth()) break;
+                if (only_s_ >= 0 && (s != only_s_ || t != only_t_)) continue;
+                connect(scene, sampler, paths, s, t, out);
+            }
+    }
+
+private:
+    // Refuses a nested time-sampling strategy other than the steady one.
+    static void check_steady(const Properties& props, PluginKind kind, const char* tag,
+                             const char* steady) {
+        const auto child = props.child(kind, steady);
+        if (child && child->type_name() != steady)
+            props.fail(tag, std::string("transient_bdpt supports only the steady time-sampling "
+                                        "strategies (distance=mean_free_path, "
+                                        "connection=deterministic, angular=phase), not <") +
+                                tag + " type=\"" + child->type_name() + "\">");
+    }
+
+    int max_vertices(bool camera) const {
+        constexpr int kCap = 1024;  // unbounded paths: the window ends them long before
+        if (max_depth() < 0) return kCap;
+        return int(std::min<int64_t>(kCap, camera ? max_depth() + 1 : max_depth()));
+    }
+
+    // ---- subpaths ----------------------------------------------------------------------------
+
+    // The camera subpath: the camera, then the scattering vertices the camera ray's path meets.
+    // A vertex on an emitter adds the strategy s = 0 at once.
+    void camera_subpath(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
+                        ContributionList& out, Subpaths& paths) const {
+        Walk walk{camera_ray, MediumTracker::at_sensor(scene)};
+        Vertex cam;
+        cam.kind = Vertex::Kind::Camera;
+        cam.p = camera_ray.o;
+        cam.pdf_fwd = 1.f;
+        cam.medium = walk.medium;
+        PathClock clock(scene, out, camera_ray.o);
+        Throughput beta;
+        paths.camera.push_back(cam);
+        paths.camera_beta.push_back(beta);
+        paths.camera_clock.push_back(clock);
+        walk.pdf_dir = scene.sensor().pdf_direction(camera_ray.d);
+        while (int(paths.camera.size()) < max_vertices(true)) {
+            Vertex v;
+            Color weight(1.f);
+            if (!next_vertex(scene, sampler, walk, v, weight, [&](const Vec3& p, double eta) {
+                    clock.travel_to(p, eta);
+                    return !clock.expired();
+                }))
+                return;
+            beta *= weight;
+            if (beta.is_black()) return;
+            if (v.kind == Vertex::Kind::Surface || v.kind == Vertex::Kind::Medium)
+                clock.reach_vertex();
+            v.pdf_fwd = to_area(walk.pdf_dir, paths.camera.back(), v);
+            paths.camera.push_back(v);
+            if (v.emitter) emitter_hit(scene, sampler, paths, beta, clock);
+            if (v.bsdf && v.bsdf->has_vertex_event()) {
+                paths.camera.back().event = v.bsdf->sample_vertex_event(v.hit, sampler.next_1d());
+                clock.delay(paths.camera.back().event.delay);
+                if (paths.camera.back().event.transfers)
+                    beta.transfer(paths.camera.back().event.transfer);
+            }
+            paths.camera_beta.push_back(beta);
+            paths.camera_clock.push_back(clock);
+            if (int(paths.camera.size()) == max_vertices(true)) return;
+            Color scatter;
+            if (!scatter_from(sampler, walk, paths.camera, false, scatter)) return;
+            beta *= scatter;
+        }
+    }
+
+    // The light subpath: a point on an emitter, then the scattering vertices its light meets.
+    void light_subpath(const Scene& scene, Sampler& sampler, Subpaths& paths) const {
+        const int limit = max_vertices(false);
+        if (limit < 1) return;
+        float pmf = 0.f;
+        const Emitter* emitter = scene.select_emitter(sampler.next_1d(), pmf);
+        if (!emitter) return;
+        const Vec2 u_position = sampler.next_2d();
+        const EmissionSample es = emitter->sample_emission(u_position, sampler.next_2d());
+        if (!es.valid() || es.weight.is_black()) return;
+        Vertex light;
+        light.kind = Vertex::Kind::Light;
+        light.p = es.p;
+        light.n = es.n;
+        light.emitter = emitter;
+        light.emission = es;
+        light.pdf_fwd = es.pdf_position * pmf;
+        light.medium = starts_.medium(*emitter, es, es.d);
+        LightClock clock(scene, *emitter, es.p, sampler);
+        if (clock.expired()) return;
+        paths.light.push_back(light);
+        paths.light_power.push_back(es.weight / pmf);  // unused for the light vertex itself
+        paths.light_clock.push_back(clock);
+        Walk walk{emission_ray(es), light.medium};
+        walk.pdf_dir = es.pdf_direction;
+        Color power = es.weight / pmf;
+        while (int(paths.light.size()) < limit) {
+            Vertex v;
+            Color weight(1.f);
+            if (!next_vertex(scene, sampler, walk, v, weight, [&](const Vec3& p, double eta) {
+                    clock.travel_to(p, eta);
+                    return !clock.expired();
+                }))
+                return;
+            power *= weight;
+            if (power.is_black()) return;
+            v.pdf_fwd = to_area(walk.pdf_dir, paths.light.back(), v);
+            if (v.bsdf && v.bsdf->has_vertex_event()) {
+                v.event = v.bsdf->sample_vertex_event(v.hit, sampler.next_1d());
+                clock.delay(v.event.delay);
+            }
+            paths.light.push_back(v);
+            paths.light_power.push_back(power);
+            paths.light_clock.push_back(clock);
+            if (int(paths.light.size()) == limit) return;
+            Color scatter;
+            if (!scatter_from(sampler, walk, paths.light, true, scatter)) return;
+            power = leaving(paths.light.back().event, scatter * power);
+        }
+    }
+
+    // A random walk's state between vertices.
+    struct Walk {
+        Ray ray;
+        MediumTracker medium;
+        float pdf_dir = 0.f;  // density of ray.d at the walk's last vertex
+    };
+
+    // The next scattering vertex along walk.ray: a medium vertex (mean-free-path distances) or
+    // a surface that is not `null` (null boundaries are crossed). `travel(p, eta)` moves the
+    // subpath's clock there and returns false when the path expired; `weight` gets the
+    // segment's transmittance weight. Returns false when the walk ends.
+    template <typename Travel>
+    bool next_vertex(const Scene& scene, Sampler& sampler, Walk& walk, Vertex& v, Color& weight,
+                     Travel&& travel) const {
+        for (int crossings = 0; crossings < 256; ++crossings) {
+            Hit hit;
+            const bool found = scene.intersect(walk.ray, hit);
+            if (const Medium* medium = walk.medium.medium) {
+                const DistanceMixture mfp(*medium, nullptr, false, DistanceContext{kInfinity});
+                const double tmax = found ? double(hit.t) : kInfinity;
+                const double u = double(sampler.next_1d());
+                const DistanceSample ds = sample_distance(*medium, walk.ray, tmax, mfp, u, sampler);
+                weight *= ds.weight;
+                if (ds.scattered) {
+                    v.kind = Vertex::Kind::Medium;
+                    v.p = walk.ray.at(float(ds.distance));
+                    v.phase = &medium->phase();
+                    v.medium = walk.medium;
+                    return travel(v.p, medium->eta()) && !weight.is_black();
+                }
+                if (!found || weight.is_black()) return false;
+            }
+            if (!found || !travel(hit.p, walk.medium.eta())) return false;
+            const Bsdf& bsdf = *hit.shape->bsdf();
+            if (bsdf.is_null()) {
+                walk.medium.cross(hit, walk.ray.d);
+                walk.ray = hit.spawn(walk.ray.d);
+                if (hit.shape->emitter()) continue;  // a visible null emitter is not a vertex
+                continue;
+            }
+            v.kind = Vertex::Kind::Surface;
+            v.p = hit.p;
+            v.n = hit.ng;
+            v.hit = hit;
+            v.bsdf = &bsdf;
+            v.emitter = hit.shape->emitter();
+            v.medium = walk.medium;
+            return true;
+        }
+        return false;
+    }
+
+    // Samples the direction out of the subpath's last vertex (BSDF or phase function) and sets
+    // the densities: the next vertex's forward density (walk.pdf_dir) and the previous vertex's
+    // reverse one. `scatter` gets the sample's weight (with the adjoint shading factor on light
+    // subpaths). Returns false when sampling failed.
+    bool scatter_from(Sampler& sampler, Walk& walk, std::vector<Vertex>& path, bool light,
+                      Color& scatter) const {
+        Vertex& v = path.back();
+        Vertex& prev = path[path.size() - 2];
+        const Vec3 wi = -walk.ray.d;
+        Vec3 wo;
+        float pdf_rev_dir = 0.f;
+        if (v.kind == Vertex::Kind::Medium) {
+            wo = v.phase->sample(wi, sampler.next_2d());
+            walk.pdf_dir = v.phase->eval(wi, wo);
+            pdf_rev_dir = v.phase->eval(wo, wi);
+            scatter = Color(1.f);
+            walk.ray = Ray{v.p, wo, 0.f, kInfinity};
+        } else {
+            const float u_lobe = sampler.next_1d();
+            const BsdfSample bs = v.bsdf->sample(v.hit, v.hit.wi, u_lobe, sampler.next_2d());
+            if (!bs.valid() || bs.weight.is_black()) return false;
+            wo = v.hit.to_world(bs.wo);
+            scatter = bs.weight;
+            if (light) scatter *= adjoint_shading_factor(v.hit, wi, wo);
+            if (bs.sampled_lobe & kBsdfDelta) {
+                v.delta = true;
+                walk.pdf_dir = 0.f;
+            } else {
+                walk.pdf_dir = bs.pdf;
+                pdf_rev_dir = v.bsdf->pdf(v.hit, bs.wo, v.hit.wi);
+            }
+            walk.medium.refract(bs);
+            walk.medium.cross(v.hit, wo);
+            walk.ray = v.hit.spawn(wo);
+        }
+        prev.pdf_rev = v.delta ? 0.f : to_area(pdf_rev_dir, v, prev);
+        return true;
+    }
+
+    // Light leaving a vertex whose event transfers colour.
+    static Color leaving(const VertexEvent& event, const Color& light) {
+        return event.transfers ? event.transfer * light : light;
+    }
+
+    // ---- strategies --------------------------------------------------------------------------
+
+    // s = 0: the camera subpath's last vertex is on an emitter (clock: before its delay).
+    void emitter_hit(const Scene& scene, Sampler& sampler, const Subpaths& paths,
+                     const Throughput& beta, const PathClock& clock) const {
+        const int t = int(paths.camera.size());
+        if (only_s_ >= 0 && (only_s_ != 0 || only_t_ != t)) return;
+        if (t == 2 && hide_emitters()) return;
+        const Vertex& v = paths.camera.back();
+        const Color Le = v.emitter->eval(v.hit, towards(v, paths.camera[size_t(t) - 2]));
+        if (Le.is_black()) return;
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 0, t, nullptr, nullptr);
+        clock.record(beta(Le * w), *v.emitter, sampler);
+    }
+
+    // Joins the first s light vertices and the first t camera vertices (s, t >= 1).
+    void connect(const Scene& scene, Sampler& sampler, const Subpaths& paths, int s, int t,
+                 ContributionList& out) const {
+        if (t == 1) return to_sensor(scene, sampler, paths, s, out);
+        if (s == 1) return light_sample(scene, sampler, paths, t);
+        const Vertex& lv = paths.light[size_t(s) - 1];
+        const Vertex& cv = paths.camera[size_t(t) - 1];
+        if (!lv.connectible() || !cv.connectible()) return;
+        const PathClock& clock = paths.camera_clock[size_t(t) - 1];
+        const LightClock& light_clock = paths.light_clock[size_t(s) - 1];
+        const double distance = distance_between(cv.p, lv.p);
+        if (!(distance > 0) || !clock.arrives_in_time(light_clock, distance)) return;
+        const Vec3 to_light = towards(cv, lv), to_camera = -to_light;
+        const Color f_light = scattering(lv, paths.light[size_t(s) - 2].p, to_camera, true);
+        const Color f_camera = scattering(cv, paths.camera[size_t(t) - 2].p, to_light, false);
+        if (f_light.is_black() || f_camera.is_black()) return;
+        const ShadowConnection c = connection(scene, sampler, cv, lv.p, to_light, distance);
+        if (c.blocked()) return;
+        const Color arriving = leaving(lv.event, f_light * paths.light_power[size_t(s) - 1]);
+        const float g = float(1.0 / (distance * distance));
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, t, nullptr, nullptr);
+        clock.record(
+            paths.camera_beta[size_t(t) - 1](f_camera * arriving * c.transmittance) * (g * w),
+            light_clock, c.optical_length);
+    }
+
+    // s = 1: a light sample for camera vertex t - 1 (next-event estimation).
+    void light_sample(const Scene& scene, Sampler& sampler, const Subpaths& paths, int t) const {
+        const Vertex& cv = paths.camera[size_t(t) - 1];
+        if (!cv.connectible()) return;
+        const EmitterSample ls = sample_emitter(scene, cv.p, sampler);
+        if (!(ls.pdf > 0) || ls.weight.is_black()) return;
+        const PathClock& clock = paths.camera_clock[size_t(t) - 1];
+        if (std::isfinite(ls.distance) && double(ls.distance) > clock.remaining()) return;
+        const Color f = scattering(cv, paths.camera[size_t(t) - 2].p, ls.wi, false);
+        if (f.is_black()) return;
+        const ShadowConnection c = cv.kind == Vertex::Kind::Surface
+                                       ? connect_to_light(scene, cv.hit, ls, cv.medium, sampler)
+                                       : connect_to_light(scene, cv.p, ls, cv.medium, sampler);
+        if (c.blocked()) return;
+        Vertex light;
+        light.kind = Vertex::Kind::Light;
+        light.p = ls.p;
+        light.n = ls.n;
+        light.emitter = ls.emitter;
+        light.emission.p = ls.p;
+        light.emission.n = ls.n;
+        float pos = 0.f, dir = 0.f, pmf = 0.f;
+        scene.select_emitter(0.f, pmf);
+        ls.emitter->pdf_emission(light.emission, -ls.wi, pos, dir);
+        light.pdf_fwd = pos * pmf;
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 1, t, &light, nullptr);
+        clock.record(paths.camera_beta[size_t(t) - 1](f * ls.weight * c.transmittance) * w,
+                     *ls.emitter, sampler, c.optical_length);
+    }
+
+    // t = 1: light vertex s - 1 seen by the camera, a splat.
+    void to_sensor(const Scene& scene, Sampler& sampler, const Subpaths& paths, int s,
+                   ContributionList& out) const {
+        if (s == 1 && hide_emitters()) return;
+        const Vertex& lv = paths.light[size_t(s) - 1];
+        if (!lv.connectible() || !out.splat_list()) return;
+        const SensorSample ss = scene.sensor().sample_direct(lv.p, sampler.next_2d());
+        const LightClock& clock = paths.light_clock[size_t(s) - 1];
+        if (!ss.valid() || !clock.arrives_in_time(ss.distance)) return;
+        Color value;
+        if (s == 1) {
+            value = lv.emitter->eval_direction(lv.emission, ss.wi) / lv.pdf_fwd;
+        } else {
+            const Color f = scattering(lv, paths.light[size_t(s) - 2].p, ss.wi, true);
+            value = leaving(lv.event, f * paths.light_power[size_t(s) - 1]);
+        }
+        if (value.is_black()) return;
+        const ShadowConnection c =
+            lv.kind == Vertex::Kind::Surface
+                ? connect_to_sensor(scene, lv.hit, ss, lv.medium, sampler)
+                : connect_to_sensor(scene, lv.p, ss,
+                                    lv.kind == Vertex::Kind::Light
+                                        ? starts_.medium(*lv.emitter, lv.emission, ss.wi)
+                                        : lv.medium,
+                                    sampler, lv.n, lv.emission.p_error);
+        if (c.blocked()) return;
+        Vertex camera;
+        camera.kind = Vertex::Kind::Camera;
+        camera.p = ss.p;
+        camera.pdf_fwd = 1.f;
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, 1, nullptr, &camera);
+        clock.record(*out.splat_list(), ss.pos, value * c.transmittance * (ss.weight * w),
+                     c.optical_length);
+    }
+
+    // What vertex v (arrived at from `from`) sends toward world direction d: the BSDF value
+    // with its cosine (and, on light subpaths, the adjoint shading factor) or the phase
+    // function. Zero for camera and light vertices (their terms are the strategies').
+    static Color scattering(const Vertex& v, const Vec3& from, const Vec3& d, bool light) {
+        const Vec3 wi = normalize(from - v.p);
+        if (v.kind == Vertex::Kind::Medium) return Color(v.phase->eval(wi, d));
+        if (v.kind != Vertex::Kind::Surface) return Color(0.f);
+        Color f = v.bsdf->eval(v.hit, v.hit.to_local(wi), v.hit.to_local(d));
+        if (light) f *= adjoint_shading_factor(v.hit, wi, d);
+        return f;
+    }
+
+    // The shadow connection from camera vertex cv toward point `to`.
+    static ShadowConnection connection(const Scene& scene, Sampler& sampler, const Vertex& cv,
+                                       const Vec3& to, const Vec3& dir, double distance) {
+        EmitterSample target;  // connect_to_light() needs only the point, direction, distance
+        target.p = to;
+        target.wi = dir;
+        target.distance = float(distance);
+        return cv.kind == Vertex::Kind::Surface
+                   ? connect_to_light(scene, cv.hit, target, cv.medium, sampler)
+                   : connect_to_light(scene, cv.p, target, cv.medium, sampler);
+    }
+
+    // ---- multiple importance sampling --------------------------------------------------------
+
+    // Density with which vertex v (arrived at from `prev`, unused for end points) samples
+    // `next`, as a density of next.
+    float pdf(const Scene& scene, const Vertex& v, const Vertex* prev, const Vertex& next) const {
+        const Vec3 d = towards(v, next);
+        switch (v.kind) {
+            case Vertex::Kind::Camera:
+                return to_area(scene.sensor().pdf_direction(d), v, next);
+            case Vertex::Kind::Light:
+                return pdf_light(v, next);
+            case Vertex::Kind::Medium:
+                return to_area(v.phase->eval(towards(v, *prev), d), v, next);
+            case Vertex::Kind::Surface:
+                return to_area(
+                    v.bsdf->pdf(v.hit, v.hit.to_local(towards(v, *prev)), v.hit.to_local(d)), v,
+                    next);
+        }
+        return 0.f;
+    }
+    // Density with which an emitter at v sends light toward `next` (v on an emitter: a light
+    // vertex, or a camera vertex that hit one).
+    static float pdf_light(const Vertex& v, const Vertex& next) {
+        EmissionSample at = v.emission;
+        at.p = v.p;
+        at.n = v.n;
+        float pos = 0.f, dir = 0.f;
+        v.emitter->pdf_emission(at, towards(v, next), pos, dir);
+        return to_area(dir, v, next);
+    }
+    // Density with which a light subpath starts at v (on an emitter).
+    static float pdf_light_origin(const Scene& scene, const Vertex& v) {
+        EmissionSample at;
+        at.p = v.p;
+        at.n = v.n;
+        float pos = 0.f, dir = 0.f, pmf = 0.f;
+        scene.select_emitter(0.f, pmf);
+        v.emitter->pdf_emission(at, v.n, pos, dir);
+        return pos * pmf;
+    }
+
+    // The weight of strategy (s, t) for the path it made: the heuristic over every strategy
+    // (s', t') with s' + t' = s + t that could have sampled it (Veach 1997, ch. 10; pbrt-v3's
+    // MISWeight). `light` / `camera` replace the end vertex a strategy sampled itself (s = 1:
+    // the light sample; t = 1: the sensor point).
+    float mis_weight(const Scene& scene, const Subpaths& paths, int s, int t, const Vertex* light,
+                     const Vertex* camera) const {
+        // The path's vertices in light-to-camera order with the density of each from either
+        // side: x_0 .. x_{s-1} the light vertices, x_s .. x_{n-1} the camera vertices reversed.
+        struct Densities {
+            float from_light, from_camera;
+            bool delta;
+        };
+        const int n = s + t;
+        thread_local std::vector<Densities> x;
+        x.assign(size_t(n), {});
+        auto light_vertex = [&](int i) -> const Vertex& {
+            return (i == s - 1 && light) ? *light : paths.light[size_t(i)];
+        };
+        auto camera_vertex = [&](int j) -> const Vertex& {  // camera vertex j is x_{n-1-j}
+            return (j == t - 1 && camera) ? *camera : paths.camera[size_t(j)];
+        };
+        for (int i = 0; i < s; ++i) {
+            const Vertex& v = light_vertex(i);
+            x[size_t(i)] = {v.pdf_fwd, v.pdf_rev, v.delta};
+        }
+        for (int j = 0; j < t; ++j) {
+            const Vertex& v = camera_vertex(j);
+            x[size_t(n - 1 - j)] = {v.pdf_rev, v.pdf_fwd, v.delta};
+        }
+        // The connection's end points are not scattered by a delta lobe, and the densities
+        // across the connection are those of the other side sampling them.
+        const Vertex& pt = camera_vertex(t - 1);
+        const Vertex* qs = s > 0 ? &light_vertex(s - 1) : nullptr;
+        Densities& xt = x[size_t(s)];  // pt
+        xt.delta = false;
+        if (s > 0) {
+            Densities& xs = x[size_t(s) - 1];
+            xs.delta = false;
+            const Vertex* qs_prev = s > 1 ? &light_vertex(s - 2) : nullptr;
+            xt.from_light = pdf(scene, *qs, qs_prev, pt);
+            if (t > 1) x[size_t(s) + 1].from_light = pdf(scene, pt, qs, camera_vertex(t - 2));
+            const Vertex* pt_prev = t > 1 ? &camera_vertex(t - 2) : nullptr;
+            xs.from_camera = pdf(scene, pt, pt_prev, *qs);
+            if (s > 1) x[size_t(s) - 2].from_camera = pdf(scene, *qs, &pt, light_vertex(s - 2));
+        } else {
+            xt.from_light = pdf_light_origin(scene, pt);
+            x[size_t(s) + 1].from_light = pdf_light(pt, camera_vertex(t - 2));
+        }
+        // Strategy k joins x_{k-1} and x_k; its density relative to strategy s is the product of
+        // from_light / from_camera of the vertices in between.
+        auto remap = [](float f) { return f != 0.f ? f : 1.f; };
+        auto h = [&](double r) { return power_ ? r * r : r; };
+        // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
+        const bool delta_light = s > 0 && light_vertex(0).emission.delta_position;
+        double sum = 1.0, r = 1.0;
+        for (int k = s + 1; k < n; ++k) {  // strategies with fewer camera vertices (t >= 1)
+            r *= remap(x[size_t(k) - 1].from_light) / remap(x[size_t(k) - 1].from_camera);
+            if (!x[size_t(k) - 1].delta && !x[size_t(k)].delta) sum += h(r);
+        }
+        r = 1.0;
+        for (int k = s - 1; k >= 0; --k) {  // strategies with fewer light vertices
+            r *= remap(x[size_t(k)].from_camera) / remap(x[size_t(k)].from_light);
+            const bool start_delta = k > 0 ? x[size_t(k) - 1].delta : delta_light;
+            if (!x[size_t(k)].delta && !start_delta) sum += h(r);
+        }
+        return float(1.0 / sum);
+    }
+
+    bool power_ = true;
+    int only_s_ = -1, only_t_ = -1;
+    LightPathStarts starts_;
+};
+
+}  // namespace
+
+FEMTO_PLUGIN(Bdpt, femto::PluginKind::Integrator, "transient_bdpt",
+             "Transient bidirectional path tracer: every (s, t) strategy with MIS, surfaces and "
+             "media, each contribution at its own time",
+             {{"rr_depth", "integer", "0", "must be 0: paths end at max_depth or at the window"},
+              {"heuristic", "string", "power", "MIS heuristic: power or balance"},
+              {"strategy_s", "integer", "-1",
+               "debugging: render only strategy (strategy_s, strategy_t), unweighted"},
+              {"strategy_t", "integer", "-1", "debugging: see strategy_s"},
+              {"distance", "distance", "mean_free_path", "only mean_free_path (steady)"},
+              {"connection", "connection", "deterministic", "only deterministic (steady)"},
+              {"angular", "angular", "phase", "only phase (steady)"}})

@@ -1,0 +1,198 @@
+// Agreement of two integrators on the shipped scenes (tests of transient_light and
+// transient_bdpt against transient_path): per-cell means over independent renders, a
+// chi-square whose tolerance comes from the variances of those means.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "cube_util.h"
+#include "femto/bsdf.h"
+#include "femto/host.h"
+#include "femto/sensor.h"
+#include "scene_util.h"
+
+namespace femto::test {
+
+inline const std::string kScenes = std::string(FEMTO_SOURCE_DIR) + "/scenes/";
+
+inline std::string read_text(const std::string& path) {
+    std::ifstream in(path);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// Replaces the first element from `open` up to and including `close`.
+inline std::string replace_element(const std::string& xml, const std::string& open,
+                                   const std::string& close, const std::string& with) {
+    const size_t a = xml.find(open);
+    const size_t b = a == std::string::npos ? a : xml.find(close, a);
+    EXPECT_NE(b, std::string::npos) << open;
+    if (b == std::string::npos) return xml;
+    return xml.substr(0, a) + with + xml.substr(b + close.size());
+}
+
+// A shipped scene with its <integrator> replaced.
+inline std::string with_integrator(const std::string& scene, const std::string& type, int max_depth,
+                                   bool hide_emitters) {
+    std::string integrator = "<integrator type=\"" + type + "\">";
+    if (max_depth != 0)
+        integrator += "<integer name=\"max_depth\" value=\"" + std::to_string(max_depth) + "\"/>";
+    if (hide_emitters) integrator += "<boolean name=\"hide_emitters\" value=\"true\"/>";
+    integrator += "</integrator>";
+    std::string xml = read_text(kScenes + scene + "/scene.xml");
+    xml = replace_element(xml, "<integrator", "</integrator>", integrator);
+    if (scene == "tof-plane")  // the same view through a pinhole: [-2, 2]^2 at distance 5
+        xml = replace_element(xml, "<sensor type=\"orthographic\">", "</transform>",
+                              "<sensor type=\"perspective\"><float name=\"fov\" "
+                              "value=\"43.60281897270362\"/><transform name=\"to_world\">"
+                              "<lookat origin=\"0, 0, 5\" target=\"0, 0, 0\" up=\"0, 1, 0\"/>"
+                              "</transform>");
+    return xml;
+}
+
+// Per-cell means over independent renders and the variance of each mean. A cell sums the
+// energy of `block` x `block` pixels and `group` consecutive bins.
+struct Cells {
+    int count = 0;
+    std::vector<double> mean, var;
+};
+
+// Which pixels a light tracer can render: those whose camera rays (16 per pixel) all meet a
+// surface with a non-delta BSDF first, or nothing. Light paths reach the camera only by a
+// connection from a non-delta vertex, so pixels that see a mirror or glass directly are dark
+// in a light tracer (BDPT covers them).
+inline std::vector<bool> seen_through_connections(const Scene& scene) {
+    const Film& film = scene.sensor().film();
+    std::vector<bool> ok(size_t(film.width()) * size_t(film.height()), true);
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x)
+            for (int j = 0; j < 16; ++j) {
+                const Vec2 pos{float(x) + (float(j % 4) + 0.5f) / 4,
+                               float(y) + (float(j / 4) + 0.5f) / 4};
+                Ray ray = scene.sensor().sample_ray(pos, {0.5f, 0.5f});
+                Hit hit;
+                bool found = scene.intersect(ray, hit);
+                while (found && hit.shape->bsdf()->is_null()) {
+                    const float left = ray.tmax - hit.t;
+                    ray = hit.spawn(ray.d);
+                    ray.tmax = left;
+                    found = scene.intersect(ray, hit);
+                }
+                if (found && hit.shape->bsdf()->has_delta_only())
+                    ok[size_t(y) * size_t(film.width()) + size_t(x)] = false;
+            }
+    return ok;
+}
+
+// Cells hold the pixels `mask` allows (empty: all).
+inline Cells cells_of(const std::vector<Cube>& runs, int block, int group,
+                      const std::vector<bool>& mask = {}) {
+    const Cube& c0 = runs[0];
+    const int bx = c0.W / block, by = c0.H / block, groups = c0.T / group;
+    Cells out;
+    out.count = bx * by * groups;
+    std::vector<double> s(size_t(out.count), 0.0), s2(size_t(out.count), 0.0);
+    for (const Cube& c : runs) {
+        std::vector<double> v(size_t(out.count), 0.0);
+        for (int y = 0; y < by * block; ++y)
+            for (int x = 0; x < bx * block; ++x) {
+                if (!mask.empty() && !mask[size_t(y) * size_t(c.W) + size_t(x)]) continue;
+                for (int t = 0; t < groups * group; ++t)
+                    v[size_t(((y / block) * bx + x / block) * groups + t / group)] +=
+                        c.energy(y, x, t);
+            }
+        for (size_t i = 0; i < v.size(); ++i) s[i] += v[i], s2[i] += v[i] * v[i];
+    }
+    const double k = double(runs.size());
+    out.mean.resize(s.size());
+    out.var.resize(s.size());
+    for (size_t i = 0; i < s.size(); ++i) {
+        out.mean[i] = s[i] / k;
+        out.var[i] = std::max(0.0, (s2[i] - k * out.mean[i] * out.mean[i]) / (k - 1)) / k;
+    }
+    return out;
+}
+
+// Renders `xml` with `runs` seeds (defines applied).
+inline std::vector<Cube> render_runs(const std::string& xml, const LoadOptions& options, int runs,
+                                     uint64_t first_seed, const std::string& name) {
+    std::vector<Cube> out;
+    for (int r = 0; r < runs; ++r) {
+        auto scene = load_scene_string(xml, options, kScenes);
+        out.push_back(test::render_cube(*scene, first_seed + uint64_t(r), name));
+    }
+    return out;
+}
+
+// Two estimators of the same cube agree: the sum over resolved cells of z^2, z = difference of
+// the means / sqrt(sum of their variances). Each variance is estimated from `runs` renders, so
+// z^2 follows (at worst) a squared t distribution with nu = runs - 1 degrees of freedom, of
+// mean nu / (nu - 2) and variance 2 nu^2 (nu - 1) / ((nu - 2)^2 (nu - 4)); the bound is that
+// mean plus 3.72 standard deviations of the sum (P ~ 1e-4 one-sided, normal approximation).
+inline void expect_agree(const Cells& a, const Cells& b, int runs, const std::string& what) {
+    const double nu = runs - 1;
+    const double m = nu / (nu - 2), v = 2 * nu * nu * (nu - 1) / ((nu - 2) * (nu - 2) * (nu - 4));
+    double chi2 = 0, worst = 0;
+    int n = 0;
+    double total_a = 0, total_b = 0, total_var = 0;
+    for (size_t i = 0; i < a.mean.size(); ++i) {
+        total_a += a.mean[i], total_b += b.mean[i], total_var += a.var[i] + b.var[i];
+        const double var = a.var[i] + b.var[i];
+        // Resolved: both estimates have a relative error below 30 %.
+        if (!(var > 0) || !(std::sqrt(a.var[i]) < 0.3 * a.mean[i]) ||
+            !(std::sqrt(b.var[i]) < 0.3 * b.mean[i]))
+            continue;
+        const double z = (a.mean[i] - b.mean[i]) / std::sqrt(var);
+        chi2 += z * z;
+        worst = std::max(worst, std::abs(z));
+        ++n;
+    }
+    ASSERT_GT(n, 20) << what << ": too few resolved cells";
+    const double bound = n * m + 3.72 * std::sqrt(n * v);
+    EXPECT_LT(chi2, bound) << what << ": chi2 over " << n << " cells (mean " << n * m << ")";
+    const double z_total = (total_a - total_b) / std::sqrt(total_var);
+    EXPECT_LT(std::abs(z_total), 4.0) << what << ": totals " << total_a << " vs " << total_b;
+    ::testing::Test::RecordProperty(what + "_cells", n);
+    ::testing::Test::RecordProperty(what + "_chi2",
+                                    std::to_string(chi2) + " / bound " + std::to_string(bound));
+}
+
+struct AgreementCase {
+    std::string scene;
+    int max_depth;       // 0: the scene's own
+    bool hide_emitters;  // point lights in view: the path tracer never sees them
+    std::vector<std::pair<std::string, std::string>> defines;
+    int spp_path, spp_light, block, group;
+};
+
+// `integrator` against transient_path on c.scene; a light tracer is compared only where it can
+// see (seen_through_connections()).
+inline void check_agreement(const AgreementCase& c,
+                            const std::string& integrator = "transient_light") {
+    constexpr int kRuns = 16;
+    LoadOptions path_options, light_options;
+    path_options.defines = light_options.defines = c.defines;
+    path_options.defines.push_back({"spp", std::to_string(c.spp_path)});
+    light_options.defines.push_back({"spp", std::to_string(c.spp_light)});
+    const auto path =
+        render_runs(with_integrator(c.scene, "transient_path", c.max_depth, c.hide_emitters),
+                    path_options, kRuns, 100, "agree-path");
+    const auto light =
+        render_runs(with_integrator(c.scene, "transient_light", c.max_depth, c.hide_emitters),
+                    light_options, kRuns, 200, "agree-light");
+    const auto scene =
+        load_scene_string(with_integrator(c.scene, "transient_path", c.max_depth, c.hide_emitters),
+                          path_options, kScenes);
+    const std::vector<bool> mask =
+        integrator == "transient_light" ? seen_through_connections(*scene) : std::vector<bool>();
+    expect_agree(cells_of(light, c.block, c.group, mask), cells_of(path, c.block, c.group, mask),
+                 kRuns, c.scene);
+}
+
+}  // namespace femto::test

@@ -1,0 +1,202 @@
+// transient_bdpt (issue 11): bidirectional path tracing in time.
+//  - agreement with transient_path per pixel block and time group on the shipped scenes
+//    (tests/unit/agreement_util.h: a chi-square with variances from independent renders);
+//  - each strategy (s, t) alone, unweighted, estimates the same image of the paths it can
+//    sample as the other strategies of the same length (the classic BDPT test), on surfaces
+//    and in a medium;
+//  - steady and transient films agree (the time integral is the steady image: conformance);
+//  - bit-identical at 1 and 2 threads; bad input is a located error.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "agreement_util.h"
+#include "cube_util.h"
+#include "femto/host.h"
+
+using namespace femto;
+using namespace femto::test;
+
+TEST(Bdpt, AgreesWithPathTracerOnCornellBox) {
+    check_agreement({"cornell-box", 0, false, {{"res", "16"}, {"bins", "128"}}, 16, 8, 2, 16},
+                    "transient_bdpt");
+}
+
+TEST(Bdpt, AgreesWithPathTracerOnSpheres) {
+    check_agreement({"spheres", 0, false, {{"res", "16"}, {"bins", "160"}}, 16, 8, 2, 16},
+                    "transient_bdpt");
+}
+
+TEST(Bdpt, AgreesWithPathTracerOnTofPlane) {
+    check_agreement({"tof-plane", 2, true, {{"res", "16"}}, 4, 4, 2, 8}, "transient_bdpt");
+}
+
+TEST(Bdpt, AgreesWithPathTracerOnTofPlaneInWorldTime) {
+    check_agreement({"tof-plane",
+                     2,
+                     true,
+                     {{"res", "16"}, {"world_time", "true"}, {"start", "1.4"}},
+                     4,
+                     4,
+                     2,
+                     8},
+                    "transient_bdpt");
+}
+
+TEST(Bdpt, AgreesWithPathTracerOnFluorescent) {
+    check_agreement({"fluorescent", 0, true, {{"res", "16"}, {"bins", "150"}}, 16, 8, 2, 10},
+                    "transient_bdpt");
+}
+
+TEST(Bdpt, AgreesWithPathTracerOnFogPoint) {
+    check_agreement({"fog-point", 0, false, {{"res", "16"}, {"bins", "40"}}, 256, 16, 2, 5},
+                    "transient_bdpt");
+}
+
+TEST(Bdpt, AgreesWithPathTracerOnFogObject) {
+    check_agreement({"fog-object",
+                     0,
+                     true,
+                     {{"res", "16"},
+                      {"bins", "80"},
+                      {"distance", "mean_free_path"},
+                      {"connection", "deterministic"},
+                      {"angular", "phase"}},
+                     32,
+                     16,
+                     2,
+                     8},
+                    "transient_bdpt");
+}
+
+namespace {
+
+// Renders `scene` with transient_bdpt's strategy (s, t) alone, unweighted, `runs` times.
+// With `fog`, the scene (camera included) sits in a homogeneous medium (sigma_s 0.3, sigma_a
+// 0.05: a few scattering events per path in the Cornell box).
+std::vector<Cube> strategy_runs(const std::string& scene, int max_depth, int s, int t,
+                                const std::vector<std::pair<std::string, std::string>>& defines,
+                                int runs, bool fog) {
+    std::string xml = with_integrator(scene, "transient_bdpt", max_depth, false);
+    if (fog) {
+        xml = replace_element(xml, "<sensor type=\"perspective\">", ">",
+                              "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_s\" "
+                              "value=\"0.3\"/><float name=\"sigma_a\" value=\"0.05\"/></medium>"
+                              "<sensor type=\"perspective\"><ref id=\"fog\"/>");
+    }
+    xml = replace_element(xml, "<integrator", "</integrator>",
+                          "<integrator type=\"transient_bdpt\"><integer name=\"max_depth\" "
+                          "value=\"" +
+                              std::to_string(max_depth) +
+                              "\"/><integer name=\"strategy_s\" value=\"" + std::to_string(s) +
+                              "\"/><integer name=\"strategy_t\" value=\"" + std::to_string(t) +
+                              "\"/></integrator>");
+    LoadOptions options;
+    options.defines = defines;
+    return render_runs(xml, options, runs, uint64_t(1000 + 100 * s), "strategy");
+}
+
+// Every strategy of paths with `segments` segments, alone and unweighted, estimates the same
+// cube: each against light sampling (s = 1), the strategy of the path tracer's shadow rays.
+// Strategies that find the light by chance (s = 0) or the camera (t = 1) are noisier: they get
+// `spp` x `noisy` samples.
+void check_strategies(const std::string& scene, bool fog, int segments,
+                      const std::vector<std::pair<std::string, std::string>>& defines, int spp,
+                      int noisy, int block, int group) {
+    constexpr int kRuns = 16;
+    const int n = segments + 1;  // vertices
+    auto with_spp = [&](int count) {
+        auto d = defines;
+        d.push_back({"spp", std::to_string(count)});
+        return d;
+    };
+    const Cells ref =
+        cells_of(strategy_runs(scene, segments, 1, n - 1, with_spp(spp), kRuns, fog), block, group);
+    for (int s = 0; s < n; ++s) {
+        if (s == 1) continue;
+        SCOPED_TRACE("strategy s=" + std::to_string(s) + " t=" + std::to_string(n - s));
+        const int count = s == 0 || s == n - 1 ? spp * noisy : spp;
+        const auto runs = strategy_runs(scene, segments, s, n - s, with_spp(count), kRuns, fog);
+        expect_agree(cells_of(runs, block, group), ref, kRuns, scene + "_s" + std::to_string(s));
+    }
+}
+
+}  // namespace
+
+// The classic BDPT test: on the Cornell box (diffuse), paths of 3 segments by each of the four
+// strategies (0,4), (1,3), (2,2), (3,1).
+TEST(Bdpt, EachStrategyAloneEstimatesTheSameImage) {
+    check_strategies("cornell-box", false, 3, {{"res", "16"}, {"bins", "128"}}, 16, 8, 4, 16);
+}
+
+// The same in a medium: the Cornell box filled with fog, paths of 2 segments (a scattering
+// vertex in the fog or on a wall between the camera and the light): (0,3), (1,2), (2,1).
+TEST(Bdpt, EachStrategyAloneEstimatesTheSameImageInAMedium) {
+    check_strategies("cornell-box", true, 2, {{"res", "16"}, {"bins", "128"}}, 16, 8, 4, 16);
+}
+
+TEST(Bdpt, BitIdenticalAcrossThreadCounts) {
+    const std::string xml = with_integrator("cornell-box", "transient_bdpt", 0, false);
+    auto render_with = [&](int threads) {
+        LoadOptions options;
+        options.defines = {{"res", "64"}, {"spp", "4"}, {"bins", "64"}};
+        auto scene = load_scene_string(xml, options, kScenes);
+        RenderOptions opt;
+        opt.threads = threads;
+        opt.seed = 3;
+        render(*scene, opt);
+        return scene->sensor().film().steady_image();
+    };
+    const auto a = render_with(1), b = render_with(2);
+    EXPECT_EQ(a, b);
+}
+
+// Unsupported time-sampling strategies, max_depth 0, Russian roulette, an orthographic sensor
+// and a collimated emitter are located errors naming what is supported.
+TEST(Bdpt, BadInputIsALocatedError) {
+    const std::string base = with_integrator("fog-object", "transient_bdpt", 0, false);
+    for (const char* strategy :
+         {"<distance type=\"exponential\"/>", "<connection type=\"equiangular\"/>",
+          "<angular type=\"time\"/>"}) {
+        SCOPED_TRACE(strategy);
+        const std::string xml = replace_element(
+            base, "<integrator", "</integrator>",
+            std::string("<integrator type=\"transient_bdpt\">") + strategy + "</integrator>");
+        const std::string error = load_error(xml, {}, kScenes);
+        EXPECT_NE(error.find("supports only the steady time-sampling strategies"),
+                  std::string::npos)
+            << error;
+    }
+    for (const char* param :
+         {"<integer name=\"max_depth\" value=\"0\"/>", "<integer name=\"rr_depth\" value=\"5\"/>",
+          "<string name=\"heuristic\" value=\"maximum\"/>"}) {
+        SCOPED_TRACE(param);
+        const std::string xml = replace_element(
+            base, "<integrator", "</integrator>",
+            std::string("<integrator type=\"transient_bdpt\">") + param + "</integrator>");
+        EXPECT_NE(load_error(xml, {}, kScenes).find(":"), std::string::npos);
+    }
+    // The orthographic tof-plane and the collimated laser-tank: refused when rendering starts.
+    for (const char* scene : {"laser-tank"}) {
+        auto loaded =
+            load_scene_string(with_integrator(scene, "transient_bdpt", 0, false), {}, kScenes);
+        try {
+            render(*loaded, RenderOptions{});
+            ADD_FAILURE() << scene << " was accepted";
+        } catch (const SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find("collimated"), std::string::npos) << e.what();
+        }
+    }
+    std::string ortho = read_text(kScenes + "tof-plane/scene.xml");
+    ortho = replace_element(ortho, "<integrator", "</integrator>",
+                            "<integrator type=\"transient_bdpt\"><integer name=\"max_depth\" "
+                            "value=\"2\"/></integrator>");
+    auto loaded = load_scene_string(ortho, {}, kScenes);
+    try {
+        render(*loaded, RenderOptions{});
+        ADD_FAILURE() << "an orthographic sensor was accepted";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("orthographic"), std::string::npos) << e.what();
+    }
+}
