@@ -203,7 +203,9 @@ private:
                 }))
                 return;
             beta *= weight;
-            if (beta.is_black()) return;
+            // A vertex on top of the previous one (a distance that rounds to 0) has no direction
+            // to or from it: the walk ends (an event of probability zero in exact arithmetic).
+            if (beta.is_black() || !(squared_length(v.p - paths.camera.back().p) > 0.f)) return;
             if (v.kind == Vertex::Kind::Surface || v.kind == Vertex::Kind::Medium)
                 clock.reach_vertex();
             v.pdf_fwd = to_area(walk.pdf_dir, paths.camera.back(), v);
@@ -259,7 +261,7 @@ private:
                 }))
                 return;
             power *= weight;
-            if (power.is_black()) return;
+            if (power.is_black() || !(squared_length(v.p - paths.light.back().p) > 0.f)) return;
             v.pdf_fwd = to_area(walk.pdf_dir, paths.light.back(), v);
             if (v.bsdf && v.bsdf->has_vertex_event()) {
                 v.event = v.bsdf->sample_vertex_event(v.hit, sampler.next_1d());
