@@ -11,11 +11,11 @@ namespace {
 const std::string kDepth = "<integer name=\"max_depth\" value=\"$max_depth\"/>";
 }  // namespace
 
-INSTANTIATE_TEST_SUITE_P(
-    Builtin, IntegratorConformance,
-    ::testing::Values(IntegratorCase{"path", kDepth, -1, true},
-                      IntegratorCase{"transient_path", kDepth, -1, true},
-                      IntegratorCase{"direct", "", 2, false},
-                      IntegratorCase{"transient_light", kDepth, -1, true, true},
-                      IntegratorCase{"transient_bdpt", kDepth, -1, true, true}),
-    femto::testing::case_name);
+INSTANTIATE_TEST_SUITE_P(Builtin, IntegratorConformance,
+                         ::testing::Values(IntegratorCase{"path", kDepth, -1, true},
+                                           IntegratorCase{"transient_path", kDepth, -1, true},
+                                           IntegratorCase{"direct", "", 2, false},
+                                           IntegratorCase{"transient_light", kDepth, -1, true,
+                                                          true},
+                                           IntegratorCase{"transient_bdpt", kDepth, -1, true}),
+                         femto::testing::case_name);

@@ -124,16 +124,14 @@ public:
         check_steady(props, PluginKind::Angular, "angular", "phase");
     }
 
-    bool splats() const override { return true; }
+    // Strategies t = 1 splat; without them (an orthographic sensor) every contribution is the
+    // camera sample's own (asked after preprocess()).
+    bool splats() const override { return to_sensor_; }
 
     void preprocess(const Scene& scene) override {
         MonteCarloIntegrator::preprocess(scene);
-        const Sensor& sensor = scene.sensor();
-        if (!sensor.connectable())
-            throw SceneError(sensor.location(),
-                             "transient_bdpt cannot connect light subpaths to a \"" +
-                                 sensor.type_name() +
-                                 "\" sensor (its rays are parallel); use a perspective sensor");
+        // A sensor no connection can reach (orthographic) leaves out the strategies t = 1.
+        to_sensor_ = scene.sensor().connectable();
         for (const Emitter* e : scene.emitters())
             if (e->type_name() == "collimated")
                 throw SceneError(e->location(),
@@ -150,7 +148,7 @@ public:
         camera_subpath(scene, sampler, ray, out, paths);
         light_subpath(scene, sampler, paths);
         const int nc = int(paths.camera.size()), nl = int(paths.light.size());
-        for (int t = 1; t <= nc; ++t)
+        for (int t = to_sensor_ ? 1 : 2; t <= nc; ++t)
             for (int s = 1; s <= nl; ++s) {
                 if (max_depth() >= 0 && s + t - 1 > max_depth()) break;
                 if (only_s_ >= 0 && (s != only_s_ || t != only_t_)) continue;
@@ -435,6 +433,7 @@ private:
         light.emitter = ls.emitter;
         light.emission.p = ls.p;
         light.emission.n = ls.n;
+        light.emission.delta_position = ls.emitter->is_delta();  // no camera path hits it
         float pos = 0.f, dir = 0.f, pmf = 0.f;
         scene.select_emitter(0.f, pmf);
         ls.emitter->pdf_emission(light.emission, -ls.wi, pos, dir);
@@ -557,8 +556,11 @@ private:
             bool delta;
         };
         const int n = s + t;
-        thread_local std::vector<Densities> x;
-        x.assign(size_t(n), {});
+        // On the stack for the usual depths (a thread_local vector costs a TLS lookup per call).
+        constexpr int kStack = 64;
+        Densities stack[kStack];
+        std::vector<Densities> heap(n > kStack ? size_t(n) : 0);
+        Densities* x = n > kStack ? heap.data() : stack;
         auto light_vertex = [&](int i) -> const Vertex& {
             return (i == s - 1 && light) ? *light : paths.light[size_t(i)];
         };
@@ -599,7 +601,8 @@ private:
         // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
         const bool delta_light = s > 0 && light_vertex(0).emission.delta_position;
         double sum = 1.0, r = 1.0;
-        for (int k = s + 1; k < n; ++k) {  // strategies with fewer camera vertices (t >= 1)
+        const int last = to_sensor_ ? n - 1 : n - 2;  // the last strategy: t = 1 or t = 2
+        for (int k = s + 1; k <= last; ++k) {         // strategies with fewer camera vertices
             r *= remap(x[size_t(k) - 1].from_light) / remap(x[size_t(k) - 1].from_camera);
             if (!x[size_t(k) - 1].delta && !x[size_t(k)].delta) sum += h(r);
         }
@@ -613,6 +616,7 @@ private:
     }
 
     bool power_ = true;
+    bool to_sensor_ = true;  // the sensor can be connected to (strategies t = 1)
     int only_s_ = -1, only_t_ = -1;
     LightPathStarts starts_;
 };
