@@ -158,6 +158,8 @@ inline void expect_agree(const Cells& a, const Cells& b, int runs, const std::st
     EXPECT_LT(chi2, bound) << what << ": chi2 over " << n << " cells (mean " << n * m << ")";
     const double z_total = (total_a - total_b) / std::sqrt(total_var);
     EXPECT_LT(std::abs(z_total), 4.0) << what << ": totals " << total_a << " vs " << total_b;
+    ::testing::Test::RecordProperty(what + "_total_relative_error",
+                                    std::to_string(std::sqrt(total_var) / total_b));
     ::testing::Test::RecordProperty(what + "_cells", n);
     ::testing::Test::RecordProperty(what + "_chi2",
                                     std::to_string(chi2) + " / bound " + std::to_string(bound));
