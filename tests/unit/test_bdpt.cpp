@@ -75,18 +75,33 @@ TEST(Bdpt, AgreesWithPathTracerOnFogObject) {
 namespace {
 
 // Renders `scene` with transient_bdpt's strategy (s, t) alone, unweighted, `runs` times.
-// With `fog`, the scene (camera included) sits in a homogeneous medium (sigma_s 0.3, sigma_a
-// 0.05: a few scattering events per path in the Cornell box).
+// The Cornell box filled with a homogeneous medium (sigma_s 0.3, sigma_a 0.05: a few scattering
+// events per path) bounded by a null cube just inside its walls, the camera outside it, and its
+// lamp a sphere (radius 0.2) inside it. Every unweighted strategy then has finite variance: light
+// samples of a sphere (cone sampling) stay bounded next to it, where those of the rectangular lamp
+// grow as 1 / r^2 for medium vertices close to it, and so do connections to a camera in the medium.
+std::string with_fog(const std::string& xml) {
+    std::string out = replace_element(
+        xml, "<!-- Light:", "</shape>",
+        "<shape type=\"sphere\"><point name=\"center\" value=\"0,0.7,0\"/><float "
+        "name=\"radius\" value=\"0.2\"/><bsdf type=\"diffuse\"><float name=\"reflectance\" "
+        "value=\"0\"/></bsdf><emitter type=\"area\"><rgb name=\"radiance\" "
+        "value=\"3,2.2,0.8\"/></emitter></shape>");
+    return replace_element(out, "<sensor type=\"perspective\">", ">",
+                           "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_s\" "
+                           "value=\"0.3\"/><float name=\"sigma_a\" value=\"0.05\"/></medium>"
+                           "<shape type=\"cube\"><transform name=\"to_world\"><scale "
+                           "value=\"0.99\"/></transform><bsdf type=\"null\"/><ref "
+                           "name=\"interior\" id=\"fog\"/></shape><sensor "
+                           "type=\"perspective\">");
+}
+
+// With `fog`, in the medium of with_fog().
 std::vector<Cube> strategy_runs(const std::string& scene, int max_depth, int s, int t,
                                 const std::vector<std::pair<std::string, std::string>>& defines,
                                 int runs, bool fog) {
     std::string xml = with_integrator(scene, "transient_bdpt", max_depth, false);
-    if (fog) {
-        xml = replace_element(xml, "<sensor type=\"perspective\">", ">",
-                              "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_s\" "
-                              "value=\"0.3\"/><float name=\"sigma_a\" value=\"0.05\"/></medium>"
-                              "<sensor type=\"perspective\"><ref id=\"fog\"/>");
-    }
+    if (fog) xml = with_fog(xml);
     xml = replace_element(xml, "<integrator", "</integrator>",
                           "<integrator type=\"transient_bdpt\"><integer name=\"max_depth\" "
                           "value=\"" +
@@ -132,8 +147,8 @@ TEST(Bdpt, EachStrategyAloneEstimatesTheSameImage) {
     check_strategies("cornell-box", false, 3, {{"res", "16"}, {"bins", "128"}}, 16, 8, 4, 16);
 }
 
-// The same in a medium: the Cornell box filled with fog, paths of 2 segments (a scattering
-// vertex in the fog or on a wall between the camera and the light): (0,3), (1,2), (2,1).
+// The same in a medium (with_fog()), paths of 2 segments (a scattering vertex in the fog or on a
+// wall between the camera and the light): (0,3), (1,2), (2,1).
 TEST(Bdpt, EachStrategyAloneEstimatesTheSameImageInAMedium) {
     check_strategies("cornell-box", true, 2, {{"res", "16"}, {"bins", "128"}}, 16, 8, 4, 16);
 }
@@ -191,4 +206,35 @@ TEST(Bdpt, BadInputIsALocatedError) {
             EXPECT_NE(std::string(e.what()).find("collimated"), std::string::npos) << e.what();
         }
     }
+}
+
+// The MIS weights of all strategies of a path sum to 1: rendered with only the paths of L
+// segments, the weighted sum over their strategies estimates the same cube as one of those
+// strategies alone (light sampling, s = 1), on the Cornell box and in fog. A weight that does
+// not sum to 1 over a path's strategies (e.g. one counting a strategy that cannot sample the
+// path) biases the first.
+TEST(Bdpt, MisWeightsOfAPathSumToOne) {
+    constexpr int kRuns = 16;
+    for (const bool fog : {false, true})
+        for (const int length : {2, 3}) {
+            SCOPED_TRACE(std::string(fog ? "fog" : "vacuum") + ", length " +
+                         std::to_string(length));
+            std::vector<std::pair<std::string, std::string>> defines = {
+                {"res", "16"}, {"bins", "128"}, {"spp", "16"}};
+            const Cells alone = cells_of(
+                strategy_runs("cornell-box", length, 1, length, defines, kRuns, fog), 4, 16);
+            std::string xml = with_integrator("cornell-box", "transient_bdpt", length, false);
+            xml = replace_element(xml, "<integrator", "</integrator>",
+                                  "<integrator type=\"transient_bdpt\"><integer "
+                                  "name=\"max_depth\" value=\"" +
+                                      std::to_string(length) +
+                                      "\"/><integer name=\"path_length\" value=\"" +
+                                      std::to_string(length) + "\"/></integrator>");
+            if (fog) xml = with_fog(xml);
+            LoadOptions options;
+            options.defines = defines;
+            const Cells weighted = cells_of(render_runs(xml, options, kRuns, 77, "mis"), 4, 16);
+            expect_agree(weighted, alone, kRuns,
+                         std::string("mis_") + (fog ? "fog" : "vacuum") + std::to_string(length));
+        }
 }

@@ -119,6 +119,9 @@ public:
             props.fail("strategy_s",
                        "strategy_s >= 0 and strategy_t >= 1 go together (or both "
                        "-1: every strategy, weighted by MIS)");
+        only_length_ = int(props.get_int("path_length", -1));
+        if (only_length_ == 0 || only_length_ < -1)
+            props.fail("path_length", "path_length must be >= 1 (segments), or -1 for all");
         check_steady(props, PluginKind::Distance, "distance", "mean_free_path");
         check_steady(props, PluginKind::Connection, "connection", "deterministic");
         check_steady(props, PluginKind::Angular, "angular", "phase");
@@ -151,7 +154,7 @@ public:
         for (int t = to_sensor_ ? 1 : 2; t <= nc; ++t)
             for (int s = 1; s <= nl; ++s) {
                 if (max_depth() >= 0 && s + t - 1 > max_depth()) break;
-                if (only_s_ >= 0 && (s != only_s_ || t != only_t_)) continue;
+                if (!wanted(s, t)) continue;
                 connect(scene, sampler, paths, s, t, out);
             }
     }
@@ -166,6 +169,12 @@ private:
                                         "strategies (distance=mean_free_path, "
                                         "connection=deterministic, angular=phase), not <") +
                                 tag + " type=\"" + child->type_name() + "\">");
+    }
+
+    // Whether strategy (s, t) is rendered (all, unless a debugging parameter picks some).
+    bool wanted(int s, int t) const {
+        return (only_s_ < 0 || (s == only_s_ && t == only_t_)) &&
+               (only_length_ < 0 || s + t - 1 == only_length_);
     }
 
     int max_vertices(bool camera) const {
@@ -377,7 +386,7 @@ private:
     void emitter_hit(const Scene& scene, Sampler& sampler, const Subpaths& paths,
                      const Throughput& beta, const PathClock& clock) const {
         const int t = int(paths.camera.size());
-        if (only_s_ >= 0 && (only_s_ != 0 || only_t_ != t)) return;
+        if (!wanted(0, t)) return;
         if (t == 2 && hide_emitters()) return;
         const Vertex& v = paths.camera.back();
         const Color Le = v.emitter->eval(v.hit, towards(v, paths.camera[size_t(t) - 2]));
@@ -616,8 +625,9 @@ private:
     }
 
     bool power_ = true;
-    bool to_sensor_ = true;  // the sensor can be connected to (strategies t = 1)
-    int only_s_ = -1, only_t_ = -1;
+    bool to_sensor_ = true;          // the sensor can be connected to (strategies t = 1)
+    int only_s_ = -1, only_t_ = -1;  // debugging: one strategy alone, unweighted
+    int only_length_ = -1;           // debugging: paths of this many segments only
     LightPathStarts starts_;
 };
 
@@ -631,6 +641,9 @@ FEMTO_PLUGIN(Bdpt, femto::PluginKind::Integrator, "transient_bdpt",
               {"strategy_s", "integer", "-1",
                "debugging: render only strategy (strategy_s, strategy_t), unweighted"},
               {"strategy_t", "integer", "-1", "debugging: see strategy_s"},
+              {"path_length", "integer", "-1",
+               "debugging: render only paths of this many segments (all their strategies, "
+               "weighted)"},
               {"distance", "distance", "mean_free_path", "only mean_free_path (steady)"},
               {"connection", "connection", "deterministic", "only deterministic (steady)"},
               {"angular", "angular", "phase", "only phase (steady)"}})
