@@ -51,25 +51,42 @@ TEST(Bdpt, AgreesWithPathTracerOnFluorescent) {
                     "transient_bdpt");
 }
 
+// Media: the path tracer is the noisier side here, so it gets more samples, and in fog-object
+// the equiangular connections that tame its shadow rays next to the point light (unbiased:
+// test_time_strategies.cpp). Cells must be resolved to 15 %: the first light out of dense fog
+// is a few rare samples per run in both. In fog-point the cells at the ball's rim are left out
+// too: grazing paths through its thin edge make them rare events for the path tracer (at
+// 4096 vs 65536 spp the interior cells of BDPT, the light tracer and the path tracer agree
+// within 2 % per time group, while rim cells differ by 0.3-2.5x between any two renders).
 TEST(Bdpt, AgreesWithPathTracerOnFogPoint) {
-    check_agreement({"fog-point", 0, false, {{"res", "16"}, {"bins", "40"}}, 256, 16, 2, 5},
-                    "transient_bdpt");
+    AgreementCase c{"fog-point", 0, false, {{"res", "16"}, {"bins", "40"}}, 512, 16, 2, 5};
+    c.resolved = 0.15;
+    c.min_share = 0.05;
+    check_agreement(c, "transient_bdpt");
+}
+
+// The distance defines are the steady strategies; they only matter for fog-object's own
+// integrator, which with_integrator() replaces.
+AgreementCase fog_object_case() {
+    AgreementCase c{"fog-object",
+                    0,
+                    true,
+                    {{"res", "16"},
+                     {"bins", "80"},
+                     {"distance", "mean_free_path"},
+                     {"connection", "deterministic"},
+                     {"angular", "phase"}},
+                    64,
+                    16,
+                    2,
+                    8};
+    c.path_children = "<connection type=\"equiangular\"/><boolean name=\"mis\" value=\"true\"/>";
+    c.resolved = 0.15;
+    return c;
 }
 
 TEST(Bdpt, AgreesWithPathTracerOnFogObject) {
-    check_agreement({"fog-object",
-                     0,
-                     true,
-                     {{"res", "16"},
-                      {"bins", "80"},
-                      {"distance", "mean_free_path"},
-                      {"connection", "deterministic"},
-                      {"angular", "phase"}},
-                     32,
-                     16,
-                     2,
-                     8},
-                    "transient_bdpt");
+    check_agreement(fog_object_case(), "transient_bdpt");
 }
 
 namespace {
@@ -169,20 +186,30 @@ TEST(Bdpt, BitIdenticalAcrossThreadCounts) {
     EXPECT_EQ(a, b);
 }
 
+// Time sampling: exponential distances (alone, and MIS-combined with mean free paths) on both
+// subpaths, in fog-object, against the path tracer with steady sampling.
+TEST(Bdpt, AgreesWithPathTracerWithExponentialDistances) {
+    AgreementCase c = fog_object_case();
+    c.children = "<distance type=\"exponential\"/><boolean name=\"mis\" value=\"true\"/>";
+    check_agreement(c, "transient_bdpt");
+    c.children = "<distance type=\"exponential\"/>";
+    check_agreement(c, "transient_bdpt");
+}
+
 // Unsupported time-sampling strategies, max_depth 0, Russian roulette and a collimated emitter
 // are located errors naming what is supported. (An orthographic sensor is rendered without the
 // strategies t = 1: the conformance matrix's checks seen through one run on transient_bdpt.)
 TEST(Bdpt, BadInputIsALocatedError) {
     const std::string base = with_integrator("fog-object", "transient_bdpt", 0, false);
     for (const char* strategy :
-         {"<distance type=\"exponential\"/>", "<connection type=\"equiangular\"/>",
+         {"<connection type=\"equiangular\"/>", "<connection type=\"line_to_point\"/>",
           "<angular type=\"time\"/>"}) {
         SCOPED_TRACE(strategy);
         const std::string xml = replace_element(
             base, "<integrator", "</integrator>",
             std::string("<integrator type=\"transient_bdpt\">") + strategy + "</integrator>");
         const std::string error = load_error(xml, {}, kScenes);
-        EXPECT_NE(error.find("supports only the steady time-sampling strategies"),
+        EXPECT_NE(error.find("but only the steady connection=deterministic and angular=phase"),
                   std::string::npos)
             << error;
     }

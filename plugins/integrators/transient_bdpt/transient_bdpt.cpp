@@ -17,9 +17,13 @@
 // Time: each camera vertex keeps its PathClock and each light vertex its LightClock; a joined
 // path's time is the light subpath's, plus the connection's optical length, plus the camera
 // subpath's (femto/path_clock.h). The window is checked before a connection's shadow ray.
-// Only the steady time-sampling strategies are supported (distance=mean_free_path,
-// connection=deterministic, angular=phase); others are refused, since their densities would
-// have to join the MIS weights.
+// Time sampling (ch. 5.6): the nested <distance> strategy (exponential, alone or MIS-combined
+// with mean free paths) draws the distances of both subpaths. The MIS weights use the
+// directional densities only (as pbrt-v3's volumetric BDPT): the same for every strategy of a
+// path, so they sum to 1 and the estimate stays unbiased, but they do not yet favour the
+// strategy whose distances fit the time window. The connection and angular strategies are
+// refused: a vertex placed on a connection, or a direction chosen by time, would be a strategy
+// of its own in the weights.
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -122,7 +126,11 @@ public:
         only_length_ = int(props.get_int("path_length", -1));
         if (only_length_ == 0 || only_length_ < -1)
             props.fail("path_length", "path_length must be >= 1 (segments), or -1 for all");
-        check_steady(props, PluginKind::Distance, "distance", "mean_free_path");
+        // Distances in media on both subpaths by the nested <distance> strategy (alone, or
+        // MIS-combined with mean-free-path sampling).
+        distance_ = std::static_pointer_cast<DistanceSampler>(
+            props.child(PluginKind::Distance, "mean_free_path"));
+        mis_ = props.get_bool("mis", false);
         check_steady(props, PluginKind::Connection, "connection", "deterministic");
         check_steady(props, PluginKind::Angular, "angular", "phase");
     }
@@ -135,6 +143,8 @@ public:
         MonteCarloIntegrator::preprocess(scene);
         // A sensor no connection can reach (orthographic) leaves out the strategies t = 1.
         to_sensor_ = scene.sensor().connectable();
+        window_end_ = scene.time_window().end;
+        distance_->prepare({window_end_});
         for (const Emitter* e : scene.emitters())
             if (e->type_name() == "collimated")
                 throw SceneError(e->location(),
@@ -165,9 +175,10 @@ private:
                              const char* steady) {
         const auto child = props.child(kind, steady);
         if (child && child->type_name() != steady)
-            props.fail(tag, std::string("transient_bdpt supports only the steady time-sampling "
-                                        "strategies (distance=mean_free_path, "
-                                        "connection=deterministic, angular=phase), not <") +
+            props.fail(tag, std::string("transient_bdpt supports the distance strategies "
+                                        "(mean_free_path, exponential, with or without mis) "
+                                        "but only the steady connection=deterministic and "
+                                        "angular=phase, not <") +
                                 tag + " type=\"" + child->type_name() + "\">");
     }
 
@@ -302,10 +313,12 @@ private:
             Hit hit;
             const bool found = scene.intersect(walk.ray, hit);
             if (const Medium* medium = walk.medium.medium) {
-                const DistanceMixture mfp(*medium, nullptr, false, DistanceContext{kInfinity});
+                const DistanceMixture strategy(*medium, distance_.get(), mis_,
+                                               DistanceContext{window_end_});
                 const double tmax = found ? double(hit.t) : kInfinity;
                 const double u = double(sampler.next_1d());
-                const DistanceSample ds = sample_distance(*medium, walk.ray, tmax, mfp, u, sampler);
+                const DistanceSample ds =
+                    sample_distance(*medium, walk.ray, tmax, strategy, u, sampler);
                 weight *= ds.weight;
                 if (ds.scattered) {
                     v.kind = Vertex::Kind::Medium;
@@ -625,7 +638,10 @@ private:
     }
 
     bool power_ = true;
-    bool to_sensor_ = true;          // the sensor can be connected to (strategies t = 1)
+    bool to_sensor_ = true;  // the sensor can be connected to (strategies t = 1)
+    std::shared_ptr<DistanceSampler> distance_;
+    bool mis_ = false;               // distances: a mixture of the strategy and mean free paths
+    double window_end_ = kInfinity;  // the film's window end (exponential distances' rate)
     int only_s_ = -1, only_t_ = -1;  // debugging: one strategy alone, unweighted
     int only_length_ = -1;           // debugging: paths of this many segments only
     LightPathStarts starts_;
@@ -644,6 +660,10 @@ FEMTO_PLUGIN(Bdpt, femto::PluginKind::Integrator, "transient_bdpt",
               {"path_length", "integer", "-1",
                "debugging: render only paths of this many segments (all their strategies, "
                "weighted)"},
-              {"distance", "distance", "mean_free_path", "only mean_free_path (steady)"},
+              {"distance", "distance", "mean_free_path",
+               "distance sampling in media on both subpaths (nested <distance>): mean_free_path "
+               "or exponential"},
+              {"mis", "boolean", "false",
+               "combine the distance strategy with mean-free-path sampling (one-sample MIS)"},
               {"connection", "connection", "deterministic", "only deterministic (steady)"},
               {"angular", "angular", "phase", "only phase (steady)"}})
