@@ -171,18 +171,10 @@ TEST(Bdpt, EachStrategyAloneEstimatesTheSameImageInAMedium) {
 }
 
 TEST(Bdpt, BitIdenticalAcrossThreadCounts) {
-    const std::string xml = with_integrator("cornell-box", "transient_bdpt", 0, false);
-    auto render_with = [&](int threads) {
-        LoadOptions options;
-        options.defines = {{"res", "64"}, {"spp", "4"}, {"bins", "64"}};
-        auto scene = load_scene_string(xml, options, kScenes);
-        RenderOptions opt;
-        opt.threads = threads;
-        opt.seed = 3;
-        render(*scene, opt);
-        return scene->sensor().film().steady_image();
-    };
-    const auto a = render_with(1), b = render_with(2);
+    const std::vector<std::pair<std::string, std::string>> defines = {
+        {"res", "64"}, {"spp", "4"}, {"bins", "64"}};
+    const auto a = image_with_threads("cornell-box", "transient_bdpt", defines, 1);
+    const auto b = image_with_threads("cornell-box", "transient_bdpt", defines, 2);
     EXPECT_EQ(a, b);
 }
 

@@ -3,8 +3,6 @@
 // error against independent sampling.
 #include <gtest/gtest.h>
 
-#include "chi2.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -14,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "chi2.h"
 #include "femto/host.h"
 #include "femto/sampler.h"
 

@@ -157,6 +157,21 @@ MediumTracker medium_at_emission(const Emitter& emitter, const EmissionSample& e
 class LightPathStarts {
 public:
     void prepare(const Scene& scene, const std::string& integrator);
+
+    /// Where a light path starts: its emitter, the probability of choosing it, and the point
+    /// and direction sampled on it.
+    struct Start {
+        const Emitter* emitter = nullptr;  ///< null: no start (no emitters, or sampling failed)
+        float pmf = 0.f;
+        EmissionSample emission;
+        /// The light the path carries on its first segment: emission.weight / pmf.
+        Color power() const { return emission.weight / pmf; }
+        explicit operator bool() const { return emitter != nullptr; }
+    };
+    /// Chooses an emitter with one number (Scene::select_emitter) and samples its emission with
+    /// four more (point, then direction), in this order.
+    static Start sample(const Scene& scene, Sampler& sampler);
+
     /// The medium light leaving emission sample `es` of `emitter` in direction `d` travels in.
     MediumTracker medium(const Emitter& emitter, const EmissionSample& es, const Vec3& d) const;
 

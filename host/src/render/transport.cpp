@@ -108,6 +108,16 @@ void LightPathStarts::prepare(const Scene& scene, const std::string& integrator)
     }
 }
 
+LightPathStarts::Start LightPathStarts::sample(const Scene& scene, Sampler& sampler) {
+    Start start;
+    const Emitter* emitter = scene.select_emitter(sampler.next_1d(), start.pmf);
+    if (!emitter) return start;
+    const Vec2 u_position = sampler.next_2d();
+    start.emission = emitter->sample_emission(u_position, sampler.next_2d());
+    if (start.emission.valid() && !start.emission.weight.is_black()) start.emitter = emitter;
+    return start;
+}
+
 MediumTracker LightPathStarts::medium(const Emitter& emitter, const EmissionSample& es,
                                       const Vec3& d) const {
     const Medium* around = nullptr;

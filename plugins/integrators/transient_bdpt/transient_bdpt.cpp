@@ -248,12 +248,11 @@ private:
     void light_subpath(const Scene& scene, Sampler& sampler, Subpaths& paths) const {
         const int limit = max_vertices(false);
         if (limit < 1) return;
-        float pmf = 0.f;
-        const Emitter* emitter = scene.select_emitter(sampler.next_1d(), pmf);
-        if (!emitter) return;
-        const Vec2 u_position = sampler.next_2d();
-        const EmissionSample es = emitter->sample_emission(u_position, sampler.next_2d());
-        if (!es.valid() || es.weight.is_black()) return;
+        const LightPathStarts::Start start = LightPathStarts::sample(scene, sampler);
+        if (!start) return;
+        const Emitter* emitter = start.emitter;
+        const EmissionSample& es = start.emission;
+        const float pmf = start.pmf;
         Vertex light;
         light.kind = Vertex::Kind::Light;
         light.p = es.p;
@@ -265,11 +264,11 @@ private:
         LightClock clock(scene, *emitter, es.p, sampler);
         if (clock.expired()) return;
         paths.light.push_back(light);
-        paths.light_power.push_back(es.weight / pmf);  // unused for the light vertex itself
+        paths.light_power.push_back(start.power());  // unused for the light vertex itself
         paths.light_clock.push_back(clock);
         Walk walk{emission_ray(es), light.medium};
         walk.pdf_dir = es.pdf_direction;
-        Color power = es.weight / pmf;
+        Color power = start.power();
         while (int(paths.light.size()) < limit) {
             Vertex v;
             Color weight(1.f);

@@ -78,14 +78,13 @@ public:
     }
 
     void sample_light(const Scene& scene, Sampler& sampler, SplatList& out) const override {
-        float pmf = 0.f;
-        const Emitter* emitter = scene.select_emitter(sampler.next_1d(), pmf);
-        if (!emitter) return;
-        const Vec2 u_position = sampler.next_2d();
-        const EmissionSample es = emitter->sample_emission(u_position, sampler.next_2d());
-        if (!es.valid() || es.weight.is_black()) return;
+        const LightPathStarts::Start start = LightPathStarts::sample(scene, sampler);
+        if (!start) return;
+        const Emitter* emitter = start.emitter;
+        const EmissionSample& es = start.emission;
+        const float pmf = start.pmf;
         LightPath path{emission_ray(es), LightClock(scene, *emitter, es.p, sampler),
-                       starts_.medium(*emitter, es, es.d), es.weight / pmf};
+                       starts_.medium(*emitter, es, es.d), start.power()};
         path.start = path.power.max_component();
         if (path.clock.expired()) return;
         if (!hide_emitters()) emitter_seen(scene, sampler, path, *emitter, es, pmf, out);
