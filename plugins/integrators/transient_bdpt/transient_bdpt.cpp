@@ -47,6 +47,7 @@ struct Vertex {
     Kind kind = Kind::Surface;
     Vec3 p;
     Vec3 n;   // geometric normal of surface and area-light vertices; zero otherwise
+    Vec3 wi;  // unit direction back to the previous vertex of its own subpath (zero at the ends)
     Hit hit;  // surface vertices
     const Bsdf* bsdf = nullptr;            // surface vertices
     const PhaseFunction* phase = nullptr;  // medium vertices
@@ -322,6 +323,7 @@ private:
                 if (ds.scattered) {
                     v.kind = Vertex::Kind::Medium;
                     v.p = walk.ray.at(float(ds.distance));
+                    v.wi = -walk.ray.d;
                     v.phase = &medium->phase();
                     v.medium = walk.medium;
                     return travel(v.p, medium->eta()) && !weight.is_black();
@@ -338,6 +340,7 @@ private:
             }
             v.kind = Vertex::Kind::Surface;
             v.p = hit.p;
+            v.wi = -walk.ray.d;
             v.n = hit.ng;
             v.hit = hit;
             v.bsdf = &bsdf;
@@ -420,8 +423,8 @@ private:
         const double distance = distance_between(cv.p, lv.p);
         if (!(distance > 0) || !clock.arrives_in_time(light_clock, distance)) return;
         const Vec3 to_light = towards(cv, lv), to_camera = -to_light;
-        const Color f_light = scattering(lv, paths.light[size_t(s) - 2].p, to_camera, true);
-        const Color f_camera = scattering(cv, paths.camera[size_t(t) - 2].p, to_light, false);
+        const Color f_light = scattering(lv, to_camera, true);
+        const Color f_camera = scattering(cv, to_light, false);
         if (f_light.is_black() || f_camera.is_black()) return;
         const ShadowConnection c = connection(scene, sampler, cv, lv.p, to_light, distance);
         if (c.blocked()) return;
@@ -441,7 +444,7 @@ private:
         if (!(ls.pdf > 0) || ls.weight.is_black()) return;
         const PathClock& clock = paths.camera_clock[size_t(t) - 1];
         if (std::isfinite(ls.distance) && double(ls.distance) > clock.remaining()) return;
-        const Color f = scattering(cv, paths.camera[size_t(t) - 2].p, ls.wi, false);
+        const Color f = scattering(cv, ls.wi, false);
         if (f.is_black()) return;
         const ShadowConnection c = cv.kind == Vertex::Kind::Surface
                                        ? connect_to_light(scene, cv.hit, ls, cv.medium, sampler)
@@ -477,7 +480,7 @@ private:
         if (s == 1) {
             value = lv.emitter->eval_direction(lv.emission, ss.wi) / lv.pdf_fwd;
         } else {
-            const Color f = scattering(lv, paths.light[size_t(s) - 2].p, ss.wi, true);
+            const Color f = scattering(lv, ss.wi, true);
             value = leaving(lv.event, f * paths.light_power[size_t(s) - 1]);
         }
         if (value.is_black()) return;
@@ -499,15 +502,14 @@ private:
                      c.optical_length);
     }
 
-    // What vertex v (arrived at from `from`) sends toward world direction d: the BSDF value
-    // with its cosine (and, on light subpaths, the adjoint shading factor) or the phase
-    // function. Zero for camera and light vertices (their terms are the strategies').
-    static Color scattering(const Vertex& v, const Vec3& from, const Vec3& d, bool light) {
-        const Vec3 wi = normalize(from - v.p);
-        if (v.kind == Vertex::Kind::Medium) return Color(v.phase->eval(wi, d));
+    // What vertex v sends toward world direction d of what arrived from its previous vertex:
+    // the BSDF value with its cosine (and, on light subpaths, the adjoint shading factor) or
+    // the phase function. Zero for camera and light vertices (their terms are the strategies').
+    static Color scattering(const Vertex& v, const Vec3& d, bool light) {
+        if (v.kind == Vertex::Kind::Medium) return Color(v.phase->eval(v.wi, d));
         if (v.kind != Vertex::Kind::Surface) return Color(0.f);
-        Color f = v.bsdf->eval(v.hit, v.hit.to_local(wi), v.hit.to_local(d));
-        if (light) f *= adjoint_shading_factor(v.hit, wi, d);
+        Color f = v.bsdf->eval(v.hit, v.hit.wi, v.hit.to_local(d));
+        if (light) f *= adjoint_shading_factor(v.hit, v.wi, d);
         return f;
     }
 
@@ -525,9 +527,9 @@ private:
 
     // ---- multiple importance sampling --------------------------------------------------------
 
-    // Density with which vertex v (arrived at from `prev`, unused for end points) samples
-    // `next`, as a density of next.
-    float pdf(const Scene& scene, const Vertex& v, const Vertex* prev, const Vertex& next) const {
+    // Density with which vertex v, arrived at from direction w_prev (unit, toward where the
+    // path came from; unused for end points), samples `next`, as a density of next.
+    float pdf(const Scene& scene, const Vertex& v, const Vec3& w_prev, const Vertex& next) const {
         const Vec3 d = towards(v, next);
         switch (v.kind) {
             case Vertex::Kind::Camera:
@@ -535,11 +537,10 @@ private:
             case Vertex::Kind::Light:
                 return pdf_light(v, next);
             case Vertex::Kind::Medium:
-                return to_area(v.phase->eval(towards(v, *prev), d), v, next);
+                return to_area(v.phase->eval(w_prev, d), v, next);
             case Vertex::Kind::Surface:
-                return to_area(
-                    v.bsdf->pdf(v.hit, v.hit.to_local(towards(v, *prev)), v.hit.to_local(d)), v,
-                    next);
+                return to_area(v.bsdf->pdf(v.hit, v.hit.to_local(w_prev), v.hit.to_local(d)), v,
+                               next);
         }
         return 0.f;
     }
@@ -605,12 +606,14 @@ private:
         if (s > 0) {
             Densities& xs = x[size_t(s) - 1];
             xs.delta = false;
-            const Vertex* qs_prev = s > 1 ? &light_vertex(s - 2) : nullptr;
-            xt.from_light = pdf(scene, *qs, qs_prev, pt);
-            if (t > 1) x[size_t(s) + 1].from_light = pdf(scene, pt, qs, camera_vertex(t - 2));
-            const Vertex* pt_prev = t > 1 ? &camera_vertex(t - 2) : nullptr;
-            xs.from_camera = pdf(scene, pt, pt_prev, *qs);
-            if (s > 1) x[size_t(s) - 2].from_camera = pdf(scene, *qs, &pt, light_vertex(s - 2));
+            xt.from_light = pdf(scene, *qs, qs->wi, pt);
+            if (t > 1)
+                x[size_t(s) + 1].from_light =
+                    pdf(scene, pt, towards(pt, *qs), camera_vertex(t - 2));
+            xs.from_camera = pdf(scene, pt, pt.wi, *qs);
+            if (s > 1)
+                x[size_t(s) - 2].from_camera =
+                    pdf(scene, *qs, towards(*qs, pt), light_vertex(s - 2));
         } else {
             xt.from_light = pdf_light_origin(scene, pt);
             x[size_t(s) + 1].from_light = pdf_light(pt, camera_vertex(t - 2));
