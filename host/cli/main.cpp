@@ -272,7 +272,8 @@ int cmd_render(const std::string& scene_path, std::string out_base,
                    stats.spp_requested, stats.seconds,
                    stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0, out_base);
     const auto write_start = std::chrono::steady_clock::now();
-    const auto files = scene->sensor().film().write(out_base, info);
+    auto files = scene->sensor().film().write(out_base, info);
+    for (auto& f : scene->integrator().write(out_base, info)) files.push_back(std::move(f));
     handle_stop_signals(false);
     if (!quiet) {
         const std::chrono::duration<double> took = std::chrono::steady_clock::now() - write_start;

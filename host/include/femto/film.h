@@ -81,6 +81,10 @@ public:
     void splat(Vec2 pos, const Color& radiance, double time, double sensor_distance) {
         if (splats_) splats_->add({pos, radiance, sample_index_, time, sensor_distance});
     }
+    /// Film position (pixels) of this camera sample, set by the renderer (for integrators that
+    /// keep images of their own, e.g. BDPT's per-strategy images).
+    void set_film_position(Vec2 pos) { film_position_ = pos; }
+    Vec2 film_position() const { return film_position_; }
     /// The list splat() adds to (set by the renderer), or null.
     void set_splat_list(SplatList* splats) { splats_ = splats; }
     SplatList* splat_list() const { return splats_; }
@@ -96,6 +100,7 @@ private:
     uint32_t sample_index_ = 0;
     SplatList* splats_ = nullptr;
     bool is_splat_ = false;
+    Vec2 film_position_;
 };
 
 /// Metadata recorded into every output file.

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "femto/film.h"
@@ -57,6 +58,13 @@ public:
     /// integrators implement it; the default throws std::logic_error). The sampler is started
     /// for (seed, path index modulo pixels, path index / pixels).
     virtual void sample_light(const Scene& scene, Sampler& sampler, SplatList& out) const;
+    /// Writes outputs of the integrator's own next to the film's (e.g. debugging images named
+    /// `out_base` + a suffix), atomically, and returns the paths written; the default writes
+    /// nothing. Called by `femto render` after the film has written its outputs.
+    virtual std::vector<std::string> write(const std::string& /*out_base*/,
+                                           const RenderInfo& /*info*/) const {
+        return {};
+    }
 };
 
 /// Base of integrators that follow paths of bounded depth (Mitsuba's MonteCarloIntegrator):

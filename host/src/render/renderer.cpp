@@ -150,6 +150,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
                 const Ray ray = sensor.sample_ray(pos, sampler.next_2d());
                 list.clear();
                 list.set_sample_index(s);
+                list.set_film_position(pos);
                 if (splats) splats->set_sample_index(s);
                 integrator.sample(scene, sampler, ray, list);
                 block->put(pos, list);

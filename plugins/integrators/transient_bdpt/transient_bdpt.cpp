@@ -24,11 +24,16 @@
 // strategy whose distances fit the time window. The connection and angular strategies are
 // refused: a vertex placed on a connection, or a direction chosen by time, would be a strategy
 // of its own in the weights.
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <vector>
 
+#include "femto/image_io.h"
 #include "femto/integrator.h"
 #include "femto/mis.h"
 #include "femto/path_clock.h"
@@ -124,6 +129,8 @@ public:
             props.fail("strategy_s",
                        "strategy_s >= 0 and strategy_t >= 1 go together (or both "
                        "-1: every strategy, weighted by MIS)");
+        images_.enabled = props.get_bool("strategy_images", false);
+        images_location_ = props.location_of("strategy_images");
         only_length_ = int(props.get_int("path_length", -1));
         if (only_length_ == 0 || only_length_ < -1)
             props.fail("path_length", "path_length must be >= 1 (segments), or -1 for all");
@@ -145,6 +152,14 @@ public:
         // A sensor no connection can reach (orthographic) leaves out the strategies t = 1.
         to_sensor_ = scene.sensor().connectable();
         window_end_ = scene.time_window().end;
+        if (images_.enabled) {
+            if (max_depth() < 0)
+                throw SceneError(images_location_,
+                                 "strategy_images needs a finite max_depth (one image per (s, t) "
+                                 "with s + t - 1 <= max_depth)");
+            const Film& film = scene.sensor().film();
+            images_.prepare(film.width(), film.height(), int(max_depth()));
+        }
         distance_->prepare({window_end_});
         for (const Emitter* e : scene.emitters())
             if (e->type_name() == "collimated")
@@ -229,7 +244,7 @@ private:
                 clock.reach_vertex();
             v.pdf_fwd = to_area(walk.pdf_dir, paths.camera.back(), v);
             paths.camera.push_back(v);
-            if (v.emitter) emitter_hit(scene, sampler, paths, beta, clock);
+            if (v.emitter) emitter_hit(scene, sampler, paths, beta, clock, out);
             if (v.bsdf && v.bsdf->has_vertex_event()) {
                 paths.camera.back().event = v.bsdf->sample_vertex_event(v.hit, sampler.next_1d());
                 clock.delay(paths.camera.back().event.delay);
@@ -399,7 +414,8 @@ private:
 
     // s = 0: the camera subpath's last vertex is on an emitter (clock: before its delay).
     void emitter_hit(const Scene& scene, Sampler& sampler, const Subpaths& paths,
-                     const Throughput& beta, const PathClock& clock) const {
+                     const Throughput& beta, const PathClock& clock,
+                     const ContributionList& out) const {
         const int t = int(paths.camera.size());
         if (!wanted(0, t)) return;
         if (t == 2 && hide_emitters()) return;
@@ -407,14 +423,16 @@ private:
         const Color Le = v.emitter->eval(v.hit, towards(v, paths.camera[size_t(t) - 2]));
         if (Le.is_black()) return;
         const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 0, t, nullptr, nullptr);
-        clock.record(beta(Le * w), *v.emitter, sampler);
+        const Color value = beta(Le * w);
+        clock.record(value, *v.emitter, sampler);
+        images_.add(0, t, out.film_position(), value);
     }
 
     // Joins the first s light vertices and the first t camera vertices (s, t >= 1).
     void connect(const Scene& scene, Sampler& sampler, const Subpaths& paths, int s, int t,
                  ContributionList& out) const {
         if (t == 1) return to_sensor(scene, sampler, paths, s, out);
-        if (s == 1) return light_sample(scene, sampler, paths, t);
+        if (s == 1) return light_sample(scene, sampler, paths, t, out);
         const Vertex& lv = paths.light[size_t(s) - 1];
         const Vertex& cv = paths.camera[size_t(t) - 1];
         if (!lv.connectible() || !cv.connectible()) return;
@@ -431,13 +449,15 @@ private:
         const Color arriving = leaving(lv.event, f_light * paths.light_power[size_t(s) - 1]);
         const float g = float(1.0 / (distance * distance));
         const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, t, nullptr, nullptr);
-        clock.record(
-            paths.camera_beta[size_t(t) - 1](f_camera * arriving * c.transmittance) * (g * w),
-            light_clock, c.optical_length);
+        const Color value =
+            paths.camera_beta[size_t(t) - 1](f_camera * arriving * c.transmittance) * (g * w);
+        clock.record(value, light_clock, c.optical_length);
+        images_.add(s, t, out.film_position(), value);
     }
 
     // s = 1: a light sample for camera vertex t - 1 (next-event estimation).
-    void light_sample(const Scene& scene, Sampler& sampler, const Subpaths& paths, int t) const {
+    void light_sample(const Scene& scene, Sampler& sampler, const Subpaths& paths, int t,
+                      const ContributionList& out) const {
         const Vertex& cv = paths.camera[size_t(t) - 1];
         if (!cv.connectible()) return;
         const EmitterSample ls = sample_emitter(scene, cv.p, sampler);
@@ -463,8 +483,9 @@ private:
         ls.emitter->pdf_emission(light.emission, -ls.wi, pos, dir);
         light.pdf_fwd = pos * pmf;
         const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 1, t, &light, nullptr);
-        clock.record(paths.camera_beta[size_t(t) - 1](f * ls.weight * c.transmittance) * w,
-                     *ls.emitter, sampler, c.optical_length);
+        const Color value = paths.camera_beta[size_t(t) - 1](f * ls.weight * c.transmittance) * w;
+        clock.record(value, *ls.emitter, sampler, c.optical_length);
+        images_.add(1, t, out.film_position(), value);
     }
 
     // t = 1: light vertex s - 1 seen by the camera, a splat.
@@ -498,8 +519,9 @@ private:
         camera.p = ss.p;
         camera.pdf_fwd = 1.f;
         const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, 1, nullptr, &camera);
-        clock.record(*out.splat_list(), ss.pos, value * c.transmittance * (ss.weight * w),
-                     c.optical_length);
+        const Color splat = value * c.transmittance * (ss.weight * w);
+        clock.record(*out.splat_list(), ss.pos, splat, c.optical_length);
+        images_.add(s, 1, ss.pos, splat);
     }
 
     // What vertex v sends toward world direction d of what arrived from its previous vertex:
@@ -639,6 +661,56 @@ private:
         return float(1.0 / sum);
     }
 
+    // strategy_images: the weighted contributions of each strategy (s, t), summed per pixel
+    // (box filter, no time), written as OUTBASE_bdpt_s<s>_t<t>.exr. Threads add concurrently,
+    // so these debugging images are not bit-identical across thread counts (the film is).
+    struct StrategyImages {
+        bool enabled = false;
+        int width = 0, height = 0, depth = 0;
+        mutable std::vector<std::atomic<double>> sums;  // [(s * (depth + 2) + t) * pixels][3]
+        void prepare(int w, int h, int d) {
+            width = w, height = h, depth = d;
+            sums = std::vector<std::atomic<double>>(size_t(d + 1) * size_t(d + 2) * size_t(w) *
+                                                    size_t(h) * 3);
+        }
+        size_t offset(int s, int t) const {
+            return size_t(s * (depth + 2) + t) * size_t(width) * size_t(height) * 3;
+        }
+        void add(int s, int t, Vec2 pos, const Color& value) const {
+            if (!enabled || !value.is_finite()) return;
+            const int x = std::clamp(int(pos.x), 0, width - 1),
+                      y = std::clamp(int(pos.y), 0, height - 1);
+            const size_t i = offset(s, t) + (size_t(y) * size_t(width) + size_t(x)) * 3;
+            for (int c = 0; c < 3; ++c) sums[i + size_t(c)].fetch_add(double(value[c]));
+        }
+    };
+
+public:
+    std::vector<std::string> write(const std::string& out_base,
+                                   const RenderInfo& info) const override {
+        if (!images_.enabled || info.samples_per_pixel == 0) return {};
+        io::OutputSet files;
+        const size_t pixels = size_t(images_.width) * size_t(images_.height);
+        std::vector<float> rgb(pixels * 3);
+        for (int s = 0; s <= images_.depth; ++s)
+            for (int t = 1; s + t - 1 <= images_.depth; ++t) {
+                const size_t o = images_.offset(s, t);
+                double total = 0;
+                for (size_t i = 0; i < pixels * 3; ++i) {
+                    rgb[i] = float(images_.sums[o + i].load() / info.samples_per_pixel);
+                    total += rgb[i];
+                }
+                if (!(total > 0)) continue;
+                const std::string name = fmt::format("{}_bdpt_s{}_t{}.exr", out_base, s, t);
+                io::write_exr_rgb(files.add(name), images_.width, images_.height, rgb.data(),
+                                  {{"femto:strategy", fmt::format("s={} t={}", s, t)}});
+            }
+        return files.commit();
+    }
+
+private:
+    StrategyImages images_;
+    SourceLocation images_location_;
     bool power_ = true;
     bool to_sensor_ = true;  // the sensor can be connected to (strategies t = 1)
     std::shared_ptr<DistanceSampler> distance_;
@@ -659,6 +731,9 @@ FEMTO_PLUGIN(Bdpt, femto::PluginKind::Integrator, "transient_bdpt",
               {"strategy_s", "integer", "-1",
                "debugging: render only strategy (strategy_s, strategy_t), unweighted"},
               {"strategy_t", "integer", "-1", "debugging: see strategy_s"},
+              {"strategy_images", "boolean", "false",
+               "also write OUTBASE_bdpt_s<s>_t<t>.exr: each strategy's weighted contributions "
+               "(steady, box-filtered; needs a finite max_depth)"},
               {"path_length", "integer", "-1",
                "debugging: render only paths of this many segments (all their strategies, "
                "weighted)"},
