@@ -65,21 +65,8 @@ TEST(Bdpt, AgreesWithPathTracerOnFogPoint) {
     check_agreement(c, "transient_bdpt");
 }
 
-// The distance defines are the steady strategies; they only matter for fog-object's own
-// integrator, which with_integrator() replaces.
 AgreementCase fog_object_case() {
-    AgreementCase c{"fog-object",
-                    0,
-                    true,
-                    {{"res", "16"},
-                     {"bins", "80"},
-                     {"distance", "mean_free_path"},
-                     {"connection", "deterministic"},
-                     {"angular", "phase"}},
-                    64,
-                    16,
-                    2,
-                    8};
+    AgreementCase c{"fog-object", 0, true, {{"res", "16"}, {"bins", "80"}}, 64, 16, 2, 8};
     c.path_children = "<connection type=\"equiangular\"/><boolean name=\"mis\" value=\"true\"/>";
     c.resolved = 0.15;
     return c;

@@ -60,18 +60,7 @@ TEST(LightTracer, AgreesWithPathTracerOnFogPoint) {
 }
 
 TEST(LightTracer, AgreesWithPathTracerOnFogObject) {
-    check_agreement({"fog-object",
-                     0,
-                     true,
-                     {{"res", "16"},
-                      {"bins", "80"},
-                      {"distance", "mean_free_path"},
-                      {"connection", "deterministic"},
-                      {"angular", "phase"}},
-                     16,
-                     32,
-                     2,
-                     8});
+    check_agreement({"fog-object", 0, true, {{"res", "16"}, {"bins", "80"}}, 16, 32, 2, 8});
 }
 
 namespace {
