@@ -185,6 +185,29 @@ public:
             }
     }
 
+    // strategy_images: one steady EXR per strategy (docs/outputs.md).
+    std::vector<std::string> write(const std::string& out_base,
+                                   const RenderInfo& info) const override {
+        if (!images_.enabled || info.samples_per_pixel == 0) return {};
+        io::OutputSet files;
+        const size_t pixels = size_t(images_.width) * size_t(images_.height);
+        std::vector<float> rgb(pixels * 3);
+        for (int s = 0; s <= images_.depth; ++s)
+            for (int t = 1; s + t - 1 <= images_.depth; ++t) {
+                const size_t o = images_.offset(s, t);
+                double total = 0;
+                for (size_t i = 0; i < pixels * 3; ++i) {
+                    rgb[i] = float(images_.sums[o + i].load() / info.samples_per_pixel);
+                    total += rgb[i];
+                }
+                if (!(total > 0)) continue;
+                const std::string name = fmt::format("{}_bdpt_s{}_t{}.exr", out_base, s, t);
+                io::write_exr_rgb(files.add(name), images_.width, images_.height, rgb.data(),
+                                  {{"femto:strategy", fmt::format("s={} t={}", s, t)}});
+            }
+        return files.commit();
+    }
+
 private:
     // Refuses a nested time-sampling strategy other than the steady one.
     static void check_steady(const Properties& props, PluginKind kind, const char* tag,
@@ -685,30 +708,6 @@ private:
         }
     };
 
-public:
-    std::vector<std::string> write(const std::string& out_base,
-                                   const RenderInfo& info) const override {
-        if (!images_.enabled || info.samples_per_pixel == 0) return {};
-        io::OutputSet files;
-        const size_t pixels = size_t(images_.width) * size_t(images_.height);
-        std::vector<float> rgb(pixels * 3);
-        for (int s = 0; s <= images_.depth; ++s)
-            for (int t = 1; s + t - 1 <= images_.depth; ++t) {
-                const size_t o = images_.offset(s, t);
-                double total = 0;
-                for (size_t i = 0; i < pixels * 3; ++i) {
-                    rgb[i] = float(images_.sums[o + i].load() / info.samples_per_pixel);
-                    total += rgb[i];
-                }
-                if (!(total > 0)) continue;
-                const std::string name = fmt::format("{}_bdpt_s{}_t{}.exr", out_base, s, t);
-                io::write_exr_rgb(files.add(name), images_.width, images_.height, rgb.data(),
-                                  {{"femto:strategy", fmt::format("s={} t={}", s, t)}});
-            }
-        return files.commit();
-    }
-
-private:
     StrategyImages images_;
     SourceLocation images_location_;
     bool power_ = true;
