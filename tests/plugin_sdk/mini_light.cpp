@@ -61,10 +61,8 @@ public:
                 continue;
             }
             if (depth_exhausted(depth)) return;  // the sensor needs one more segment
-            VertexEvent event;                   // fluorescence: a delay and a colour transfer
-            if (bsdf.has_vertex_event()) event = bsdf.sample_vertex_event(hit, sampler.next_1d());
-            clock.delay(event.delay);
-            auto leaving = [&](const Color& c) { return event.transfers ? event.transfer * c : c; };
+            // Fluorescence: a delay for the clock, a colour transfer for the light leaving.
+            const VertexEvent event = apply_vertex_event(bsdf, hit, sampler, clock);
             // Connect to the camera: a splat at the film position the connection lands on.
             const SensorSample ss = scene.sensor().sample_direct(hit.p, sampler.next_2d());
             if (ss.valid() && (bsdf.flags() & kBsdfSmooth) && clock.arrives_in_time(ss.distance)) {
@@ -72,14 +70,15 @@ public:
                                 adjoint_shading_factor(hit, -ray.d, ss.wi);
                 const ShadowConnection c = connect_to_sensor(scene, hit, ss, index, sampler);
                 if (!f.is_black() && !c.blocked())
-                    clock.record(out, ss.pos, leaving(f * power) * (ss.weight), c.optical_length);
+                    clock.record(out, ss.pos, leaving(event, f * power) * (ss.weight),
+                                 c.optical_length);
             }
             // Continue in a direction drawn from the BSDF.
             const float u = sampler.next_1d();
             const BsdfSample bs = bsdf.sample(hit, hit.wi, u, sampler.next_2d());
             if (!bs.valid() || bs.weight.is_black()) return;
             const Vec3 wo = hit.to_world(bs.wo);
-            power = leaving(bs.weight * power) * adjoint_shading_factor(hit, -ray.d, wo);
+            power = leaving(event, bs.weight * power) * adjoint_shading_factor(hit, -ray.d, wo);
             index.refract(bs);
             ray = hit.spawn(wo);
         }

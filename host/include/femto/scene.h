@@ -52,6 +52,8 @@ public:
     /// sample_emitter() does (uniformly); `pmf` is the probability of the pick. Null when the
     /// scene has no emitters.
     const Emitter* select_emitter(float u, float& pmf) const;
+    /// Probability with which select_emitter() picks `emitter` (a light path's start, for MIS).
+    float select_emitter_pmf(const Emitter& emitter) const;
     /// Density of sample_emitter() choosing `hit` on `emitter`, with the selection probability.
     float pdf_emitter(const Emitter& emitter, const Vec3& ref, const Hit& hit) const;
 

@@ -9,9 +9,13 @@
 //   - DistanceMixture and sample_distance(): the distance strategy in a medium (ch. 5.6.1),
 //     alone or MIS-combined with mean-free-path sampling;
 //   - connection_reach(): how far along a segment a connection strategy's vertex may lie and
-//     still reach its light within the film's window (eq. 5.110-5.111).
-// The time rules themselves are PathClock's (femto/path_clock.h); the MIS weights are in
-// femto/mis.h. `plugins/integrators/path` is an estimator written with these pieces.
+//     still reach its light within the film's window (eq. 5.110-5.111);
+//   - light paths: LightPathStarts (where they start and in which medium), emission_ray(),
+//     apply_vertex_event() with a LightClock and leaving(), adjoint_shading_factor(), and
+//     connect_to_sensor() to splat what the camera sees of them.
+// The time rules themselves are PathClock's and LightClock's (femto/path_clock.h); the MIS
+// weights are in femto/mis.h. `plugins/integrators/path` is an estimator written with these
+// pieces, `plugins/integrators/transient_light` and `transient_bdpt` the light-path ones.
 #pragma once
 
 #include <algorithm>
@@ -70,6 +74,24 @@ inline void apply_vertex_event(const Bsdf& bsdf, const Hit& hit, Sampler& sample
     const VertexEvent event = bsdf.sample_vertex_event(hit, sampler.next_1d());
     clock.delay(event.delay);
     if (event.transfers) throughput.transfer(event.transfer);
+}
+
+/// The same for a light path: the event's delay goes to the light path's clock, and the event
+/// is returned, since its colour transfer applies to the light that leaves the vertex
+/// (leaving()), not to a throughput. Draws one number when the material has an event; an
+/// ordinary material gives the identity event.
+inline VertexEvent apply_vertex_event(const Bsdf& bsdf, const Hit& hit, Sampler& sampler,
+                                      LightClock& clock) {
+    if (!bsdf.has_vertex_event()) return {};
+    const VertexEvent event = bsdf.sample_vertex_event(hit, sampler.next_1d());
+    clock.delay(event.delay);
+    return event;
+}
+
+/// Light leaving a vertex whose event transfers colour: transfer x light (light paths carry
+/// light, so the transfer applies after the BSDF's colour, in the light's direction).
+inline Color leaving(const VertexEvent& event, const Color& light) {
+    return event.transfers ? event.transfer * light : light;
 }
 
 // ---- media -----------------------------------------------------------------------------------

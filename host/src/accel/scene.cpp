@@ -98,6 +98,10 @@ const Emitter* Scene::select_emitter(float u, float& pmf) const {
     return n ? emitter_list_[std::min(size_t(u * float(n)), n - 1)] : nullptr;
 }
 
+float Scene::select_emitter_pmf(const Emitter&) const {
+    return emitter_list_.empty() ? 0.f : 1.f / float(emitter_list_.size());
+}
+
 float Scene::pdf_emitter(const Emitter& emitter, const Vec3& ref, const Hit& hit) const {
     const size_t n = emitter_list_.size();
     return n ? emitter.pdf_direct(ref, hit) / float(n) : 0.f;

@@ -59,7 +59,7 @@ struct Vertex {
     const Emitter* emitter = nullptr;      // light vertices; surface vertices on an emitter
     EmissionSample emission;               // light vertices
     MediumTracker medium;                  // the medium the path was in when it arrived
-    VertexEvent event;                     // the material's event (light leaving carries it)
+    VertexEvent event;  // light subpaths: the material's event (light leaving carries it)
     // Densities of sampling this vertex from its subpath's previous vertex (fwd) and from the
     // next one (rev): area measure at surfaces, volume in media, per unit of area-light area.
     float pdf_fwd = 0.f, pdf_rev = 0.f;
@@ -268,12 +268,7 @@ private:
             v.pdf_fwd = to_area(walk.pdf_dir, paths.camera.back(), v);
             paths.camera.push_back(v);
             if (v.emitter) emitter_hit(scene, sampler, paths, beta, clock, out);
-            if (v.bsdf && v.bsdf->has_vertex_event()) {
-                paths.camera.back().event = v.bsdf->sample_vertex_event(v.hit, sampler.next_1d());
-                clock.delay(paths.camera.back().event.delay);
-                if (paths.camera.back().event.transfers)
-                    beta.transfer(paths.camera.back().event.transfer);
-            }
+            if (v.bsdf) apply_vertex_event(*v.bsdf, v.hit, sampler, clock, beta);
             paths.camera_beta.push_back(beta);
             paths.camera_clock.push_back(clock);
             if (int(paths.camera.size()) == max_vertices(true)) return;
@@ -319,10 +314,7 @@ private:
             power *= weight;
             if (power.is_black() || !(squared_length(v.p - paths.light.back().p) > 0.f)) return;
             v.pdf_fwd = to_area(walk.pdf_dir, paths.light.back(), v);
-            if (v.bsdf && v.bsdf->has_vertex_event()) {
-                v.event = v.bsdf->sample_vertex_event(v.hit, sampler.next_1d());
-                clock.delay(v.event.delay);
-            }
+            if (v.bsdf) v.event = apply_vertex_event(*v.bsdf, v.hit, sampler, clock);
             paths.light.push_back(v);
             paths.light_power.push_back(power);
             paths.light_clock.push_back(clock);
@@ -428,11 +420,6 @@ private:
         return true;
     }
 
-    // Light leaving a vertex whose event transfers colour.
-    static Color leaving(const VertexEvent& event, const Color& light) {
-        return event.transfers ? event.transfer * light : light;
-    }
-
     // ---- strategies --------------------------------------------------------------------------
 
     // s = 0: the camera subpath's last vertex is on an emitter (clock: before its delay).
@@ -501,10 +488,7 @@ private:
         light.emission.p = ls.p;
         light.emission.n = ls.n;
         light.emission.delta_position = ls.emitter->is_delta();  // no camera path hits it
-        float pos = 0.f, dir = 0.f, pmf = 0.f;
-        scene.select_emitter(0.f, pmf);
-        ls.emitter->pdf_emission(light.emission, -ls.wi, pos, dir);
-        light.pdf_fwd = pos * pmf;
+        light.pdf_fwd = pdf_light_origin(scene, light);
         const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 1, t, &light, nullptr);
         const Color value = paths.camera_beta[size_t(t) - 1](f * ls.weight * c.transmittance) * w;
         clock.record(value, *ls.emitter, sampler, c.optical_length);
@@ -604,10 +588,9 @@ private:
         EmissionSample at;
         at.p = v.p;
         at.n = v.n;
-        float pos = 0.f, dir = 0.f, pmf = 0.f;
-        scene.select_emitter(0.f, pmf);
+        float pos = 0.f, dir = 0.f;
         v.emitter->pdf_emission(at, v.n, pos, dir);
-        return pos * pmf;
+        return pos * scene.select_emitter_pmf(*v.emitter);
     }
 
     // The weight of strategy (s, t) for the path it made: the heuristic over every strategy

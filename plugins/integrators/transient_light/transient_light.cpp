@@ -49,11 +49,6 @@ struct LightPath {
 // What a segment through a medium ended in.
 enum class SegmentEnd { Surface, Scattered, Stop };
 
-// Light leaving a vertex whose event (fluorescence) transfers colour: transfer x light.
-Color leaving(const VertexEvent& event, const Color& light) {
-    return event.transfers ? event.transfer * light : light;
-}
-
 class LightTracer final : public MonteCarloIntegrator {
 public:
     explicit LightTracer(const Properties& props) : MonteCarloIntegrator(props, 0) {
@@ -131,9 +126,7 @@ private:
         }
         if (depth_exhausted(path.depth)) return false;  // no segment left for the sensor
         // The vertex's event (delay, colour transfer) applies to all light leaving it.
-        VertexEvent event;
-        if (bsdf.has_vertex_event()) event = bsdf.sample_vertex_event(hit, sampler.next_1d());
-        path.clock.delay(event.delay);
+        const VertexEvent event = apply_vertex_event(bsdf, hit, sampler, path.clock);
         if (bsdf.flags() & kBsdfSmooth)
             surface_to_sensor(scene, sampler, path, hit, bsdf, event, out);
         return continue_from_surface(sampler, path, hit, bsdf, event);

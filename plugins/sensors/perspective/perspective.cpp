@@ -78,10 +78,7 @@ public:
 
     float pdf_direction(const Vec3& d) const override {
         Vec2 pos;
-        if (!film_position(d, pos)) return 0.f;
-        const double c = std::abs(double(dot(d, plane_n_)));
-        // dA on the plane = t^2 / cos d(omega), with t = plane_distance_ / cos.
-        return float(plane_distance_ * plane_distance_ / (plane_area_ * c * c * c));
+        return film_position(d, pos) ? density_in_view(d) : 0.f;
     }
 
     SensorSample sample_direct(const Vec3& ref, Vec2) const override {
@@ -95,7 +92,7 @@ public:
         if (!film_position(-s.wi, s.pos)) return s;
         s.p = origin_;
         s.distance = dist;
-        s.weight = float(double(pdf_direction(-s.wi)) / (dist * dist));
+        s.weight = float(double(density_in_view(-s.wi)) / (dist * dist));
         return s;
     }
 
@@ -109,6 +106,13 @@ public:
     }
 
 private:
+    // pdf_direction() of a direction d (unit) already known to land on the film.
+    float density_in_view(const Vec3& d) const {
+        const double c = std::abs(double(dot(d, plane_n_)));
+        // dA on the plane = t^2 / cos d(omega), with t = plane_distance_ / cos.
+        return float(plane_distance_ * plane_distance_ / (plane_area_ * c * c * c));
+    }
+
     // Film position (pixels) of the camera ray leaving in world direction d (unit); false
     // outside the film.
     bool film_position(const Vec3& d, Vec2& pos) const {
