@@ -15,6 +15,11 @@
 //             line_to_point, each alone; the film's `count` AOV gives the samples per frame.
 //  combos     every combination of distance x connection x angular x mis (24) at sigma_s 0.9,
 //             isotropic: error against wall-clock time, so each strategy's cost counts.
+//  bdpt       the media of `media` rendered by transient_bdpt: steady (mean-free-path
+//             distances) against exponential distances alone and MIS-combined with mean free
+//             paths, on both subpaths with their densities in the MIS weights; the path
+//             tracer's steady sampling alongside (run with --prefix media_bdpt to keep the
+//             other parts' CSVs; bench/run_media_bdpt.sh does).
 //
 // Reference per configuration: exponential + equiangular + time angular with MIS at many spp
 // (equiangular has finite variance next to the point light, where line_to_point and shadow
@@ -66,6 +71,7 @@ using Clock = std::chrono::steady_clock;
 struct Strategy {
     std::string name, distance, connection, angular;
     bool mis;
+    std::string integrator = "transient_path";
 };
 
 const Strategy kSteady{"steady", "mean_free_path", "deterministic", "phase", false};
@@ -75,6 +81,13 @@ const Strategy kTime{"time", "exponential", "line_to_point", "time", true};
 // exponential (mean_vertices 3 over this window: lambda = 0.375) only adds weight.
 const Strategy kTimeMfp{"time_mfp", "mean_free_path", "line_to_point", "time", true};
 const Strategy kReference{"reference", "exponential", "equiangular", "time", true};
+// BDPT takes the distance strategies only (connection and angular strategies are refused).
+const Strategy kBdptSteady{"bdpt_steady", "mean_free_path", "deterministic", "phase",
+                           false,         "transient_bdpt"};
+const Strategy kBdptTime{"bdpt_time", "exponential", "deterministic",
+                         "phase",     true,          "transient_bdpt"};
+const Strategy kBdptExponential{"bdpt_exponential", "exponential", "deterministic", "phase", false,
+                                "transient_bdpt"};
 
 struct Medium {
     double sigma_s, g;
@@ -82,6 +95,7 @@ struct Medium {
 
 struct Options {
     std::string out_dir = FEMTO_BENCH_SOURCE_DIR "/bench/results";
+    std::string prefix = "media";  // of the output files
     std::vector<std::string> parts{"media", "single", "combos"};
     std::vector<int> budgets{16, 64, 256, 1024, 4096};
     std::vector<int> combo_budgets{16, 64, 256, 1024};
@@ -92,7 +106,8 @@ struct Options {
 
 [[noreturn]] void usage(int code) {
     fmt::print(
-        "usage: femto_bench_media [--out DIR] [--parts media,single,combos] [--budgets 16,64,...]\n"
+        "usage: femto_bench_media [--out DIR] [--prefix media] [--parts media,single,combos,bdpt]\n"
+        "                         [--budgets 16,64,...]\n"
         "                         [--combo-budgets 16,...] [--seeds N] [--combo-seeds N]\n"
         "                         [--res N] [--ref-spp N] [--threads N]\n");
     std::exit(code);
@@ -106,6 +121,8 @@ Options parse(int argc, char** argv) {
         if (a == "-h" || a == "--help") usage(0);
         if (a == "--out")
             o.out_dir = next();
+        else if (a == "--prefix")
+            o.prefix = next();
         else if (a == "--parts")
             o.parts = split(next(), ',');
         else if (a == "--budgets")
@@ -174,7 +191,14 @@ Rendered render(const std::string& xml, const Options& o, const Medium& m, const
                   {"connection", s.connection},
                   {"angular", s.angular},
                   {"mis", s.mis ? "true" : "false"}};
-    auto scene = femto::load_scene_string(xml, lo, kSceneDir);
+    // A splatting integrator (BDPT) has no per-pixel variance AOV; only the reference needs it.
+    const bool path = s.integrator == "transient_path";
+    const std::string text =
+        path ? xml
+             : replace_once(replace_once(xml, "<integrator type=\"transient_path\">",
+                                         "<integrator type=\"" + s.integrator + "\">"),
+                            "value=\"variance,count\"", "value=\"count\"");
+    auto scene = femto::load_scene_string(text, lo, kSceneDir);
     femto::RenderOptions ro;
     ro.spp = uint32_t(spp);
     ro.threads = o.threads;
@@ -185,7 +209,7 @@ Rendered render(const std::string& xml, const Options& o, const Medium& m, const
     r.wall = std::chrono::duration<double>(Clock::now() - t0).count();
     r.render_seconds = st.seconds;
     // Read back through the film's writer (untimed): the cube, its variance and count AOVs.
-    r.cube = film_cube(*scene, ro, st, r.shape, &r.variance, &r.count);
+    r.cube = film_cube(*scene, ro, st, r.shape, path ? &r.variance : nullptr, &r.count);
     return r;
 }
 
@@ -347,13 +371,14 @@ int main(int argc, char** argv) try {
     const Options o = parse(argc, argv);
     fs::create_directories(o.out_dir);
     Csv csv;
-    csv.error.open(o.out_dir + "/media_error.csv");
-    csv.frames.open(o.out_dir + "/media_frames.csv");
+    const std::string base = o.out_dir + "/" + o.prefix;
+    csv.error.open(base + "_error.csv");
+    csv.frames.open(base + "_frames.csv");
     csv.error << "part,sigma_s,g,strategy,distance,connection,angular,mis,spp,seed,wall_s,"
                  "render_s,cube_relmse,frame_relmse,pixel_relmse,load1\n";
     csv.frames << "part,sigma_s,g,strategy,spp,frame,t,frame_relmse,pixel,pixel_ref,samples\n";
     {
-        std::ofstream meta(o.out_dir + "/media_meta.txt");
+        std::ofstream meta(base + "_meta.txt");
         meta << "date: " << now_utc() << "\ncpu: " << cpu_model() << " ("
              << sysconf(_SC_NPROCESSORS_ONLN) << " cores)\nbuild: " << FEMTO_BENCH_BUILD
              << "\nload before: " << read_loadavg() << "\nscene: scenes/fog-object, " << o.res
@@ -392,8 +417,12 @@ int main(int argc, char** argv) try {
                     }
         run(csv, "combos", {0.9, 0.0}, all, o.combo_budgets, o.combo_seeds, o, false);
     }
-    std::ofstream(o.out_dir + "/media_meta.txt", std::ios::app)
-        << "load after: " << read_loadavg() << "\n";
+    if (has("bdpt"))
+        for (double g : {0.0, 0.8, -0.8})
+            for (double sigma_s : {0.2, 0.9, 1.5})
+                run(csv, "bdpt", {sigma_s, g}, {kSteady, kBdptSteady, kBdptTime, kBdptExponential},
+                    o.budgets, o.seeds, o, false);
+    std::ofstream(base + "_meta.txt", std::ios::app) << "load after: " << read_loadavg() << "\n";
     return 0;
 } catch (const std::exception& e) {
     fmt::print(stderr, "femto_bench_media: {}\n", e.what());

@@ -30,6 +30,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from ratios import equal_error_spp  # noqa: E402
+
 RESULTS = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "results")
 
 
@@ -62,23 +64,6 @@ def curve(part, s, g, strategy, metric):
     pts = sorted((k[4], v[metric], v["wall"]) for k, v in med.items()
                  if k[0] == part and k[1] == s and k[2] == g and k[3] == strategy)
     return pts
-
-
-def equal_error_spp(steady, err):
-    """spp at which the steady curve reaches `err`: log-log interpolation between its medians,
-    extrapolation along slope -1 beyond them (flagged). Non-positive errors are skipped."""
-    pts = [(n, e, w) for n, e, w in steady if e > 0]
-    if not pts or err <= 0:
-        return float("nan"), float("nan"), "none"
-    for (n0, e0, w0), (n1, e1, w1) in zip(pts, pts[1:]):
-        if (e0 - err) * (e1 - err) <= 0 and e0 != e1:
-            f = (math.log(err) - math.log(e0)) / (math.log(e1) - math.log(e0))
-            n = math.exp(math.log(n0) + f * (math.log(n1) - math.log(n0)))
-            w = math.exp(math.log(w0) + f * (math.log(w1) - math.log(w0)))
-            return n, w, "interpolated"
-    n_last, e_last, w_last = pts[-1] if err < pts[-1][1] else pts[0]
-    n = n_last * e_last / err  # error ~ 1 / n
-    return n, w_last * n / n_last, "extrapolated"
 
 
 media = sorted({(k[1], k[2]) for k in med if k[0] == "media"})

@@ -221,26 +221,33 @@ TEST(Bdpt, BadInputIsALocatedError) {
 // path) biases the first.
 TEST(Bdpt, MisWeightsOfAPathSumToOne) {
     constexpr int kRuns = 16;
+    // In fog also with exponential distances MIS-combined with mean free paths: the weights then
+    // hold distance densities that differ between the strategies of one path.
+    const std::string exponential =
+        "<distance type=\"exponential\"/><boolean name=\"mis\" value=\"true\"/>";
     for (const bool fog : {false, true})
-        for (const int length : {2, 3}) {
-            SCOPED_TRACE(std::string(fog ? "fog" : "vacuum") + ", length " +
-                         std::to_string(length));
-            std::vector<std::pair<std::string, std::string>> defines = {
-                {"res", "16"}, {"bins", "128"}, {"spp", "16"}};
-            const Cells alone = cells_of(
-                strategy_runs("cornell-box", length, 1, length, defines, kRuns, fog), 4, 16);
-            std::string xml = with_integrator("cornell-box", "transient_bdpt", length, false);
-            xml = replace_element(xml, "<integrator", "</integrator>",
-                                  "<integrator type=\"transient_bdpt\"><integer "
-                                  "name=\"max_depth\" value=\"" +
-                                      std::to_string(length) +
-                                      "\"/><integer name=\"path_length\" value=\"" +
-                                      std::to_string(length) + "\"/></integrator>");
-            if (fog) xml = with_fog(xml);
-            LoadOptions options;
-            options.defines = defines;
-            const Cells weighted = cells_of(render_runs(xml, options, kRuns, 77, "mis"), 4, 16);
-            expect_agree(weighted, alone, kRuns,
-                         std::string("mis_") + (fog ? "fog" : "vacuum") + std::to_string(length));
-        }
+        for (const std::string& distance : {std::string(), exponential})
+            for (const int length : {2, 3}) {
+                if (!fog && !distance.empty()) continue;
+                SCOPED_TRACE(std::string(fog ? "fog" : "vacuum") + ", length " +
+                             std::to_string(length) + (distance.empty() ? "" : ", exponential"));
+                std::vector<std::pair<std::string, std::string>> defines = {
+                    {"res", "16"}, {"bins", "128"}, {"spp", "16"}};
+                const Cells alone = cells_of(
+                    strategy_runs("cornell-box", length, 1, length, defines, kRuns, fog), 4, 16);
+                std::string xml = with_integrator("cornell-box", "transient_bdpt", length, false);
+                xml = replace_element(
+                    xml, "<integrator", "</integrator>",
+                    "<integrator type=\"transient_bdpt\"><integer "
+                    "name=\"max_depth\" value=\"" +
+                        std::to_string(length) + "\"/><integer name=\"path_length\" value=\"" +
+                        std::to_string(length) + "\"/>" + distance + "</integrator>");
+                if (fog) xml = with_fog(xml);
+                LoadOptions options;
+                options.defines = defines;
+                const Cells weighted = cells_of(render_runs(xml, options, kRuns, 77, "mis"), 4, 16);
+                expect_agree(weighted, alone, kRuns,
+                             std::string("mis_") + (fog ? "fog" : "vacuum") +
+                                 (distance.empty() ? "" : "_exp") + std::to_string(length));
+            }
 }

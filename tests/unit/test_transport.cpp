@@ -197,6 +197,66 @@ TEST(ConnectionReach, AVertexAtTheReachArrivesExactlyAtTheWindow) {
     EXPECT_TRUE(std::isinf(connection_reach(o, d, target, 1.0, kInfinity)));
 }
 
+TEST(SegmentDensities, PiecesSeenFromEitherEnd) {
+    SegmentDensities none(nullptr, false, DistanceContext{});
+    EXPECT_EQ(none.forward(true), 1.0);
+    EXPECT_EQ(none.backward(false), 1.0);
+    SegmentDensities one = none;
+    one.add(0.5, 0.7);
+    EXPECT_EQ(one.forward(true), 0.7);
+    EXPECT_EQ(one.backward(true), 0.7);
+    EXPECT_EQ(one.forward(false), 0.5);
+    SegmentDensities three = none;
+    three.add(0.5, 0.7);
+    three.add(0.25, 0.3);
+    three.add(0.125, 0.2);
+    EXPECT_DOUBLE_EQ(three.forward(true), 0.5 * 0.25 * 0.2);
+    EXPECT_DOUBLE_EQ(three.backward(true), 0.125 * 0.25 * 0.7);
+    EXPECT_DOUBLE_EQ(three.forward(false), 0.5 * 0.25 * 0.125);
+    EXPECT_DOUBLE_EQ(three.backward(false), 0.5 * 0.25 * 0.125);
+    three.clear();
+    EXPECT_EQ(three.forward(true), 1.0);
+}
+
+TEST(SegmentDensities, MatchAWalkThatRestartsAtEachBoundary) {
+    // Two media pieces (rates 1.3 over 0.7, then 0.4 over 1.1), sampled as a walk does: an
+    // exponential in each piece, restarted at the boundary. The fraction passing both and the
+    // histogram of stops in the second piece match forward(false) and forward(true).
+    const double a = 0.7, b = 1.1, la = 1.3, lb = 0.4;
+    Pcg32 rng(7, 1);
+    constexpr int kN = 400000, kBins = 11;
+    int passed = 0;
+    std::vector<double> counts(kBins, 0.0);
+    for (int i = 0; i < kN; ++i) {
+        if (DistanceSampler::sample(la, rng.next_double()) < a) continue;
+        const double r = DistanceSampler::sample(lb, rng.next_double());
+        if (r >= b) {
+            ++passed;
+        } else {
+            counts[size_t(r / b * kBins)] += 1;
+        }
+    }
+    const auto densities = [&](double r) {
+        SegmentDensities seg(nullptr, false, DistanceContext{});
+        seg.add(DistanceSampler::survival(la, a), DistanceSampler::pdf(la, a));
+        seg.add(DistanceSampler::survival(lb, r), DistanceSampler::pdf(lb, r));
+        return seg;
+    };
+    const double p_pass = densities(b).forward(false);
+    EXPECT_NEAR(passed / double(kN), p_pass, 4 * std::sqrt(p_pass * (1 - p_pass) / kN));
+    double chi2 = 0;
+    for (int k = 0; k < kBins; ++k) {
+        const double r0 = b * k / kBins, r1 = b * (k + 1) / kBins;
+        // Expected count: the density integrated over the bin (Simpson, exact to 1e-7 here).
+        const double p =
+            (r1 - r0) / 6 *
+            (densities(r0).forward(true) + 4 * densities(0.5 * (r0 + r1)).forward(true) +
+             densities(r1).forward(true));
+        chi2 += (counts[size_t(k)] - kN * p) * (counts[size_t(k)] - kN * p) / (kN * p);
+    }
+    EXPECT_LT(chi2, 31.3);  // 10 dof, p = 5e-4
+}
+
 TEST(ShadowConnection, ThroughANullBoundedSlab) {
     // A slab 0.5 thick (z in [-0.25, 0.25]) of sigma_t 2 and index 1.5 behind null boundaries:
     // a connection from z = -3 to z = 3 keeps e^(-2 * 0.5) of the light and takes
@@ -222,6 +282,13 @@ TEST(ShadowConnection, ThroughANullBoundedSlab) {
     EXPECT_NEAR(c.transmittance.r, std::exp(-1.0),
                 std::exp(-1.0) * 2 * 2 * 5 * kRayOffsetScale + 1e-6);
     EXPECT_NEAR(c.optical_length, 5.5 + 1.5 * 0.5, 1e-6);
+    // The connection reports its one medium piece: mean-free-path sampling (sigma_t 2) passes
+    // the slab with probability e^(-1) and stops at its far side with density 2 e^(-1).
+    SegmentDensities segment(nullptr, false, DistanceContext{});
+    connect_to_light(*scene, Vec3(0.f, 0.f, -3.f), light, MediumTracker{}, s, &segment);
+    EXPECT_NEAR(segment.forward(false), std::exp(-1.0), 1e-5);
+    EXPECT_NEAR(segment.forward(true), 2 * std::exp(-1.0), 1e-5);
+    EXPECT_NEAR(segment.backward(true), 2 * std::exp(-1.0), 1e-5);
     // Blocked by an opaque surface.
     auto wall = load_scene_string(
         test::scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\"><scale "

@@ -28,7 +28,8 @@ namespace femto {
 /// (8: Hit::p_error; PathClock::travel_to() measures time between actual vertices.)
 /// (9: splats and light paths: Integrator::source()/sample_light()/begin_pass(), SplatList,
 ///  Film::add_splat_weight(), Sensor::sample_direct(), Emitter::sample_emission().)
-inline constexpr uint32_t kPluginAbiVersion = 9;
+/// (10: shadow connections report their medium pieces (MediumPieces); SegmentDensities.)
+inline constexpr uint32_t kPluginAbiVersion = 10;
 
 struct PluginDescriptor {
     uint32_t abi_version;

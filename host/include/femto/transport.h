@@ -8,6 +8,8 @@
 //     its transmittance and eta-weighted optical length;
 //   - DistanceMixture and sample_distance(): the distance strategy in a medium (ch. 5.6.1),
 //     alone or MIS-combined with mean-free-path sampling;
+//   - SegmentDensities: a segment's distance densities seen from either end, for the MIS
+//     weights of bidirectional estimators (shadow connections report their MediumPieces);
 //   - connection_reach(): how far along a segment a connection strategy's vertex may lie and
 //     still reach its light within the film's window (eq. 5.110-5.111);
 //   - light paths: LightPathStarts (where they start and in which medium), emission_ray(),
@@ -134,6 +136,17 @@ inline EmitterSample sample_emitter(const Scene& scene, const Vec3& ref, Sampler
     return scene.sample_emitter(ref, u_select, sampler.next_2d());
 }
 
+/// Receives the media a shadow connection crosses, one call per medium piece in order from the
+/// connection's start (pieces in vacuum are not reported): a bidirectional integrator weighs
+/// its strategies with the distance densities of these pieces (SegmentDensities).
+class MediumPieces {
+public:
+    virtual void piece(const Medium& medium, double length) = 0;
+
+protected:
+    ~MediumPieces() = default;
+};
+
 /// What light loses and how long it takes along a shadow connection.
 struct ShadowConnection {
     Color transmittance{1.f, 1.f, 1.f};  ///< black when something opaque blocks it
@@ -145,19 +158,23 @@ struct ShadowConnection {
 /// null surfaces (media boundaries), changing media there, and multiplies each medium's
 /// transmittance; blocked at any other surface. `from` and `to` are the connection's actual
 /// end points (the ray starts off a surface and stops short of the light): the optical length
-/// is measured between them and the boundaries crossed.
+/// is measured between them and the boundaries crossed. `pieces`, when given, hears of every
+/// medium piece of the connection (of all of it, so it is only meaningful when not blocked).
 ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, const Vec3& to,
-                              MediumTracker medium, Sampler& sampler);
+                              MediumTracker medium, Sampler& sampler,
+                              MediumPieces* pieces = nullptr);
 
 /// The shadow connection from surface vertex `from` to light sample `light`. Without media in
 /// the scene it is an occlusion test and light crosses `light.distance` in vacuum (a shadow
 /// ray cannot leave a dielectric: its surface blocks it).
 ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const EmitterSample& light,
-                                  const MediumTracker& medium, Sampler& sampler);
+                                  const MediumTracker& medium, Sampler& sampler,
+                                  MediumPieces* pieces = nullptr);
 
 /// The shadow connection from a point `x` inside `medium.medium` to light sample `light`.
 ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const EmitterSample& light,
-                                  const MediumTracker& medium, Sampler& sampler);
+                                  const MediumTracker& medium, Sampler& sampler,
+                                  MediumPieces* pieces = nullptr);
 
 // ---- light paths -----------------------------------------------------------------------------
 
@@ -211,12 +228,14 @@ inline Ray emission_ray(const EmissionSample& es) {
 /// seen by the camera), as connect_to_light() traces it: its transmittance and optical length
 /// (the splat's sensor distance).
 ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,
-                                   const MediumTracker& medium, Sampler& sampler);
+                                   const MediumTracker& medium, Sampler& sampler,
+                                   MediumPieces* pieces = nullptr);
 /// The same from a point `x` inside `medium.medium` or, with p_error > 0, on a surface of
 /// geometric normal `n` (an emitter's point: EmissionSample::n and p_error).
 ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const SensorSample& sensor,
                                    const MediumTracker& medium, Sampler& sampler,
-                                   const Vec3& n = Vec3(), float p_error = 0.f);
+                                   const Vec3& n = Vec3(), float p_error = 0.f,
+                                   MediumPieces* pieces = nullptr);
 
 /// Light paths see shading normals differently from camera paths (Veach 1997, sec. 5.3.2):
 /// a BSDF weight (eval() or a sample's weight, which use the shading cosine of `wo`) for light
@@ -267,6 +286,57 @@ public:
 private:
     double steady_, strategy_;
     bool mix_;
+};
+
+/// How likely distance sampling (a DistanceMixture in each medium, restarted at every boundary)
+/// is to reach the far end of a segment that crosses media in pieces, walking from either end:
+/// what a bidirectional integrator's MIS weights need of a segment that one strategy samples
+/// from its start, another from its end, and a third connects without sampling. An end that is
+/// a medium vertex is reached with the density (per unit length) of stopping there; an end on
+/// a surface with the probability of passing every piece. Vacuum pieces are passed surely.
+class SegmentDensities final : public MediumPieces {
+public:
+    SegmentDensities(const DistanceSampler* strategy, bool mis, const DistanceContext& ctx)
+        : strategy_(strategy), mis_(mis), ctx_(ctx) {}
+
+    /// Forgets the pieces: a new segment.
+    void clear() { *this = SegmentDensities(strategy_, mis_, ctx_); }
+    /// The next medium piece from the segment's start (MediumPieces).
+    void piece(const Medium& medium, double length) override {
+        const DistanceMixture m(medium, strategy_, mis_, ctx_);
+        add(m.survival(length), m.pdf(length));
+    }
+    /// The same with the piece's probability of passing it and density of stopping at its end.
+    void add(double survival, double density) {
+        if (pieces_ == 0) {
+            first_ = {survival, density};
+        } else {
+            after_first_ *= survival;
+            before_last_ *= last_.survival;
+        }
+        last_ = {survival, density};
+        ++pieces_;
+    }
+    /// Density of reaching the end walking from the start.
+    double forward(bool end_in_medium) const {
+        return pieces_ == 0 ? 1.0 : before_last_ * (end_in_medium ? last_.density : last_.survival);
+    }
+    /// Density of reaching the start walking from the end.
+    double backward(bool start_in_medium) const {
+        return pieces_ == 0 ? 1.0
+                            : after_first_ * (start_in_medium ? first_.density : first_.survival);
+    }
+
+private:
+    struct Piece {
+        double survival = 1.0, density = 0.0;
+    };
+    const DistanceSampler* strategy_;
+    bool mis_;
+    DistanceContext ctx_;
+    int pieces_ = 0;
+    Piece first_, last_;
+    double after_first_ = 1.0, before_last_ = 1.0;  // survival of all pieces but the first / last
 };
 
 /// A distance drawn along a ray in a medium: a medium vertex before the surface at `tmax`, or

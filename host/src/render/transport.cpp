@@ -27,7 +27,7 @@ double light_distance(const Vec3& from, const EmitterSample& light) {
 }  // namespace
 
 ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, const Vec3& to,
-                              MediumTracker medium, Sampler& sampler) {
+                              MediumTracker medium, Sampler& sampler, MediumPieces* pieces) {
     ShadowConnection c;
     Vec3 last = from;  // the latest actual point: lengths are measured between these
     for (int crossings = 0; crossings < 256; ++crossings) {
@@ -36,7 +36,9 @@ ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, con
         const double segment = found ? double(hit.t) : double(ray.tmax);
         if (medium.medium) c.transmittance *= medium.medium->transmittance(ray, segment, sampler);
         const Vec3 next = found ? hit.p : to;
-        c.optical_length += distance_between(last, next) * medium.eta();
+        const double length = distance_between(last, next);
+        if (pieces && medium.medium) pieces->piece(*medium.medium, length);
+        c.optical_length += length * medium.eta();
         last = next;
         if (!found) return c;
         if (!hit.shape->bsdf()->is_null() || c.blocked()) return {Color(0.f), 0.0};
@@ -49,7 +51,8 @@ ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, con
 }
 
 ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const EmitterSample& light,
-                                  const MediumTracker& medium, Sampler& sampler) {
+                                  const MediumTracker& medium, Sampler& sampler,
+                                  MediumPieces* pieces) {
     const Ray ray = from.spawn_to(light.p);
     if (!scene.has_media()) {
         if (scene.occluded(ray)) return {Color(0.f), 0.0};
@@ -57,13 +60,14 @@ ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const Emi
     }
     MediumTracker beyond = medium;
     beyond.medium = medium.beyond(from, light.wi);
-    return trace_shadow(scene, ray, from.p, light.p, beyond, sampler);
+    return trace_shadow(scene, ray, from.p, light.p, beyond, sampler, pieces);
 }
 
 ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const EmitterSample& light,
-                                  const MediumTracker& medium, Sampler& sampler) {
+                                  const MediumTracker& medium, Sampler& sampler,
+                                  MediumPieces* pieces) {
     const Ray ray{x, light.wi, 0.f, shadow_ray_length(light.distance, light.p)};
-    return trace_shadow(scene, ray, x, light.p, medium, sampler);
+    return trace_shadow(scene, ray, x, light.p, medium, sampler, pieces);
 }
 
 MediumTracker medium_at(const Scene& scene, const Vec3& p) {
@@ -127,7 +131,8 @@ MediumTracker LightPathStarts::medium(const Emitter& emitter, const EmissionSamp
 }
 
 ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,
-                                   const MediumTracker& medium, Sampler& sampler) {
+                                   const MediumTracker& medium, Sampler& sampler,
+                                   MediumPieces* pieces) {
     const Ray ray = from.spawn_to(sensor.p);
     if (!scene.has_media()) {
         if (scene.occluded(ray)) return {Color(0.f), 0.0};
@@ -135,18 +140,18 @@ ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const Se
     }
     MediumTracker beyond = medium;
     beyond.medium = medium.beyond(from, sensor.wi);
-    return trace_shadow(scene, ray, from.p, sensor.p, beyond, sampler);
+    return trace_shadow(scene, ray, from.p, sensor.p, beyond, sampler, pieces);
 }
 
 ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const SensorSample& sensor,
                                    const MediumTracker& medium, Sampler& sampler, const Vec3& n,
-                                   float p_error) {
+                                   float p_error, MediumPieces* pieces) {
     Ray ray{x, sensor.wi, 0.f, shadow_ray_length(float(sensor.distance), sensor.p)};
     if (p_error > 0) {
         ray.o = offset_origin(x, n, sensor.wi, p_error);
         ray.tmax = shadow_ray_length(length(sensor.p - ray.o), sensor.p);
     }
-    return trace_shadow(scene, ray, x, sensor.p, medium, sampler);
+    return trace_shadow(scene, ray, x, sensor.p, medium, sampler, pieces);
 }
 
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,

@@ -18,11 +18,11 @@
 // path's time is the light subpath's, plus the connection's optical length, plus the camera
 // subpath's (femto/path_clock.h). The window is checked before a connection's shadow ray.
 // Time sampling (ch. 5.6): the nested <distance> strategy (exponential, alone or MIS-combined
-// with mean free paths) draws the distances of both subpaths. The MIS weights use the
-// directional densities only (as pbrt-v3's volumetric BDPT): the same for every strategy of a
-// path, so they sum to 1 and the estimate stays unbiased, but they do not yet favour the
-// strategy whose distances fit the time window. The connection and angular strategies are
-// refused: a vertex placed on a connection, or a direction chosen by time, would be a strategy
+// with mean free paths) draws the distances of both subpaths, and its densities are in the MIS
+// weights (unlike pbrt-v3's volumetric BDPT): a segment's density from either end is that of
+// the walk stopping at, or passing through to, its far end (SegmentDensities), so the weights
+// favour the strategy whose distances fit the time window. The connection and angular strategies
+// are refused: a vertex placed on a connection, or a direction chosen by time, would be a strategy
 // of its own in the weights.
 #include <fmt/format.h>
 
@@ -62,7 +62,11 @@ struct Vertex {
     VertexEvent event;  // light subpaths: the material's event (light leaving carries it)
     // Densities of sampling this vertex from its subpath's previous vertex (fwd) and from the
     // next one (rev): area measure at surfaces, volume in media, per unit of area-light area.
-    float pdf_fwd = 0.f, pdf_rev = 0.f;
+    double pdf_fwd = 0, pdf_rev = 0;
+    // The distance densities of the segment from the previous vertex of its subpath to this
+    // one: of reaching this vertex walking from there (fwd), and of reaching there walking back
+    // from here (rev) (SegmentDensities; 1 in vacuum).
+    double segment_fwd = 1, segment_rev = 1;
     bool delta = false;  // scattered by a delta lobe: no connection can use it
 
     bool on_surface() const {
@@ -97,14 +101,21 @@ struct Subpaths {
 
 // pdf_dir (solid angle at `from`) as a density of `to`: area measure on a surface, volume
 // measure in a medium.
-float to_area(float pdf_dir, const Vertex& from, const Vertex& to) {
+double to_area(double pdf_dir, const Vertex& from, const Vertex& to) {
     const Vec3 d = to.p - from.p;
-    const float d2 = squared_length(d);
-    if (!(d2 > 0.f)) return 0.f;
-    float pdf = pdf_dir / d2;
-    if (to.on_surface()) pdf *= std::abs(dot(to.n, d)) / std::sqrt(d2);
+    const double d2 = double(squared_length(d));
+    if (!(d2 > 0)) return 0;
+    double pdf = pdf_dir / d2;
+    if (to.on_surface()) pdf *= double(std::abs(dot(to.n, d))) / std::sqrt(d2);
     return pdf;
 }
+
+// The distance densities of a connection, whose segment neither subpath sampled but other
+// strategies of the same path do: of reaching its light end walking from its camera end, and
+// the reverse (1 in vacuum).
+struct ConnectionDensities {
+    double at_light_end = 1, at_camera_end = 1;
+};
 
 // Direction from a to b.
 Vec3 towards(const Vertex& a, const Vertex& b) { return normalize(b.p - a.p); }
@@ -239,7 +250,7 @@ private:
     // A vertex on an emitter adds the strategy s = 0 at once.
     void camera_subpath(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
                         ContributionList& out, Subpaths& paths) const {
-        Walk walk{camera_ray, MediumTracker::at_sensor(scene)};
+        Walk walk{camera_ray, MediumTracker::at_sensor(scene), 0.0, segment_densities()};
         Vertex cam;
         cam.kind = Vertex::Kind::Camera;
         cam.p = camera_ray.o;
@@ -265,7 +276,7 @@ private:
             if (beta.is_black() || !(squared_length(v.p - paths.camera.back().p) > 0.f)) return;
             if (v.kind == Vertex::Kind::Surface || v.kind == Vertex::Kind::Medium)
                 clock.reach_vertex();
-            v.pdf_fwd = to_area(walk.pdf_dir, paths.camera.back(), v);
+            set_forward_density(walk, paths.camera.back(), v);
             paths.camera.push_back(v);
             if (v.emitter) emitter_hit(scene, sampler, paths, beta, clock, out);
             if (v.bsdf) apply_vertex_event(*v.bsdf, v.hit, sampler, clock, beta);
@@ -300,7 +311,7 @@ private:
         paths.light.push_back(light);
         paths.light_power.push_back(start.power());  // unused for the light vertex itself
         paths.light_clock.push_back(clock);
-        Walk walk{emission_ray(es), light.medium};
+        Walk walk{emission_ray(es), light.medium, 0.0, segment_densities()};
         walk.pdf_dir = es.pdf_direction;
         Color power = start.power();
         while (int(paths.light.size()) < limit) {
@@ -313,7 +324,7 @@ private:
                 return;
             power *= weight;
             if (power.is_black() || !(squared_length(v.p - paths.light.back().p) > 0.f)) return;
-            v.pdf_fwd = to_area(walk.pdf_dir, paths.light.back(), v);
+            set_forward_density(walk, paths.light.back(), v);
             if (v.bsdf) v.event = apply_vertex_event(*v.bsdf, v.hit, sampler, clock);
             paths.light.push_back(v);
             paths.light_power.push_back(power);
@@ -329,8 +340,20 @@ private:
     struct Walk {
         Ray ray;
         MediumTracker medium;
-        float pdf_dir = 0.f;  // density of ray.d at the walk's last vertex
+        double pdf_dir = 0;        // density of ray.d at the walk's last vertex
+        SegmentDensities segment;  // the media of the segment being walked
     };
+    SegmentDensities segment_densities() const {
+        return SegmentDensities(distance_.get(), mis_, DistanceContext{window_end_});
+    }
+
+    // The density of the walk reaching v from prev (direction and distance), and of the
+    // segment walked back.
+    static void set_forward_density(const Walk& walk, const Vertex& prev, Vertex& v) {
+        v.segment_fwd = walk.segment.forward(v.kind == Vertex::Kind::Medium);
+        v.segment_rev = walk.segment.backward(prev.kind == Vertex::Kind::Medium);
+        v.pdf_fwd = to_area(walk.pdf_dir, prev, v) * v.segment_fwd;
+    }
 
     // The next scattering vertex along walk.ray: a medium vertex (mean-free-path distances) or
     // a surface that is not `null` (null boundaries are crossed). `travel(p, eta)` moves the
@@ -339,6 +362,7 @@ private:
     template <typename Travel>
     bool next_vertex(const Scene& scene, Sampler& sampler, Walk& walk, Vertex& v, Color& weight,
                      Travel&& travel) const {
+        walk.segment.clear();
         for (int crossings = 0; crossings < 256; ++crossings) {
             Hit hit;
             const bool found = scene.intersect(walk.ray, hit);
@@ -349,6 +373,8 @@ private:
                 const double u = double(sampler.next_1d());
                 const DistanceSample ds =
                     sample_distance(*medium, walk.ray, tmax, strategy, u, sampler);
+                const double piece = ds.scattered ? ds.distance : tmax;
+                walk.segment.add(strategy.survival(piece), strategy.pdf(piece));
                 weight *= ds.weight;
                 if (ds.scattered) {
                     v.kind = Vertex::Kind::Medium;
@@ -391,7 +417,7 @@ private:
         Vertex& prev = path[path.size() - 2];
         const Vec3 wi = -walk.ray.d;
         Vec3 wo;
-        float pdf_rev_dir = 0.f;
+        double pdf_rev_dir = 0;
         if (v.kind == Vertex::Kind::Medium) {
             wo = v.phase->sample(wi, sampler.next_2d());
             walk.pdf_dir = v.phase->eval(wi, wo);
@@ -407,7 +433,7 @@ private:
             if (light) scatter *= adjoint_shading_factor(v.hit, wi, wo);
             if (bs.sampled_lobe & kBsdfDelta) {
                 v.delta = true;
-                walk.pdf_dir = 0.f;
+                walk.pdf_dir = 0;
             } else {
                 walk.pdf_dir = bs.pdf;
                 pdf_rev_dir = v.bsdf->pdf(v.hit, bs.wo, v.hit.wi);
@@ -416,7 +442,7 @@ private:
             walk.medium.cross(v.hit, wo);
             walk.ray = v.hit.spawn(wo);
         }
-        prev.pdf_rev = v.delta ? 0.f : to_area(pdf_rev_dir, v, prev);
+        prev.pdf_rev = v.delta ? 0 : to_area(pdf_rev_dir, v, prev) * v.segment_rev;
         return true;
     }
 
@@ -432,7 +458,7 @@ private:
         const Vertex& v = paths.camera.back();
         const Color Le = v.emitter->eval(v.hit, towards(v, paths.camera[size_t(t) - 2]));
         if (Le.is_black()) return;
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 0, t, nullptr, nullptr);
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 0, t, {}, nullptr, nullptr);
         const Color value = beta(Le * w);
         clock.record(value, *v.emitter, sampler);
         images_.add(0, t, out.film_position(), value);
@@ -454,11 +480,15 @@ private:
         const Color f_light = scattering(lv, to_camera, true);
         const Color f_camera = scattering(cv, to_light, false);
         if (f_light.is_black() || f_camera.is_black()) return;
-        const ShadowConnection c = connection(scene, sampler, cv, lv.p, to_light, distance);
+        SegmentDensities segment = segment_densities();
+        const ShadowConnection c =
+            connection(scene, sampler, cv, lv.p, to_light, distance, segment);
         if (c.blocked()) return;
         const Color arriving = leaving(lv.event, f_light * paths.light_power[size_t(s) - 1]);
         const float g = float(1.0 / (distance * distance));
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, t, nullptr, nullptr);
+        const ConnectionDensities cd{segment.forward(lv.kind == Vertex::Kind::Medium),
+                                     segment.backward(cv.kind == Vertex::Kind::Medium)};
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, t, cd, nullptr, nullptr);
         const Color value =
             paths.camera_beta[size_t(t) - 1](f_camera * arriving * c.transmittance) * (g * w);
         clock.record(value, light_clock, c.optical_length);
@@ -476,9 +506,11 @@ private:
         if (std::isfinite(ls.distance) && double(ls.distance) > clock.remaining()) return;
         const Color f = scattering(cv, ls.wi, false);
         if (f.is_black()) return;
-        const ShadowConnection c = cv.kind == Vertex::Kind::Surface
-                                       ? connect_to_light(scene, cv.hit, ls, cv.medium, sampler)
-                                       : connect_to_light(scene, cv.p, ls, cv.medium, sampler);
+        SegmentDensities segment = segment_densities();
+        const ShadowConnection c =
+            cv.kind == Vertex::Kind::Surface
+                ? connect_to_light(scene, cv.hit, ls, cv.medium, sampler, &segment)
+                : connect_to_light(scene, cv.p, ls, cv.medium, sampler, &segment);
         if (c.blocked()) return;
         Vertex light;
         light.kind = Vertex::Kind::Light;
@@ -489,7 +521,9 @@ private:
         light.emission.n = ls.n;
         light.emission.delta_position = ls.emitter->is_delta();  // no camera path hits it
         light.pdf_fwd = pdf_light_origin(scene, light);
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 1, t, &light, nullptr);
+        const ConnectionDensities cd{segment.forward(false),
+                                     segment.backward(cv.kind == Vertex::Kind::Medium)};
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 1, t, cd, &light, nullptr);
         const Color value = paths.camera_beta[size_t(t) - 1](f * ls.weight * c.transmittance) * w;
         clock.record(value, *ls.emitter, sampler, c.optical_length);
         images_.add(1, t, out.film_position(), value);
@@ -512,20 +546,23 @@ private:
             value = leaving(lv.event, f * paths.light_power[size_t(s) - 1]);
         }
         if (value.is_black()) return;
+        SegmentDensities segment = segment_densities();
         const ShadowConnection c =
             lv.kind == Vertex::Kind::Surface
-                ? connect_to_sensor(scene, lv.hit, ss, lv.medium, sampler)
+                ? connect_to_sensor(scene, lv.hit, ss, lv.medium, sampler, &segment)
                 : connect_to_sensor(scene, lv.p, ss,
                                     lv.kind == Vertex::Kind::Light
                                         ? starts_.medium(*lv.emitter, lv.emission, ss.wi)
                                         : lv.medium,
-                                    sampler, lv.n, lv.emission.p_error);
+                                    sampler, lv.n, lv.emission.p_error, &segment);
         if (c.blocked()) return;
         Vertex camera;
         camera.kind = Vertex::Kind::Camera;
         camera.p = ss.p;
         camera.pdf_fwd = 1.f;
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, 1, nullptr, &camera);
+        const ConnectionDensities cd{segment.backward(lv.kind == Vertex::Kind::Medium),
+                                     segment.forward(false)};
+        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, 1, cd, nullptr, &camera);
         const Color splat = value * c.transmittance * (ss.weight * w);
         clock.record(*out.splat_list(), ss.pos, splat, c.optical_length);
         images_.add(s, 1, ss.pos, splat);
@@ -542,23 +579,25 @@ private:
         return f;
     }
 
-    // The shadow connection from camera vertex cv toward point `to`.
+    // The shadow connection from camera vertex cv toward point `to`; `segment` hears of its
+    // media.
     static ShadowConnection connection(const Scene& scene, Sampler& sampler, const Vertex& cv,
-                                       const Vec3& to, const Vec3& dir, double distance) {
+                                       const Vec3& to, const Vec3& dir, double distance,
+                                       SegmentDensities& segment) {
         EmitterSample target;  // connect_to_light() needs only the point, direction, distance
         target.p = to;
         target.wi = dir;
         target.distance = float(distance);
         return cv.kind == Vertex::Kind::Surface
-                   ? connect_to_light(scene, cv.hit, target, cv.medium, sampler)
-                   : connect_to_light(scene, cv.p, target, cv.medium, sampler);
+                   ? connect_to_light(scene, cv.hit, target, cv.medium, sampler, &segment)
+                   : connect_to_light(scene, cv.p, target, cv.medium, sampler, &segment);
     }
 
     // ---- multiple importance sampling --------------------------------------------------------
 
     // Density with which vertex v, arrived at from direction w_prev (unit, toward where the
     // path came from; unused for end points), samples `next`, as a density of next.
-    float pdf(const Scene& scene, const Vertex& v, const Vec3& w_prev, const Vertex& next) const {
+    double pdf(const Scene& scene, const Vertex& v, const Vec3& w_prev, const Vertex& next) const {
         const Vec3 d = towards(v, next);
         switch (v.kind) {
             case Vertex::Kind::Camera:
@@ -571,11 +610,11 @@ private:
                 return to_area(v.bsdf->pdf(v.hit, v.hit.to_local(w_prev), v.hit.to_local(d)), v,
                                next);
         }
-        return 0.f;
+        return 0;
     }
     // Density with which an emitter at v sends light toward `next` (v on an emitter: a light
     // vertex, or a camera vertex that hit one).
-    static float pdf_light(const Vertex& v, const Vertex& next) {
+    static double pdf_light(const Vertex& v, const Vertex& next) {
         EmissionSample at = v.emission;
         at.p = v.p;
         at.n = v.n;
@@ -584,7 +623,7 @@ private:
         return to_area(dir, v, next);
     }
     // Density with which a light subpath starts at v (on an emitter).
-    static float pdf_light_origin(const Scene& scene, const Vertex& v) {
+    static double pdf_light_origin(const Scene& scene, const Vertex& v) {
         EmissionSample at;
         at.p = v.p;
         at.n = v.n;
@@ -596,13 +635,17 @@ private:
     // The weight of strategy (s, t) for the path it made: the heuristic over every strategy
     // (s', t') with s' + t' = s + t that could have sampled it (Veach 1997, ch. 10; pbrt-v3's
     // MISWeight). `light` / `camera` replace the end vertex a strategy sampled itself (s = 1:
-    // the light sample; t = 1: the sensor point).
-    float mis_weight(const Scene& scene, const Subpaths& paths, int s, int t, const Vertex* light,
+    // the light sample; t = 1: the sensor point). `connection` has the distance densities of
+    // the segment the strategy joined (s, t >= 1). A medium vertex's densities include those
+    // of the distance strategy that placed it, so the weights favour the strategies whose
+    // distances fit the path (the time-sampling strategies of ch. 5.6.1 among them).
+    float mis_weight(const Scene& scene, const Subpaths& paths, int s, int t,
+                     const ConnectionDensities& connection, const Vertex* light,
                      const Vertex* camera) const {
         // The path's vertices in light-to-camera order with the density of each from either
         // side: x_0 .. x_{s-1} the light vertices, x_s .. x_{n-1} the camera vertices reversed.
         struct Densities {
-            float from_light, from_camera;
+            double from_light, from_camera;
             bool delta;
         };
         const int n = s + t;
@@ -634,21 +677,21 @@ private:
         if (s > 0) {
             Densities& xs = x[size_t(s) - 1];
             xs.delta = false;
-            xt.from_light = pdf(scene, *qs, qs->wi, pt);
+            xt.from_light = pdf(scene, *qs, qs->wi, pt) * connection.at_camera_end;
             if (t > 1)
                 x[size_t(s) + 1].from_light =
-                    pdf(scene, pt, towards(pt, *qs), camera_vertex(t - 2));
-            xs.from_camera = pdf(scene, pt, pt.wi, *qs);
+                    pdf(scene, pt, towards(pt, *qs), camera_vertex(t - 2)) * pt.segment_rev;
+            xs.from_camera = pdf(scene, pt, pt.wi, *qs) * connection.at_light_end;
             if (s > 1)
                 x[size_t(s) - 2].from_camera =
-                    pdf(scene, *qs, towards(*qs, pt), light_vertex(s - 2));
+                    pdf(scene, *qs, towards(*qs, pt), light_vertex(s - 2)) * qs->segment_rev;
         } else {
             xt.from_light = pdf_light_origin(scene, pt);
-            x[size_t(s) + 1].from_light = pdf_light(pt, camera_vertex(t - 2));
+            x[size_t(s) + 1].from_light = pdf_light(pt, camera_vertex(t - 2)) * pt.segment_rev;
         }
         // Strategy k joins x_{k-1} and x_k; its density relative to strategy s is the product of
         // from_light / from_camera of the vertices in between.
-        auto remap = [](float f) { return f != 0.f ? f : 1.f; };
+        auto remap = [](double f) { return f != 0 ? f : 1.0; };
         auto h = [&](double r) { return power_ ? r * r : r; };
         // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
         const bool delta_light = s > 0 && light_vertex(0).emission.delta_position;
