@@ -174,7 +174,10 @@ struct AgreementCase {
     std::vector<std::pair<std::string, std::string>> defines;
     int spp_path, spp_light, block, group;
     std::string children = "";       // more XML inside the tested integrator
-    std::string path_children = "";  // and inside transient_path
+    std::string path_children = "";  // and inside the reference
+    // The reference integrator, rendered with spp_path samples (a light tracer where the path
+    // tracer's estimate is dominated by rare events).
+    std::string reference = "transient_path";
     // A cell counts when both estimates' relative errors are below this. Cells of rare events
     // (the first light of a dense medium: a few samples per run) have skewed distributions
     // whose spread over 16 runs understates their variance; a lower bound keeps them out.
@@ -194,7 +197,7 @@ inline void check_agreement(const AgreementCase& c,
     path_options.defines.push_back({"spp", std::to_string(c.spp_path)});
     light_options.defines.push_back({"spp", std::to_string(c.spp_light)});
     const auto path = render_runs(
-        with_integrator(c.scene, "transient_path", c.max_depth, c.hide_emitters, c.path_children),
+        with_integrator(c.scene, c.reference, c.max_depth, c.hide_emitters, c.path_children),
         path_options, kRuns, 100, "agree-path");
     const auto tested =
         render_runs(with_integrator(c.scene, integrator, c.max_depth, c.hide_emitters, c.children),
@@ -203,7 +206,9 @@ inline void check_agreement(const AgreementCase& c,
         load_scene_string(with_integrator(c.scene, "transient_path", c.max_depth, c.hide_emitters),
                           path_options, kScenes);
     const std::vector<bool> mask =
-        integrator == "transient_light" ? seen_through_connections(*scene) : std::vector<bool>();
+        integrator == "transient_light" || c.reference == "transient_light"
+            ? seen_through_connections(*scene)
+            : std::vector<bool>();
     ::testing::Test::RecordProperty("tested_integrator", integrator);
     expect_agree(cells_of(tested, c.block, c.group, mask), cells_of(path, c.block, c.group, mask),
                  kRuns, c.scene, c.resolved, c.min_share);

@@ -143,7 +143,104 @@ void check_strategies(const std::string& scene, bool fog, int segments,
     }
 }
 
+// An unbounded fog (sigma_s 0.4, sigma_a 0.05, isotropic) around the camera and a sphere lamp
+// (radius 0.3, 3 units ahead): every vertex between the camera and the lamp is a medium vertex,
+// and no boundary cuts a ray, so the connection strategy can place any of them.
+std::string open_fog_scene(const std::string& integrator, int spp) {
+    return "<scene version=\"3.0.0\"><medium type=\"homogeneous\" id=\"fog\"><float "
+           "name=\"sigma_s\" value=\"0.4\"/><float name=\"sigma_a\" value=\"0.05\"/></medium>" +
+           integrator +
+           "<sensor type=\"perspective\"><float name=\"fov\" value=\"50\"/><ref id=\"fog\"/>"
+           "<transform name=\"to_world\"><lookat origin=\"0,0,0\" target=\"0,0,-1\" "
+           "up=\"0,1,0\"/></transform><sampler type=\"independent\"><integer "
+           "name=\"sample_count\" value=\"" +
+           std::to_string(spp) +
+           "\"/></sampler><film type=\"transient\"><integer name=\"width\" value=\"8\"/>"
+           "<integer name=\"height\" value=\"8\"/><float name=\"bin_width\" value=\"0.25\"/>"
+           "<integer name=\"bins\" value=\"48\"/><rfilter type=\"box\"/><tfilter "
+           "type=\"histogram\"/></film></sensor><shape type=\"sphere\"><point name=\"center\" "
+           "value=\"0.4,0.3,-3\"/><float name=\"radius\" value=\"0.3\"/><bsdf "
+           "type=\"diffuse\"><float name=\"reflectance\" value=\"0\"/></bsdf><emitter "
+           "type=\"area\"><rgb name=\"radiance\" value=\"4,3,2\"/></emitter></shape></scene>";
+}
+
+// transient_bdpt on paths of `segments` segments in open_fog_scene() with `children` in the
+// integrator, 16 runs.
+std::vector<Cube> open_fog_runs(int segments, const std::string& children, int spp, uint64_t seed) {
+    const std::string integrator =
+        "<integrator type=\"transient_bdpt\"><integer name=\"max_depth\" value=\"" +
+        std::to_string(segments) + "\"/><integer name=\"path_length\" value=\"" +
+        std::to_string(segments) + "\"/>" + children + "</integrator>";
+    return render_runs(open_fog_scene(integrator, spp), LoadOptions{}, 16, seed, "open-fog");
+}
+
+// Strategy (s, t) alone, its last camera vertex placed by the connection strategy `connection`
+// when `placed`.
+std::vector<Cube> open_fog_strategy(int segments, int s, int t, bool placed,
+                                    const std::string& connection, int spp) {
+    return open_fog_runs(segments,
+                         "<integer name=\"strategy_s\" value=\"" + std::to_string(s) +
+                             "\"/><integer name=\"strategy_t\" value=\"" + std::to_string(t) +
+                             "\"/><boolean name=\"strategy_placed\" value=\"" +
+                             (placed ? "true" : "false") + "\"/><connection type=\"" + connection +
+                             "\"/>",
+                         spp, uint64_t(5000 + 100 * s + (placed ? 50 : 0)));
+}
+
 }  // namespace
+
+// The connection strategy's variants: the last camera vertex of strategy (s, t) placed on the
+// camera ray toward light vertex s - 1, alone and unweighted, estimate the same cube as light
+// sampling (1, t') alone, for paths of 2 and 3 segments. line_to_point's density does not
+// follow the lamp's 1 / r^2 near it (equiangular's does), so its estimates have heavy tails
+// there: at 64 spp the spread of 16 runs understates their variance, at 512 it does not.
+TEST(Bdpt, PlacedStrategiesAloneEstimateTheSameImage) {
+    constexpr int kRuns = 16;
+    struct Case {
+        int segments;
+        const char* connection;
+        int spp;
+    };
+    for (const Case& c : {Case{2, "equiangular", 64}, Case{2, "line_to_point", 64},
+                          Case{3, "equiangular", 64}, Case{3, "line_to_point", 512}}) {
+        const int n = c.segments + 1;
+        const Cells ref =
+            cells_of(open_fog_strategy(c.segments, 1, n - 1, false, c.connection, 64), 2, 8);
+        for (int s = 1; s <= n - 2; ++s) {
+            SCOPED_TRACE(std::string(c.connection) + " s=" + std::to_string(s) +
+                         " t=" + std::to_string(n - s));
+            const auto runs = open_fog_strategy(c.segments, s, n - s, true, c.connection, c.spp);
+            expect_agree(cells_of(runs, 2, 8), ref, kRuns,
+                         std::string("placed_") + c.connection + std::to_string(c.segments) + "_s" +
+                             std::to_string(s));
+        }
+    }
+}
+
+// The MIS weights of all strategies of a path, the connection strategy's variants among them,
+// sum to 1 (as in MisWeightsOfAPathSumToOne): in the open fog, paths of 2 and 3 segments with
+// every strategy weighted estimate the same cube as light sampling alone, for equiangular
+// placements, and line_to_point ones with exponential distances MIS-combined with mean free
+// paths.
+TEST(Bdpt, MisWeightsWithPlacedVerticesSumToOne) {
+    constexpr int kRuns = 16;
+    for (const int segments : {2, 3})
+        for (const char* children :
+             {"<connection type=\"equiangular\"/>",
+              "<connection type=\"line_to_point\"/><distance type=\"exponential\"/><boolean "
+              "name=\"mis\" value=\"true\"/>"}) {
+            SCOPED_TRACE(std::string(children) + " " + std::to_string(segments));
+            const Cells ref = cells_of(
+                open_fog_strategy(segments, 1, segments, false, "deterministic", 64), 2, 8);
+            const Cells weighted = cells_of(open_fog_runs(segments, children, 64, 77), 2, 8);
+            expect_agree(weighted, ref, kRuns,
+                         std::string("mis_placed_") +
+                             (std::string(children).find("equiangular") != std::string::npos
+                                  ? "equiangular"
+                                  : "line_to_point") +
+                             std::to_string(segments));
+        }
+}
 
 // The classic BDPT test: on the Cornell box (diffuse), paths of 3 segments by each of the four
 // strategies (0,4), (1,3), (2,2), (3,1).
@@ -167,6 +264,18 @@ TEST(Bdpt, BitIdenticalAcrossThreadCounts) {
 
 // Time sampling: exponential distances (alone, and MIS-combined with mean free paths) on both
 // subpaths, in fog-object, against the path tracer with steady sampling.
+// A collimated beam (a delta direction: its light vertex's position density moves to the next
+// vertex) in a forward-scattering medium behind null boundaries of index 1.33. Against the
+// light tracer: the path tracer finds the glow on the walls only when a bounce off a wall
+// crosses the beam, rare events that at 16384 spp still leave 16-pixel blocks 0.3-3x off
+// (while BDPT and the light tracer agree within 2-3 % on every lit block).
+TEST(Bdpt, AgreesWithLightTracerOnLaserTank) {
+    AgreementCase c{"laser-tank", 0,  false, {{"res", "16"}, {"bins", "60"}, {"bin_width", "1"}},
+                    256,          64, 2,     10};
+    c.reference = "transient_light";
+    check_agreement(c, "transient_bdpt");
+}
+
 TEST(Bdpt, AgreesWithPathTracerWithExponentialDistances) {
     AgreementCase c = fog_object_case();
     c.children = "<distance type=\"exponential\"/><boolean name=\"mis\" value=\"true\"/>";
@@ -175,42 +284,49 @@ TEST(Bdpt, AgreesWithPathTracerWithExponentialDistances) {
     check_agreement(c, "transient_bdpt");
 }
 
-// Unsupported time-sampling strategies, max_depth 0, Russian roulette and a collimated emitter
+// Connection strategies: vertices placed on the camera rays toward each light vertex
+// (equiangular; line_to_point with exponential distances), weighed by MIS with the rest.
+// Against BDPT without them, which agrees with the path tracer above: the path tracer's rare
+// first light out of the dense fog already takes the chi-square of that comparison to 583 of
+// a bound of 621 (mean 481), which leaves no room to see a bias of the new strategies.
+TEST(Bdpt, AgreesWithItselfWithConnectionStrategies) {
+    AgreementCase c = fog_object_case();
+    c.reference = "transient_bdpt";
+    c.path_children = "";
+    c.spp_path = c.spp_light;
+    c.children = "<connection type=\"equiangular\"/>";
+    check_agreement(c, "transient_bdpt");
+    c.children =
+        "<connection type=\"line_to_point\"/><distance type=\"exponential\"/><boolean "
+        "name=\"mis\" value=\"true\"/>";
+    check_agreement(c, "transient_bdpt");
+}
+
+// Unsupported time-sampling strategies, max_depth 0 and Russian roulette
 // are located errors naming what is supported. (An orthographic sensor is rendered without the
 // strategies t = 1: the conformance matrix's checks seen through one run on transient_bdpt.)
 TEST(Bdpt, BadInputIsALocatedError) {
     const std::string base = with_integrator("fog-object", "transient_bdpt", 0, false);
-    for (const char* strategy :
-         {"<connection type=\"equiangular\"/>", "<connection type=\"line_to_point\"/>",
-          "<angular type=\"time\"/>"}) {
+    for (const char* strategy : {"<angular type=\"time\"/>"}) {
         SCOPED_TRACE(strategy);
         const std::string xml = replace_element(
             base, "<integrator", "</integrator>",
             std::string("<integrator type=\"transient_bdpt\">") + strategy + "</integrator>");
         const std::string error = load_error(xml, {}, kScenes);
-        EXPECT_NE(error.find("but only the steady connection=deterministic and angular=phase"),
-                  std::string::npos)
-            << error;
+        EXPECT_NE(error.find("but only the steady angular=phase"), std::string::npos) << error;
     }
     for (const char* param :
          {"<integer name=\"max_depth\" value=\"0\"/>", "<integer name=\"rr_depth\" value=\"5\"/>",
-          "<string name=\"heuristic\" value=\"maximum\"/>"}) {
+          "<string name=\"heuristic\" value=\"maximum\"/>",
+          // the connection strategy's variant of no strategy, or with no connection strategy
+          "<boolean name=\"strategy_placed\" value=\"true\"/>",
+          "<integer name=\"strategy_s\" value=\"1\"/><integer name=\"strategy_t\" "
+          "value=\"2\"/><boolean name=\"strategy_placed\" value=\"true\"/>"}) {
         SCOPED_TRACE(param);
         const std::string xml = replace_element(
             base, "<integrator", "</integrator>",
             std::string("<integrator type=\"transient_bdpt\">") + param + "</integrator>");
         EXPECT_NE(load_error(xml, {}, kScenes).find(":"), std::string::npos);
-    }
-    // The collimated laser-tank: refused when rendering starts.
-    for (const char* scene : {"laser-tank"}) {
-        auto loaded =
-            load_scene_string(with_integrator(scene, "transient_bdpt", 0, false), {}, kScenes);
-        try {
-            render(*loaded, RenderOptions{});
-            ADD_FAILURE() << scene << " was accepted";
-        } catch (const SceneError& e) {
-            EXPECT_NE(std::string(e.what()).find("collimated"), std::string::npos) << e.what();
-        }
     }
 }
 

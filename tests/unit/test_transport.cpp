@@ -206,6 +206,11 @@ TEST(SegmentDensities, PiecesSeenFromEitherEnd) {
     EXPECT_EQ(one.forward(true), 0.7);
     EXPECT_EQ(one.backward(true), 0.7);
     EXPECT_EQ(one.forward(false), 0.5);
+    EXPECT_TRUE(one.single_medium());
+    SegmentDensities with_vacuum = one;
+    with_vacuum.add_vacuum();
+    EXPECT_FALSE(with_vacuum.single_medium());
+    EXPECT_EQ(with_vacuum.forward(true), 0.7);  // vacuum is passed surely
     SegmentDensities three = none;
     three.add(0.5, 0.7);
     three.add(0.25, 0.3);
@@ -289,6 +294,7 @@ TEST(ShadowConnection, ThroughANullBoundedSlab) {
     EXPECT_NEAR(segment.forward(false), std::exp(-1.0), 1e-5);
     EXPECT_NEAR(segment.forward(true), 2 * std::exp(-1.0), 1e-5);
     EXPECT_NEAR(segment.backward(true), 2 * std::exp(-1.0), 1e-5);
+    EXPECT_FALSE(segment.single_medium());  // vacuum, the slab, vacuum
     // Blocked by an opaque surface.
     auto wall = load_scene_string(
         test::scene_xml("<shape type=\"rectangle\"><transform name=\"to_world\"><scale "

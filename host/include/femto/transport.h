@@ -136,12 +136,12 @@ inline EmitterSample sample_emitter(const Scene& scene, const Vec3& ref, Sampler
     return scene.sample_emitter(ref, u_select, sampler.next_2d());
 }
 
-/// Receives the media a shadow connection crosses, one call per medium piece in order from the
-/// connection's start (pieces in vacuum are not reported): a bidirectional integrator weighs
-/// its strategies with the distance densities of these pieces (SegmentDensities).
+/// Receives the pieces a shadow connection crosses between boundaries, in order from the
+/// connection's start (`medium` null in vacuum): a bidirectional integrator weighs its
+/// strategies with the distance densities of these pieces (SegmentDensities).
 class MediumPieces {
 public:
-    virtual void piece(const Medium& medium, double length) = 0;
+    virtual void piece(const Medium* medium, double length) = 0;
 
 protected:
     ~MediumPieces() = default;
@@ -213,9 +213,18 @@ public:
 
     /// The medium light leaving emission sample `es` of `emitter` in direction `d` travels in.
     MediumTracker medium(const Emitter& emitter, const EmissionSample& es, const Vec3& d) const;
+    /// Whether `emitter` sends its light in a single direction (collimated), as its emission
+    /// samples say.
+    bool delta_direction(const Emitter& emitter) const;
 
 private:
-    std::vector<std::pair<const Emitter*, const Medium*>> surrounding_;
+    struct Known {
+        const Emitter* emitter;
+        const Medium* surrounding;
+        bool delta_direction;
+    };
+    const Known* find(const Emitter& emitter) const;
+    std::vector<Known> emitters_;
 };
 
 /// The first ray of a light path: from es.p (off its surface by es.p_error) along es.d.
@@ -301,31 +310,37 @@ public:
 
     /// Forgets the pieces: a new segment.
     void clear() { *this = SegmentDensities(strategy_, mis_, ctx_); }
-    /// The next medium piece from the segment's start (MediumPieces).
-    void piece(const Medium& medium, double length) override {
-        const DistanceMixture m(medium, strategy_, mis_, ctx_);
+    /// The next piece from the segment's start (MediumPieces; null: vacuum).
+    void piece(const Medium* medium, double length) override {
+        if (!medium) return add_vacuum();
+        const DistanceMixture m(*medium, strategy_, mis_, ctx_);
         add(m.survival(length), m.pdf(length));
     }
-    /// The same with the piece's probability of passing it and density of stopping at its end.
+    /// A piece in vacuum (passed surely).
+    void add_vacuum() { ++pieces_; }
+    /// A medium piece with its probability of passing it and density of stopping at its end.
     void add(double survival, double density) {
-        if (pieces_ == 0) {
+        ++pieces_;
+        if (media_ == 0) {
             first_ = {survival, density};
         } else {
             after_first_ *= survival;
             before_last_ *= last_.survival;
         }
         last_ = {survival, density};
-        ++pieces_;
+        ++media_;
     }
     /// Density of reaching the end walking from the start.
     double forward(bool end_in_medium) const {
-        return pieces_ == 0 ? 1.0 : before_last_ * (end_in_medium ? last_.density : last_.survival);
+        return media_ == 0 ? 1.0 : before_last_ * (end_in_medium ? last_.density : last_.survival);
     }
     /// Density of reaching the start walking from the end.
     double backward(bool start_in_medium) const {
-        return pieces_ == 0 ? 1.0
-                            : after_first_ * (start_in_medium ? first_.density : first_.survival);
+        return media_ == 0 ? 1.0
+                           : after_first_ * (start_in_medium ? first_.density : first_.survival);
     }
+    /// Whether the segment lies in one medium, with no boundary on it.
+    bool single_medium() const { return pieces_ == 1 && media_ == 1; }
 
 private:
     struct Piece {
@@ -334,7 +349,7 @@ private:
     const DistanceSampler* strategy_;
     bool mis_;
     DistanceContext ctx_;
-    int pieces_ = 0;
+    int pieces_ = 0, media_ = 0;  // all pieces; those in a medium
     Piece first_, last_;
     double after_first_ = 1.0, before_last_ = 1.0;  // survival of all pieces but the first / last
 };

@@ -37,7 +37,7 @@ ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, con
         if (medium.medium) c.transmittance *= medium.medium->transmittance(ray, segment, sampler);
         const Vec3 next = found ? hit.p : to;
         const double length = distance_between(last, next);
-        if (pieces && medium.medium) pieces->piece(*medium.medium, length);
+        if (pieces) pieces->piece(medium.medium, length);
         c.optical_length += length * medium.eta();
         last = next;
         if (!found) return c;
@@ -97,7 +97,7 @@ MediumTracker medium_at_emission(const Emitter& emitter, const EmissionSample& e
 }
 
 void LightPathStarts::prepare(const Scene& scene, const std::string& integrator) {
-    surrounding_.clear();
+    emitters_.clear();
     for (const Emitter* emitter : scene.emitters()) {
         EmissionSample es;  // any valid sample: a plugin without sample_emission() has none
         for (const float u : {0.5f, 0.25f, 0.75f})
@@ -108,7 +108,7 @@ void LightPathStarts::prepare(const Scene& scene, const std::string& integrator)
                                                       "\" emitter (it does not sample its "
                                                       "emission)");
         const Vec3 off = es.p_error > 0 ? offset_origin(es.p, es.n, es.d, es.p_error) : es.p;
-        surrounding_.push_back({emitter, medium_at(scene, off).medium});
+        emitters_.push_back({emitter, medium_at(scene, off).medium, es.delta_direction});
     }
 }
 
@@ -122,12 +122,21 @@ LightPathStarts::Start LightPathStarts::sample(const Scene& scene, Sampler& samp
     return start;
 }
 
+const LightPathStarts::Known* LightPathStarts::find(const Emitter& emitter) const {
+    for (const Known& k : emitters_)
+        if (k.emitter == &emitter) return &k;
+    return nullptr;
+}
+
 MediumTracker LightPathStarts::medium(const Emitter& emitter, const EmissionSample& es,
                                       const Vec3& d) const {
-    const Medium* around = nullptr;
-    for (const auto& [e, m] : surrounding_)
-        if (e == &emitter) around = m;
-    return medium_at_emission(emitter, es, d, around);
+    const Known* k = find(emitter);
+    return medium_at_emission(emitter, es, d, k ? k->surrounding : nullptr);
+}
+
+bool LightPathStarts::delta_direction(const Emitter& emitter) const {
+    const Known* k = find(emitter);
+    return k && k->delta_direction;
 }
 
 ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,

@@ -13,6 +13,7 @@
 //     camera vertex on an emitter adds the strategy s = 0 as soon as it is found;
 //   - connect(): the strategies with s >= 1 and t >= 1: the light sample (s = 1), the sensor
 //     connection (t = 1, a splat onto the film), and the general connection;
+//   - place_and_connect(): the connection strategy's variants (below);
 //   - mis_weight(): the heuristic over the path's strategies, from the vertices' densities.
 // Time: each camera vertex keeps its PathClock and each light vertex its LightClock; a joined
 // path's time is the light subpath's, plus the connection's optical length, plus the camera
@@ -21,9 +22,14 @@
 // with mean free paths) draws the distances of both subpaths, and its densities are in the MIS
 // weights (unlike pbrt-v3's volumetric BDPT): a segment's density from either end is that of
 // the walk stopping at, or passing through to, its far end (SegmentDensities), so the weights
-// favour the strategy whose distances fit the time window. The connection and angular strategies
-// are refused: a vertex placed on a connection, or a direction chosen by time, would be a strategy
-// of its own in the weights.
+// favour the strategy whose distances fit the time window. The nested <connection> strategy
+// (line_to_point, equiangular; Fig. 5.6 middle) adds a variant of each strategy (s, t >= 2):
+// its last camera vertex placed on the camera subpath's ray toward light vertex s - 1 instead
+// of by a distance, on the ray's first piece if that lies in a medium; MIS weighs every variant
+// of every strategy (placement_factor()). The angular strategy is refused: a direction chosen
+// by time would need the distance drawn after it in the weights of the other strategies.
+// Delta lights: a point or spot light is never hit (no s = 0); a collimated beam is never hit
+// either, and its vertex's position density moves to the next vertex (pdf_light()).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -67,7 +73,9 @@ struct Vertex {
     // one: of reaching this vertex walking from there (fwd), and of reaching there walking back
     // from here (rev) (SegmentDensities; 1 in vacuum).
     double segment_fwd = 1, segment_rev = 1;
-    bool delta = false;  // scattered by a delta lobe: no connection can use it
+    double segment_optical = 0;          // its optical length
+    bool segment_single_medium = false;  // it lies in one medium, with no boundary on it
+    bool delta = false;                  // scattered by a delta lobe: no connection can use it
 
     bool on_surface() const {
         return kind == Kind::Surface || (kind == Kind::Light && n != Vec3());
@@ -93,9 +101,20 @@ struct Subpaths {
     std::vector<PathClock> camera_clock;  // after the vertex's delay
     std::vector<Color> light_power;       // light arriving (before the vertex's event and BSDF)
     std::vector<LightClock> light_clock;  // after the vertex's delay
+    // The ray each camera vertex's walk left along, on which connection strategies place
+    // vertices (camera_out[j] leaves camera[j]).
+    struct Outgoing {
+        Ray ray;
+        double pdf_dir;        // its direction's density (solid angle)
+        double first_end;      // where its first piece ends (the first surface it meets)
+        MediumTracker medium;  // the medium of that piece
+        Throughput beta;       // the camera path's weight along it
+    };
+    std::vector<Outgoing> camera_out;
+    double emission_time = 0;  // the light subpath's
     void clear() {
         camera.clear(), light.clear(), camera_beta.clear(), camera_clock.clear();
-        light_power.clear(), light_clock.clear();
+        light_power.clear(), light_clock.clear(), camera_out.clear();
     }
 };
 
@@ -110,11 +129,16 @@ double to_area(double pdf_dir, const Vertex& from, const Vertex& to) {
     return pdf;
 }
 
-// The distance densities of a connection, whose segment neither subpath sampled but other
-// strategies of the same path do: of reaching its light end walking from its camera end, and
-// the reverse (1 in vacuum).
-struct ConnectionDensities {
+// What a strategy's own connection adds to the path, for its MIS weight: the joining segment's
+// distance densities (which neither subpath sampled but other strategies of the same path do:
+// of reaching its light end walking from its camera end, and the reverse; 1 in vacuum), its
+// optical length and whether it lies in one medium, and the whole path's optical length and
+// delays (its time without the emission time).
+struct Join {
     double at_light_end = 1, at_camera_end = 1;
+    double optical = 0;
+    bool single_medium = false;
+    double path_time = 0;
 };
 
 // Direction from a to b.
@@ -150,7 +174,16 @@ public:
         distance_ = std::static_pointer_cast<DistanceSampler>(
             props.child(PluginKind::Distance, "mean_free_path"));
         mis_ = props.get_bool("mis", false);
-        check_steady(props, PluginKind::Connection, "connection", "deterministic");
+        // Connection strategies place vertices on the camera subpath's rays (place_and_connect).
+        connection_ = std::static_pointer_cast<ConnectionSampler>(
+            props.child(PluginKind::Connection, "deterministic"));
+        connecting_ = connection_->places_vertex();
+        only_placed_ = props.get_bool("strategy_placed", false);
+        if (only_placed_ && (only_s_ < 0 || !connecting_))
+            props.fail("strategy_placed",
+                       "strategy_placed renders the connection strategy's variant of (strategy_s, "
+                       "strategy_t) alone: it needs those and a <connection> strategy that places "
+                       "vertices (line_to_point or equiangular)");
         check_steady(props, PluginKind::Angular, "angular", "phase");
     }
 
@@ -172,12 +205,6 @@ public:
             images_.prepare(film.width(), film.height(), int(max_depth()));
         }
         distance_->prepare({window_end_});
-        for (const Emitter* e : scene.emitters())
-            if (e->type_name() == "collimated")
-                throw SceneError(e->location(),
-                                 "transient_bdpt does not support collimated emitters yet (a "
-                                 "delta direction needs its own MIS densities); use "
-                                 "transient_path or transient_light");
         starts_.prepare(scene, "transient_bdpt");
     }
 
@@ -194,6 +221,7 @@ public:
                 if (!wanted(s, t)) continue;
                 connect(scene, sampler, paths, s, t, out);
             }
+        if (connecting_) place_and_connect(scene, sampler, paths, out);
     }
 
     // strategy_images: one steady EXR per strategy (docs/outputs.md).
@@ -226,17 +254,21 @@ private:
         const auto child = props.child(kind, steady);
         if (child && child->type_name() != steady)
             props.fail(tag, std::string("transient_bdpt supports the distance strategies "
-                                        "(mean_free_path, exponential, with or without mis) "
-                                        "but only the steady connection=deterministic and "
+                                        "(mean_free_path, exponential, with or without mis) and "
+                                        "the connection strategies (deterministic, "
+                                        "line_to_point, equiangular) but only the steady "
                                         "angular=phase, not <") +
                                 tag + " type=\"" + child->type_name() + "\">");
     }
 
     // Whether strategy (s, t) is rendered (all, unless a debugging parameter picks some).
-    bool wanted(int s, int t) const {
-        return (only_s_ < 0 || (s == only_s_ && t == only_t_)) &&
-               (only_length_ < 0 || s + t - 1 == only_length_);
+    // `placed`: the connection strategy's variant of (s, t).
+    bool wanted(int s, int t, bool placed = false) const {
+        const bool chosen = only_s_ < 0 || (s == only_s_ && t == only_t_ && placed == only_placed_);
+        return chosen && (only_length_ < 0 || s + t - 1 == only_length_);
     }
+    // Debugging: one strategy alone, unweighted.
+    bool unweighted() const { return only_s_ >= 0; }
 
     int max_vertices(bool camera) const {
         constexpr int kCap = 1024;  // unbounded paths: the window ends them long before
@@ -262,14 +294,19 @@ private:
         paths.camera_beta.push_back(beta);
         paths.camera_clock.push_back(clock);
         walk.pdf_dir = scene.sensor().pdf_direction(camera_ray.d);
+        paths.camera_out.push_back({walk.ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         while (int(paths.camera.size()) < max_vertices(true)) {
             Vertex v;
             Color weight(1.f);
-            if (!next_vertex(scene, sampler, walk, v, weight, [&](const Vec3& p, double eta) {
+            const double before = clock.time();
+            const bool found =
+                next_vertex(scene, sampler, walk, v, weight, [&](const Vec3& p, double eta) {
                     clock.travel_to(p, eta);
                     return !clock.expired();
-                }))
-                return;
+                });
+            paths.camera_out.back().first_end = walk.first_end;
+            if (!found) return;
+            v.segment_optical = clock.time() - before;
             beta *= weight;
             // A vertex on top of the previous one (a distance that rounds to 0) has no direction
             // to or from it: the walk ends (an event of probability zero in exact arithmetic).
@@ -286,6 +323,7 @@ private:
             Color scatter;
             if (!scatter_from(sampler, walk, paths.camera, false, scatter)) return;
             beta *= scatter;
+            paths.camera_out.push_back({walk.ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         }
     }
 
@@ -304,9 +342,10 @@ private:
         light.n = es.n;
         light.emitter = emitter;
         light.emission = es;
-        light.pdf_fwd = es.pdf_position * pmf;
+        light.pdf_fwd = es.delta_direction ? pmf : es.pdf_position * pmf;  // pdf_light()
         light.medium = starts_.medium(*emitter, es, es.d);
         LightClock clock(scene, *emitter, es.p, sampler);
+        paths.emission_time = clock.time();
         if (clock.expired()) return;
         paths.light.push_back(light);
         paths.light_power.push_back(start.power());  // unused for the light vertex itself
@@ -317,11 +356,13 @@ private:
         while (int(paths.light.size()) < limit) {
             Vertex v;
             Color weight(1.f);
+            const double before = clock.time();
             if (!next_vertex(scene, sampler, walk, v, weight, [&](const Vec3& p, double eta) {
                     clock.travel_to(p, eta);
                     return !clock.expired();
                 }))
                 return;
+            v.segment_optical = clock.time() - before;
             power *= weight;
             if (power.is_black() || !(squared_length(v.p - paths.light.back().p) > 0.f)) return;
             set_forward_density(walk, paths.light.back(), v);
@@ -340,8 +381,9 @@ private:
     struct Walk {
         Ray ray;
         MediumTracker medium;
-        double pdf_dir = 0;        // density of ray.d at the walk's last vertex
-        SegmentDensities segment;  // the media of the segment being walked
+        double pdf_dir = 0;            // density of ray.d at the walk's last vertex
+        SegmentDensities segment;      // the media of the segment being walked
+        double first_end = kInfinity;  // where the ray's first piece ends (its first surface)
     };
     SegmentDensities segment_densities() const {
         return SegmentDensities(distance_.get(), mis_, DistanceContext{window_end_});
@@ -352,7 +394,10 @@ private:
     static void set_forward_density(const Walk& walk, const Vertex& prev, Vertex& v) {
         v.segment_fwd = walk.segment.forward(v.kind == Vertex::Kind::Medium);
         v.segment_rev = walk.segment.backward(prev.kind == Vertex::Kind::Medium);
-        v.pdf_fwd = to_area(walk.pdf_dir, prev, v) * v.segment_fwd;
+        v.segment_single_medium = walk.segment.single_medium();
+        const double direction =
+            prev.kind == Vertex::Kind::Light ? pdf_light(prev, v) : to_area(walk.pdf_dir, prev, v);
+        v.pdf_fwd = direction * v.segment_fwd;
     }
 
     // The next scattering vertex along walk.ray: a medium vertex (mean-free-path distances) or
@@ -366,6 +411,7 @@ private:
         for (int crossings = 0; crossings < 256; ++crossings) {
             Hit hit;
             const bool found = scene.intersect(walk.ray, hit);
+            if (crossings == 0) walk.first_end = found ? double(hit.t) : kInfinity;
             if (const Medium* medium = walk.medium.medium) {
                 const DistanceMixture strategy(*medium, distance_.get(), mis_,
                                                DistanceContext{window_end_});
@@ -385,6 +431,8 @@ private:
                     return travel(v.p, medium->eta()) && !weight.is_black();
                 }
                 if (!found || weight.is_black()) return false;
+            } else {
+                walk.segment.add_vacuum();
             }
             if (!found || !travel(hit.p, walk.medium.eta())) return false;
             const Bsdf& bsdf = *hit.shape->bsdf();
@@ -458,7 +506,9 @@ private:
         const Vertex& v = paths.camera.back();
         const Color Le = v.emitter->eval(v.hit, towards(v, paths.camera[size_t(t) - 2]));
         if (Le.is_black()) return;
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 0, t, {}, nullptr, nullptr);
+        Join join;
+        join.path_time = clock.time();
+        const float w = unweighted() ? 1.f : mis_weight(scene, paths, 0, t, join, nullptr, nullptr);
         const Color value = beta(Le * w);
         clock.record(value, *v.emitter, sampler);
         images_.add(0, t, out.film_position(), value);
@@ -486,9 +536,11 @@ private:
         if (c.blocked()) return;
         const Color arriving = leaving(lv.event, f_light * paths.light_power[size_t(s) - 1]);
         const float g = float(1.0 / (distance * distance));
-        const ConnectionDensities cd{segment.forward(lv.kind == Vertex::Kind::Medium),
-                                     segment.backward(cv.kind == Vertex::Kind::Medium)};
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, t, cd, nullptr, nullptr);
+        const Join join{segment.forward(lv.kind == Vertex::Kind::Medium),
+                        segment.backward(cv.kind == Vertex::Kind::Medium), c.optical_length,
+                        segment.single_medium(),
+                        clock.time() + c.optical_length + light_clock.time() - paths.emission_time};
+        const float w = unweighted() ? 1.f : mis_weight(scene, paths, s, t, join, nullptr, nullptr);
         const Color value =
             paths.camera_beta[size_t(t) - 1](f_camera * arriving * c.transmittance) * (g * w);
         clock.record(value, light_clock, c.optical_length);
@@ -520,10 +572,11 @@ private:
         light.emission.p = ls.p;
         light.emission.n = ls.n;
         light.emission.delta_position = ls.emitter->is_delta();  // no camera path hits it
+        light.emission.delta_direction = starts_.delta_direction(*ls.emitter);
         light.pdf_fwd = pdf_light_origin(scene, light);
-        const ConnectionDensities cd{segment.forward(false),
-                                     segment.backward(cv.kind == Vertex::Kind::Medium)};
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, 1, t, cd, &light, nullptr);
+        const Join join{segment.forward(false), segment.backward(cv.kind == Vertex::Kind::Medium),
+                        c.optical_length, segment.single_medium(), clock.time() + c.optical_length};
+        const float w = unweighted() ? 1.f : mis_weight(scene, paths, 1, t, join, &light, nullptr);
         const Color value = paths.camera_beta[size_t(t) - 1](f * ls.weight * c.transmittance) * w;
         clock.record(value, *ls.emitter, sampler, c.optical_length);
         images_.add(1, t, out.film_position(), value);
@@ -560,12 +613,88 @@ private:
         camera.kind = Vertex::Kind::Camera;
         camera.p = ss.p;
         camera.pdf_fwd = 1.f;
-        const ConnectionDensities cd{segment.backward(lv.kind == Vertex::Kind::Medium),
-                                     segment.forward(false)};
-        const float w = only_s_ >= 0 ? 1.f : mis_weight(scene, paths, s, 1, cd, nullptr, &camera);
+        const Join join{segment.backward(lv.kind == Vertex::Kind::Medium), segment.forward(false),
+                        c.optical_length, segment.single_medium(),
+                        clock.time() - paths.emission_time + c.optical_length};
+        const float w = unweighted() ? 1.f : mis_weight(scene, paths, s, 1, join, nullptr, &camera);
         const Color splat = value * c.transmittance * (ss.weight * w);
         clock.record(*out.splat_list(), ss.pos, splat, c.optical_length);
         images_.add(s, 1, ss.pos, splat);
+    }
+
+    // Connection strategies (ch. 5.6.2, Fig. 5.6 middle): on the first piece of each ray the
+    // camera subpath left along through a medium, a vertex placed by the <connection> strategy
+    // aiming at each light vertex and joined to it. The placed vertex takes the place of the
+    // distance-sampled last camera vertex of strategy (s, t); MIS weighs both variants.
+    void place_and_connect(const Scene& scene, Sampler& sampler, const Subpaths& paths,
+                           ContributionList& out) const {
+        const int nl = int(paths.light.size());
+        for (size_t j = 0; j < paths.camera_out.size(); ++j) {
+            if (!paths.camera_out[j].medium.medium) continue;
+            const int t = int(j) + 2;  // the camera vertices up to camera[j], and the placed one
+            for (int s = 1; s <= nl; ++s) {
+                if (max_depth() >= 0 && s + t - 1 > max_depth()) break;
+                if (wanted(s, t, true)) connect_placed(scene, sampler, paths, j, s, out);
+            }
+        }
+    }
+
+    // Places a vertex on camera_out[j] aiming at light vertex s - 1 and joins them.
+    void connect_placed(const Scene& scene, Sampler& sampler, const Subpaths& paths, size_t j,
+                        int s, ContributionList& out) const {
+        const Subpaths::Outgoing& ray = paths.camera_out[j];
+        const Vertex& lv = paths.light[size_t(s) - 1];
+        const LightClock& light_clock = paths.light_clock[size_t(s) - 1];
+        const PathClock& from = paths.camera_clock[j];
+        const Medium& medium = *ray.medium.medium;
+        const ConnectionQuery q =
+            placement_query(scene, ray.ray.o, ray.ray.d, lv.p, medium.eta(),
+                            from.time() + light_clock.time() - paths.emission_time);
+        const double u = double(sampler.next_1d());
+        if (!lv.connectible() || !(q.length > 0)) return;
+        const double r = connection_->sample(q, u);
+        const double pc = r >= 0 && r < ray.first_end ? connection_->pdf(q, r) : 0.0;
+        if (!(pc > 0)) return;
+        Vertex x;
+        x.kind = Vertex::Kind::Medium;
+        x.p = ray.ray.at(float(r));
+        x.wi = -ray.ray.d;
+        x.phase = &medium.phase();
+        x.medium = ray.medium;
+        PathClock clock = from;
+        clock.travel_to(x.p, medium.eta());
+        const double distance = distance_between(x.p, lv.p);
+        if (!(distance > 0) || !clock.arrives_in_time(light_clock, distance)) return;
+        // Its densities as the distance strategy would have placed it (for MIS).
+        const DistanceMixture strategy(medium, distance_.get(), mis_, DistanceContext{window_end_});
+        x.segment_fwd = strategy.pdf(r);
+        x.segment_rev =
+            paths.camera[j].kind == Vertex::Kind::Medium ? strategy.pdf(r) : strategy.survival(r);
+        x.segment_optical = clock.time() - from.time();
+        x.segment_single_medium = true;
+        x.pdf_fwd = to_area(ray.pdf_dir, paths.camera[j], x) * x.segment_fwd;
+        const Vec3 to_light = towards(x, lv);
+        const Color f_camera = scattering(x, to_light, false);
+        const Color arriving =
+            s == 1 ? lv.emitter->eval_direction(lv.emission, -to_light) / float(lv.pdf_fwd)
+                   : leaving(lv.event,
+                             scattering(lv, -to_light, true) * paths.light_power[size_t(s) - 1]);
+        if (f_camera.is_black() || arriving.is_black()) return;
+        SegmentDensities segment = segment_densities();
+        const ShadowConnection c = connection(scene, sampler, x, lv.p, to_light, distance, segment);
+        if (c.blocked()) return;
+        // The placed vertex's weight: transmittance and scattering over the placement density.
+        const Color placed =
+            medium.transmittance(ray.ray, r, sampler) * medium.sigma_s(x.p) * float(1.0 / pc);
+        const Join join{segment.forward(lv.kind == Vertex::Kind::Medium), segment.backward(true),
+                        c.optical_length, segment.single_medium(),
+                        clock.time() + c.optical_length + light_clock.time() - paths.emission_time};
+        const float w =
+            unweighted() ? 1.f : mis_weight(scene, paths, s, int(j) + 2, join, nullptr, &x, true);
+        const float g = float(1.0 / (distance * distance));
+        const Color value = ray.beta(placed * f_camera * arriving * c.transmittance) * (g * w);
+        clock.record(value, light_clock, c.optical_length);
+        images_.add(s, int(j) + 2, out.film_position(), value);
     }
 
     // What vertex v sends toward world direction d of what arrived from its previous vertex:
@@ -614,39 +743,87 @@ private:
     }
     // Density with which an emitter at v sends light toward `next` (v on an emitter: a light
     // vertex, or a camera vertex that hit one).
+    // A light of a single direction (collimated) has no density of it: the next vertex takes
+    // the light point's area density instead (the beam's cross-section dA_perp = |cos| dA at
+    // a surface; in a medium dV = dA_perp dr), so the light vertex keeps only the emitter's
+    // probability (pdf_light_origin()) and the path's density is unchanged.
     static double pdf_light(const Vertex& v, const Vertex& next) {
         EmissionSample at = v.emission;
         at.p = v.p;
         at.n = v.n;
         float pos = 0.f, dir = 0.f;
         v.emitter->pdf_emission(at, towards(v, next), pos, dir);
-        return to_area(dir, v, next);
+        if (!v.emission.delta_direction) return to_area(dir, v, next);
+        if (!next.on_surface()) return pos;
+        return pos * std::abs(dot(next.n, towards(v, next)));
     }
     // Density with which a light subpath starts at v (on an emitter).
     static double pdf_light_origin(const Scene& scene, const Vertex& v) {
+        const double pmf = scene.select_emitter_pmf(*v.emitter);
+        if (v.emission.delta_direction) return pmf;  // the next vertex has the position's
         EmissionSample at;
         at.p = v.p;
         at.n = v.n;
         float pos = 0.f, dir = 0.f;
         v.emitter->pdf_emission(at, v.n, pos, dir);
-        return pos * scene.select_emitter_pmf(*v.emitter);
+        return pos * pmf;
     }
+
+    // A path made by strategy (s, t), in light-to-camera order: x_0 .. x_{s-1} the light
+    // vertices, x_s .. x_{n-1} the camera vertices reversed. `light` / `camera` replace the end
+    // vertex a strategy sampled itself (s = 1: the light sample; t = 1: the sensor point; a
+    // vertex placed by the connection strategy).
+    struct PathView {
+        const Subpaths& paths;
+        int s, t;
+        const Vertex* light;
+        const Vertex* camera;
+        const Join& join;
+
+        int size() const { return s + t; }
+        const Vertex& light_vertex(int i) const {
+            return (i == s - 1 && light) ? *light : paths.light[size_t(i)];
+        }
+        const Vertex& camera_vertex(int j) const {  // camera vertex j is x_{n-1-j}
+            return (j == t - 1 && camera) ? *camera : paths.camera[size_t(j)];
+        }
+        const Vertex& operator[](int i) const {
+            return i < s ? light_vertex(i) : camera_vertex(s + t - 1 - i);
+        }
+        // The segment between x_i and x_{i+1}: its optical length, whether it lies in one
+        // medium, and the distance density of reaching x_i walking from x_{i+1}.
+        struct Segment {
+            double optical;
+            bool single_medium;
+            double toward_light;
+        };
+        Segment segment(int i) const {
+            if (i + 1 < s) {
+                const Vertex& b = light_vertex(i + 1);
+                return {b.segment_optical, b.segment_single_medium, b.segment_rev};
+            }
+            if (i + 1 == s) return {join.optical, join.single_medium, join.at_light_end};
+            const Vertex& a = (*this)[i];
+            return {a.segment_optical, a.segment_single_medium, a.segment_fwd};
+        }
+    };
 
     // The weight of strategy (s, t) for the path it made: the heuristic over every strategy
     // (s', t') with s' + t' = s + t that could have sampled it (Veach 1997, ch. 10; pbrt-v3's
-    // MISWeight). `light` / `camera` replace the end vertex a strategy sampled itself (s = 1:
-    // the light sample; t = 1: the sensor point). `connection` has the distance densities of
-    // the segment the strategy joined (s, t >= 1). A medium vertex's densities include those
-    // of the distance strategy that placed it, so the weights favour the strategies whose
-    // distances fit the path (the time-sampling strategies of ch. 5.6.1 among them).
-    float mis_weight(const Scene& scene, const Subpaths& paths, int s, int t,
-                     const ConnectionDensities& connection, const Vertex* light,
-                     const Vertex* camera) const {
-        // The path's vertices in light-to-camera order with the density of each from either
-        // side: x_0 .. x_{s-1} the light vertices, x_s .. x_{n-1} the camera vertices reversed.
+    // MISWeight), and over the connection strategy's variant of each (placement_factor()).
+    // `join` describes the strategy's own connection (PathView for `light` and `camera`);
+    // `placed`: the strategy is the connection strategy's variant of (s, t). A medium vertex's
+    // densities include those of the distance strategy that placed it, so the weights favour
+    // the strategies whose distances fit the path (the time-sampling strategies of ch. 5.6).
+    float mis_weight(const Scene& scene, const Subpaths& paths, int s, int t, const Join& join,
+                     const Vertex* light, const Vertex* camera, bool placed = false) const {
+        const PathView path{paths, s, t, light, camera, join};
+        // Each vertex's density from either side, and `rel`: the density of strategy k (joining
+        // x_{k-1} and x_k) relative to strategy s.
         struct Densities {
             double from_light, from_camera;
             bool delta;
+            double rel;
         };
         const int n = s + t;
         // On the stack for the usual depths (a thread_local vector costs a TLS lookup per call).
@@ -654,60 +831,90 @@ private:
         Densities stack[kStack];
         std::vector<Densities> heap(n > kStack ? size_t(n) : 0);
         Densities* x = n > kStack ? heap.data() : stack;
-        auto light_vertex = [&](int i) -> const Vertex& {
-            return (i == s - 1 && light) ? *light : paths.light[size_t(i)];
-        };
-        auto camera_vertex = [&](int j) -> const Vertex& {  // camera vertex j is x_{n-1-j}
-            return (j == t - 1 && camera) ? *camera : paths.camera[size_t(j)];
-        };
         for (int i = 0; i < s; ++i) {
-            const Vertex& v = light_vertex(i);
-            x[size_t(i)] = {v.pdf_fwd, v.pdf_rev, v.delta};
+            const Vertex& v = path.light_vertex(i);
+            x[size_t(i)] = {v.pdf_fwd, v.pdf_rev, v.delta, 0};
         }
         for (int j = 0; j < t; ++j) {
-            const Vertex& v = camera_vertex(j);
-            x[size_t(n - 1 - j)] = {v.pdf_rev, v.pdf_fwd, v.delta};
+            const Vertex& v = path.camera_vertex(j);
+            x[size_t(n - 1 - j)] = {v.pdf_rev, v.pdf_fwd, v.delta, 0};
         }
         // The connection's end points are not scattered by a delta lobe, and the densities
         // across the connection are those of the other side sampling them.
-        const Vertex& pt = camera_vertex(t - 1);
-        const Vertex* qs = s > 0 ? &light_vertex(s - 1) : nullptr;
+        const Vertex& pt = path.camera_vertex(t - 1);
+        const Vertex* qs = s > 0 ? &path.light_vertex(s - 1) : nullptr;
         Densities& xt = x[size_t(s)];  // pt
         xt.delta = false;
         if (s > 0) {
             Densities& xs = x[size_t(s) - 1];
             xs.delta = false;
-            xt.from_light = pdf(scene, *qs, qs->wi, pt) * connection.at_camera_end;
+            xt.from_light = pdf(scene, *qs, qs->wi, pt) * join.at_camera_end;
             if (t > 1)
                 x[size_t(s) + 1].from_light =
-                    pdf(scene, pt, towards(pt, *qs), camera_vertex(t - 2)) * pt.segment_rev;
-            xs.from_camera = pdf(scene, pt, pt.wi, *qs) * connection.at_light_end;
+                    pdf(scene, pt, towards(pt, *qs), path.camera_vertex(t - 2)) * pt.segment_rev;
+            xs.from_camera = pdf(scene, pt, pt.wi, *qs) * join.at_light_end;
             if (s > 1)
                 x[size_t(s) - 2].from_camera =
-                    pdf(scene, *qs, towards(*qs, pt), light_vertex(s - 2)) * qs->segment_rev;
+                    pdf(scene, *qs, towards(*qs, pt), path.light_vertex(s - 2)) * qs->segment_rev;
         } else {
             xt.from_light = pdf_light_origin(scene, pt);
-            x[size_t(s) + 1].from_light = pdf_light(pt, camera_vertex(t - 2)) * pt.segment_rev;
+            x[size_t(s) + 1].from_light = pdf_light(pt, path.camera_vertex(t - 2)) * pt.segment_rev;
         }
-        // Strategy k joins x_{k-1} and x_k; its density relative to strategy s is the product of
-        // from_light / from_camera of the vertices in between.
         auto remap = [](double f) { return f != 0 ? f : 1.0; };
         auto h = [&](double r) { return power_ ? r * r : r; };
-        // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
-        const bool delta_light = s > 0 && light_vertex(0).emission.delta_position;
-        double sum = 1.0, r = 1.0;
         const int last = to_sensor_ ? n - 1 : n - 2;  // the last strategy: t = 1 or t = 2
-        for (int k = s + 1; k <= last; ++k) {         // strategies with fewer camera vertices
-            r *= remap(x[size_t(k) - 1].from_light) / remap(x[size_t(k) - 1].from_camera);
-            if (!x[size_t(k) - 1].delta && !x[size_t(k)].delta) sum += h(r);
-        }
-        r = 1.0;
-        for (int k = s - 1; k >= 0; --k) {  // strategies with fewer light vertices
-            r *= remap(x[size_t(k)].from_camera) / remap(x[size_t(k)].from_light);
+        x[size_t(s)].rel = 1.0;
+        for (int k = s + 1; k <= last; ++k)  // strategies with fewer camera vertices
+            x[size_t(k)].rel = x[size_t(k) - 1].rel * remap(x[size_t(k) - 1].from_light) /
+                               remap(x[size_t(k) - 1].from_camera);
+        for (int k = s - 1; k >= 0; --k)  // strategies with fewer light vertices
+            x[size_t(k)].rel = x[size_t(k) + 1].rel * remap(x[size_t(k)].from_camera) /
+                               remap(x[size_t(k)].from_light);
+        // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
+        const bool delta_light = s > 0 && (path.light_vertex(0).emission.delta_position ||
+                                           path.light_vertex(0).emission.delta_direction);
+        double sum = 0.0;
+        for (int k = 0; k <= last; ++k) {
             const bool start_delta = k > 0 ? x[size_t(k) - 1].delta : delta_light;
-            if (!x[size_t(k)].delta && !start_delta) sum += h(r);
+            const bool joins = k == s || (k > s ? !x[size_t(k) - 1].delta && !x[size_t(k)].delta
+                                                : !x[size_t(k)].delta && !start_delta);
+            if (!joins) continue;
+            sum += h(x[size_t(k)].rel);
+            if (const double c = placement_factor(scene, path, k); c > 0)
+                sum += h(x[size_t(k)].rel * c);
         }
-        return float(1.0 / sum);
+        return float((placed ? h(placement_factor(scene, path, s)) : 1.0) / sum);
+    }
+
+    // The connection strategy's variant of strategy k: its last camera vertex x_k placed on the
+    // ray from x_{k+1} by the <connection> strategy aiming at x_{k-1}, instead of by distance
+    // sampling. Returns the density of that placement relative to the distance-sampled one, or
+    // 0 where it cannot make the path: x_k not in a medium, or a boundary between x_{k+1} and
+    // x_k (a vertex is placed on the first piece of a ray only), or x_{k-1} not connectible.
+    double placement_factor(const Scene& scene, const PathView& path, int k) const {
+        if (!connecting_ || k < 1 || k > path.size() - 2) return 0;
+        const Vertex& placed = path[k];
+        if (placed.kind != Vertex::Kind::Medium) return 0;
+        const PathView::Segment in = path.segment(k);
+        if (!in.single_medium || !(in.toward_light > 0)) return 0;
+        const Vertex& target = path[k - 1];
+        if (!target.connectible()) return 0;
+        const Vertex& from = path[k + 1];
+        const double elapsed = path.join.path_time - in.optical - path.segment(k - 1).optical;
+        const ConnectionQuery q = placement_query(scene, from.p, towards(from, placed), target.p,
+                                                  placed.medium.eta(), elapsed);
+        return connection_->pdf(q, distance_between(from.p, placed.p)) / in.toward_light;
+    }
+
+    // The segment of a ray from `origin` along `d` (in a medium of index eta) on which a vertex
+    // can still connect to `target` within the window when the rest of the path takes
+    // `elapsed` (optical length and delays, without the emission time): the connection
+    // strategy's query. In world time no such bound is known before the path is complete, and
+    // the strategy places vertices on the whole ray (line_to_point is then equiangular).
+    static ConnectionQuery placement_query(const Scene& scene, const Vec3& origin, const Vec3& d,
+                                           const Vec3& target, double eta, double elapsed) {
+        const double cut = scene.time_window().path_cut();  // infinite in world time
+        return {origin, d, connection_reach(origin, d, target, eta, cut - elapsed), target};
     }
 
     // strategy_images: the weighted contributions of each strategy (s, t), summed per pixel
@@ -739,6 +946,9 @@ private:
     bool power_ = true;
     bool to_sensor_ = true;  // the sensor can be connected to (strategies t = 1)
     std::shared_ptr<DistanceSampler> distance_;
+    std::shared_ptr<ConnectionSampler> connection_;
+    bool connecting_ = false;        // the connection strategy places vertices
+    bool only_placed_ = false;       // debugging: strategy_s/t's connection-strategy variant
     bool mis_ = false;               // distances: a mixture of the strategy and mean free paths
     double window_end_ = kInfinity;  // the film's window end (exponential distances' rate)
     int only_s_ = -1, only_t_ = -1;  // debugging: one strategy alone, unweighted
@@ -767,5 +977,11 @@ FEMTO_PLUGIN(Bdpt, femto::PluginKind::Integrator, "transient_bdpt",
                "or exponential"},
               {"mis", "boolean", "false",
                "combine the distance strategy with mean-free-path sampling (one-sample MIS)"},
-              {"connection", "connection", "deterministic", "only deterministic (steady)"},
+              {"connection", "connection", "deterministic",
+               "connection strategy (nested <connection>): deterministic adds nothing; "
+               "line_to_point or equiangular also place a vertex on each camera ray through a "
+               "medium toward each light vertex, weighed by MIS against the other strategies"},
+              {"strategy_placed", "boolean", "false",
+               "debugging, with strategy_s/strategy_t: render the connection strategy's variant "
+               "of that strategy alone"},
               {"angular", "angular", "phase", "only phase (steady)"}})
