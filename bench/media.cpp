@@ -16,10 +16,11 @@
 //  combos     every combination of distance x connection x angular x mis (24) at sigma_s 0.9,
 //             isotropic: error against wall-clock time, so each strategy's cost counts.
 //  bdpt       the media of `media` rendered by transient_bdpt: steady (mean-free-path
-//             distances) against exponential distances alone and MIS-combined with mean free
-//             paths, on both subpaths with their densities in the MIS weights; the path
-//             tracer's steady sampling alongside (run with --prefix media_bdpt to keep the
-//             other parts' CSVs; bench/run_media_bdpt.sh does).
+//             distances) against exponential distances MIS-combined with mean free paths
+//             (bdpt_time), equiangular placed vertices (bdpt_equiangular) and both time
+//             strategies together (exponential + line_to_point, bdpt_time_all), all weighed by
+//             BDPT's MIS; the path tracer's steady sampling alongside (run with --prefix
+//             media_bdpt to keep the other parts' CSVs; bench/run_media_bdpt.sh does).
 //
 // Reference per configuration: exponential + equiangular + time angular with MIS at many spp
 // (equiangular has finite variance next to the point light, where line_to_point and shadow
@@ -81,13 +82,15 @@ const Strategy kTime{"time", "exponential", "line_to_point", "time", true};
 // exponential (mean_vertices 3 over this window: lambda = 0.375) only adds weight.
 const Strategy kTimeMfp{"time_mfp", "mean_free_path", "line_to_point", "time", true};
 const Strategy kReference{"reference", "exponential", "equiangular", "time", true};
-// BDPT takes the distance strategies only (connection and angular strategies are refused).
+// BDPT takes the distance and connection strategies (angular=time is refused).
 const Strategy kBdptSteady{"bdpt_steady", "mean_free_path", "deterministic", "phase",
                            false,         "transient_bdpt"};
 const Strategy kBdptTime{"bdpt_time", "exponential", "deterministic",
                          "phase",     true,          "transient_bdpt"};
-const Strategy kBdptExponential{"bdpt_exponential", "exponential", "deterministic", "phase", false,
+const Strategy kBdptEquiangular{"bdpt_equiangular", "mean_free_path", "equiangular", "phase", false,
                                 "transient_bdpt"};
+const Strategy kBdptTimeAll{"bdpt_time_all", "exponential", "line_to_point",
+                            "phase",         true,          "transient_bdpt"};
 
 struct Medium {
     double sigma_s, g;
@@ -420,8 +423,9 @@ int main(int argc, char** argv) try {
     if (has("bdpt"))
         for (double g : {0.0, 0.8, -0.8})
             for (double sigma_s : {0.2, 0.9, 1.5})
-                run(csv, "bdpt", {sigma_s, g}, {kSteady, kBdptSteady, kBdptTime, kBdptExponential},
-                    o.budgets, o.seeds, o, false);
+                run(csv, "bdpt", {sigma_s, g},
+                    {kSteady, kBdptSteady, kBdptTime, kBdptEquiangular, kBdptTimeAll}, o.budgets,
+                    o.seeds, o, false);
     std::ofstream(base + "_meta.txt", std::ios::app) << "load after: " << read_loadavg() << "\n";
     return 0;
 } catch (const std::exception& e) {

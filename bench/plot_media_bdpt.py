@@ -30,10 +30,10 @@ from ratios import equal_error_spp  # noqa: E402
 RESULTS = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "results")
 METRICS = ("frame_relmse", "pixel_relmse")
 # (strategy, baseline): what each ratio compares.
-PAIRS = (("bdpt_time", "bdpt_steady"), ("bdpt_exponential", "bdpt_steady"),
-         ("bdpt_steady", "steady"), ("bdpt_time", "steady"))
+PAIRS = (("bdpt_time", "bdpt_steady"), ("bdpt_equiangular", "bdpt_steady"),
+         ("bdpt_time_all", "bdpt_steady"), ("bdpt_steady", "steady"))
 COLOURS = {"steady": "tab:blue", "bdpt_steady": "black", "bdpt_time": "tab:red",
-           "bdpt_exponential": "tab:orange"}
+           "bdpt_equiangular": "tab:green", "bdpt_time_all": "tab:purple"}
 
 with open(os.path.join(RESULTS, "media_bdpt_error.csv")) as f:
     rows = [r for r in csv.DictReader(f) if r["part"] == "bdpt"]
@@ -82,8 +82,9 @@ top = max((r["spp"] for r in ratio_rows), default=0)
 lines = [f"Equal-error ratios at {top} spp, samples / wall-clock time (how many more samples and "
          f"how much more time the baseline needs for the same median error; * extrapolated "
          f"along slope -1). `bdpt_time`: exponential distances MIS-combined with mean free "
-         f"paths; `bdpt_exponential`: exponential alone; `steady`: the path tracer's steady "
-         f"sampling.\n",
+         f"paths; `bdpt_equiangular`: equiangular placed vertices; `bdpt_time_all`: "
+         f"exponential distances (mis) and line_to_point placed vertices; `steady`: the path "
+         f"tracer's steady sampling.\n",
          "| sigma_s | g | metric | " + " | ".join(f"{a} vs {b}" for a, b in PAIRS) + " |",
          "|---|---|---|" + "---|" * len(PAIRS)]
 for s, g in media:
