@@ -254,6 +254,15 @@ TEST(Bdpt, EachStrategyAloneEstimatesTheSameImageInAMedium) {
     check_strategies("cornell-box", true, 2, {{"res", "16"}, {"bins", "128"}}, 16, 8, 4, 16);
 }
 
+// Russian roulette on both subpaths (rr_depth 1: from their second segment on) estimates the
+// same cube as none.
+TEST(Bdpt, RussianRouletteKeepsTheImage) {
+    AgreementCase c{"cornell-box", 0, false, {{"res", "16"}, {"bins", "128"}}, 16, 16, 2, 16};
+    c.reference = "transient_bdpt";
+    c.children = "<integer name=\"rr_depth\" value=\"1\"/>";
+    check_agreement(c, "transient_bdpt");
+}
+
 TEST(Bdpt, BitIdenticalAcrossThreadCounts) {
     const std::vector<std::pair<std::string, std::string>> defines = {
         {"res", "64"}, {"spp", "4"}, {"bins", "64"}};
@@ -302,7 +311,7 @@ TEST(Bdpt, AgreesWithItselfWithConnectionStrategies) {
     check_agreement(c, "transient_bdpt");
 }
 
-// Unsupported time-sampling strategies, max_depth 0 and Russian roulette
+// Unsupported time-sampling strategies, max_depth 0, a negative rr_depth
 // are located errors naming what is supported. (An orthographic sensor is rendered without the
 // strategies t = 1: the conformance matrix's checks seen through one run on transient_bdpt.)
 TEST(Bdpt, BadInputIsALocatedError) {
@@ -316,7 +325,7 @@ TEST(Bdpt, BadInputIsALocatedError) {
         EXPECT_NE(error.find("but only the steady angular=phase"), std::string::npos) << error;
     }
     for (const char* param :
-         {"<integer name=\"max_depth\" value=\"0\"/>", "<integer name=\"rr_depth\" value=\"5\"/>",
+         {"<integer name=\"max_depth\" value=\"0\"/>", "<integer name=\"rr_depth\" value=\"-1\"/>",
           "<string name=\"heuristic\" value=\"maximum\"/>",
           // the connection strategy's variant of no strategy, or with no connection strategy
           "<boolean name=\"strategy_placed\" value=\"true\"/>",

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "femto/integrator.h"
 #include "femto/log.h"
 #include "femto/sensor.h"
 #include "scene_util.h"
@@ -368,4 +369,31 @@ TEST(MitsubaSyntax, PrincipalPointOffsetMovesTheOpticalAxis) {
         EXPECT_NEAR(a.d.y, b.d.y, 1e-6f);
         EXPECT_NEAR(a.d.z, b.d.z, 1e-6f);
     }
+}
+
+// Mitsuba 0.6's `bdpt` is femto's BDPT with Mitsuba's defaults (roulette from depth 5):
+// maxDepth, rrDepth and lightImage keep their meaning, sampleDirect=false is ignored with a
+// note (femto always samples emitters and the sensor directly). The same seed renders the
+// same image as transient_bdpt given the same parameters.
+TEST(MitsubaSyntax, BdptIsFemtosBdptWithMitsubaDefaults) {
+    const std::string body = sensor_xml() + kRedBsdf + kShapeRefRed + kLight;
+    for (const bool light_image : {true, false}) {
+        SCOPED_TRACE(light_image ? "lightImage true" : "lightImage false");
+        const std::string flag = light_image ? "true" : "false";
+        const std::string old = scene(
+            "<integrator type=\"bdpt\"><integer name=\"maxDepth\" value=\"3\"/><integer "
+            "name=\"rrDepth\" value=\"2\"/><boolean name=\"lightImage\" value=\"" +
+                flag + "\"/><boolean name=\"sampleDirect\" value=\"false\"/></integrator>" + body,
+            "0.6.0");
+        const std::string native = scene(
+            "<integrator type=\"transient_bdpt\"><integer name=\"max_depth\" value=\"3\"/><integer "
+            "name=\"rr_depth\" value=\"2\"/><boolean name=\"light_image\" value=\"" +
+            flag + "\"/></integrator>" + body);
+        expect_same_image(render_string(old), render_string(native), "0.6 bdpt", "transient_bdpt");
+    }
+    // Its own default: roulette from depth 5, where transient_bdpt has none.
+    auto loaded = load_scene_string(scene("<integrator type=\"bdpt\"/>" + body, "0.6.0"));
+    const auto& integrator = static_cast<const MonteCarloIntegrator&>(loaded->integrator());
+    EXPECT_EQ(integrator.rr_depth(), 5);
+    EXPECT_EQ(integrator.max_depth(), -1);
 }

@@ -41,6 +41,7 @@
 
 #include "femto/image_io.h"
 #include "femto/integrator.h"
+#include "femto/log.h"
 #include "femto/mis.h"
 #include "femto/path_clock.h"
 #include "femto/plugin.h"
@@ -144,15 +145,16 @@ struct Join {
 // Direction from a to b.
 Vec3 towards(const Vertex& a, const Vertex& b) { return normalize(b.p - a.p); }
 
-class Bdpt final : public MonteCarloIntegrator {
+class Bdpt : public MonteCarloIntegrator {
 public:
-    explicit Bdpt(const Properties& props) : MonteCarloIntegrator(props, 0) {
-        if (max_depth() == 0)
-            props.fail("max_depth", "transient_bdpt needs max_depth >= 1 (or -1)");
-        if (rr_depth() != 0)
-            props.fail("rr_depth",
-                       "transient_bdpt does not use Russian roulette: its paths end at "
-                       "max_depth or when they can no longer reach the window");
+    Bdpt(const Properties& props, int64_t default_rr_depth)
+        : MonteCarloIntegrator(props, default_rr_depth) {
+        if (max_depth() == 0) props.fail("max_depth", "BDPT needs max_depth >= 1 (or -1)");
+        light_image_ = props.get_bool("light_image", true);
+        if (!props.get_bool("sample_direct", true))
+            log_note(props.location_of("sample_direct"),
+                     "femto's BDPT always samples the emitters and the sensor directly for the "
+                     "strategies s = 1 and t = 1 (sample_direct=false is ignored)");
         const std::string heuristic = props.get_string("heuristic", "power");
         if (heuristic != "power" && heuristic != "balance")
             props.fail("heuristic",
@@ -193,8 +195,9 @@ public:
 
     void preprocess(const Scene& scene) override {
         MonteCarloIntegrator::preprocess(scene);
-        // A sensor no connection can reach (orthographic) leaves out the strategies t = 1.
-        to_sensor_ = scene.sensor().connectable();
+        // A sensor no connection can reach (orthographic) leaves out the strategies t = 1, and
+        // so does light_image=false.
+        to_sensor_ = light_image_ && scene.sensor().connectable();
         window_end_ = scene.time_window().end;
         if (images_.enabled) {
             if (max_depth() < 0)
@@ -323,6 +326,8 @@ private:
             Color scatter;
             if (!scatter_from(sampler, walk, paths.camera, false, scatter)) return;
             beta *= scatter;
+            if (!survives_roulette(int(paths.camera.size()) - 1, beta.max_gain(), sampler, beta))
+                return;
             paths.camera_out.push_back({walk.ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         }
     }
@@ -374,7 +379,21 @@ private:
             Color scatter;
             if (!scatter_from(sampler, walk, paths.light, true, scatter)) return;
             power = leaving(paths.light.back().event, scatter * power);
+            const float gain = power.max_component() / start.power().max_component();
+            if (!survives_roulette(int(paths.light.size()) - 1, gain, sampler, power)) return;
         }
+    }
+
+    // Russian roulette (rr_depth > 0) after a subpath's `segments` segments: the walk goes on
+    // with probability min(gain, 0.95) and its weight grows by its inverse. The MIS weights
+    // leave it out (they need only be the same for every strategy of a path).
+    template <typename Weight>
+    bool survives_roulette(int segments, float gain, Sampler& sampler, Weight& weight) const {
+        if (rr_depth() <= 0 || segments < rr_depth()) return true;
+        const float q = std::min(gain, 0.95f);
+        if (!(sampler.next_1d() < q)) return false;
+        weight *= Color(1.f / q);
+        return true;
     }
 
     // A random walk's state between vertices.
@@ -944,7 +963,8 @@ private:
     StrategyImages images_;
     SourceLocation images_location_;
     bool power_ = true;
-    bool to_sensor_ = true;  // the sensor can be connected to (strategies t = 1)
+    bool light_image_ = true;  // strategies t = 1 wanted (Mitsuba's lightImage)
+    bool to_sensor_ = true;    // ... and the sensor can be connected to
     std::shared_ptr<DistanceSampler> distance_;
     std::shared_ptr<ConnectionSampler> connection_;
     bool connecting_ = false;        // the connection strategy places vertices
@@ -956,32 +976,64 @@ private:
     LightPathStarts starts_;
 };
 
+// The two plugins built from this file (CMakeLists.txt): they differ only in their defaults.
+#ifdef FEMTO_MITSUBA_BDPT
+class MitsubaBdpt final : public Bdpt {
+public:
+    explicit MitsubaBdpt(const Properties& props) : Bdpt(props, 5) {}
+};
+#else
+class TransientBdpt final : public Bdpt {
+public:
+    explicit TransientBdpt(const Properties& props) : Bdpt(props, 0) {}
+};
+#endif
+
 }  // namespace
 
-FEMTO_PLUGIN(Bdpt, femto::PluginKind::Integrator, "transient_bdpt",
+#define FEMTO_BDPT_PARAMS                                                                          \
+    {"heuristic", "string", "power", "MIS heuristic: power or balance"},                           \
+        {"light_image", "boolean", "true",                                                         \
+         "use the strategies t = 1 (light subpath vertices connected to the sensor and splatted; " \
+         "Mitsuba's lightImage)"},                                                                 \
+        {"sample_direct", "boolean", "true",                                                       \
+         "accepted for Mitsuba 0.6 scenes; femto always samples emitters and the sensor "          \
+         "directly (false is ignored with a note)"},                                               \
+        {"strategy_s", "integer", "-1",                                                            \
+         "debugging: render only strategy (strategy_s, strategy_t), unweighted"},                  \
+        {"strategy_t", "integer", "-1", "debugging: see strategy_s"},                              \
+        {"strategy_images", "boolean", "false",                                                    \
+         "also write OUTBASE_bdpt_s<s>_t<t>.exr: each strategy's weighted contributions "          \
+         "(steady, box-filtered; needs a finite max_depth)"},                                      \
+        {"path_length", "integer", "-1",                                                           \
+         "debugging: render only paths of this many segments (all their strategies, weighted)"},   \
+        {"distance", "distance", "mean_free_path",                                                 \
+         "distance sampling in media on both subpaths (nested <distance>): mean_free_path or "     \
+         "exponential"},                                                                           \
+        {"mis", "boolean", "false",                                                                \
+         "combine the distance strategy with mean-free-path sampling (one-sample MIS)"},           \
+        {"connection", "connection", "deterministic",                                              \
+         "connection strategy (nested <connection>): deterministic adds nothing; line_to_point "   \
+         "or equiangular also place a vertex on each camera ray through a medium toward each "     \
+         "light vertex, weighed by MIS against the other strategies"},                             \
+        {"strategy_placed", "boolean", "false",                                                    \
+         "debugging, with strategy_s/strategy_t: render the connection strategy's variant of "     \
+         "that strategy alone"},                                                                   \
+    {                                                                                              \
+        "angular", "angular", "phase", "only phase (steady)"                                       \
+    }
+
+#ifdef FEMTO_MITSUBA_BDPT
+FEMTO_PLUGIN(MitsubaBdpt, femto::PluginKind::Integrator, "bdpt",
+             "Mitsuba 0.6's bidirectional path tracer: transient_bdpt with Russian roulette from "
+             "depth 5",
+             {FEMTO_BDPT_PARAMS})
+#else
+FEMTO_PLUGIN(TransientBdpt, femto::PluginKind::Integrator, "transient_bdpt",
              "Transient bidirectional path tracer: every (s, t) strategy with MIS, surfaces and "
              "media, each contribution at its own time",
-             {{"rr_depth", "integer", "0", "must be 0: paths end at max_depth or at the window"},
-              {"heuristic", "string", "power", "MIS heuristic: power or balance"},
-              {"strategy_s", "integer", "-1",
-               "debugging: render only strategy (strategy_s, strategy_t), unweighted"},
-              {"strategy_t", "integer", "-1", "debugging: see strategy_s"},
-              {"strategy_images", "boolean", "false",
-               "also write OUTBASE_bdpt_s<s>_t<t>.exr: each strategy's weighted contributions "
-               "(steady, box-filtered; needs a finite max_depth)"},
-              {"path_length", "integer", "-1",
-               "debugging: render only paths of this many segments (all their strategies, "
-               "weighted)"},
-              {"distance", "distance", "mean_free_path",
-               "distance sampling in media on both subpaths (nested <distance>): mean_free_path "
-               "or exponential"},
-              {"mis", "boolean", "false",
-               "combine the distance strategy with mean-free-path sampling (one-sample MIS)"},
-              {"connection", "connection", "deterministic",
-               "connection strategy (nested <connection>): deterministic adds nothing; "
-               "line_to_point or equiangular also place a vertex on each camera ray through a "
-               "medium toward each light vertex, weighed by MIS against the other strategies"},
-              {"strategy_placed", "boolean", "false",
-               "debugging, with strategy_s/strategy_t: render the connection strategy's variant "
-               "of that strategy alone"},
-              {"angular", "angular", "phase", "only phase (steady)"}})
+             {{"rr_depth", "integer", "0",
+               "subpath depth at which Russian roulette starts; 0 = never (max_depth or the window "
+               "end paths)"},
+              FEMTO_BDPT_PARAMS})
+#endif
