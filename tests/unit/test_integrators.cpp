@@ -18,5 +18,6 @@ INSTANTIATE_TEST_SUITE_P(Builtin, IntegratorConformance,
                                            IntegratorCase{"transient_light", kDepth, -1, true,
                                                           true},
                                            IntegratorCase{"transient_bdpt", kDepth, -1, true},
-                                           IntegratorCase{"bdpt", kDepth, -1, true}),
+                                           IntegratorCase{"bdpt", kDepth, -1, true},
+                                           IntegratorCase{"volpath", kDepth, -1, true}),
                          femto::testing::case_name);

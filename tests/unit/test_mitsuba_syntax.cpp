@@ -397,3 +397,28 @@ TEST(MitsubaSyntax, BdptIsFemtosBdptWithMitsubaDefaults) {
     EXPECT_EQ(integrator.rr_depth(), 5);
     EXPECT_EQ(integrator.max_depth(), -1);
 }
+
+// Mitsuba's `volpath` (0.6 and 3) is femto's `path`, which renders media: the same image for a
+// seed, with its parameters in either spelling.
+TEST(MitsubaSyntax, VolpathIsFemtosPath) {
+    const std::string body =
+        "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_t\" value=\"0.3\"/>"
+        "</medium>" +
+        sensor_xml("<ref id=\"fog\"/>") + kRedBsdf + kShapeRefRed + kLight;
+    const std::string native = scene(
+        "<integrator type=\"path\"><integer name=\"max_depth\" value=\"4\"/><integer "
+        "name=\"rr_depth\" value=\"2\"/></integrator>" +
+        body);
+    const std::string old = scene(
+        "<integrator type=\"volpath\"><integer name=\"maxDepth\" value=\"4\"/><integer "
+        "name=\"rrDepth\" value=\"2\"/></integrator>" +
+            body,
+        "0.6.0");
+    const std::string v3 = scene(
+        "<integrator type=\"volpath\"><integer name=\"max_depth\" value=\"4\"/><integer "
+        "name=\"rr_depth\" value=\"2\"/></integrator>" +
+        body);
+    const auto reference = render_string(native);
+    expect_same_image(render_string(old), reference, "0.6 volpath", "path");
+    expect_same_image(render_string(v3), reference, "3.0 volpath", "path");
+}

@@ -339,11 +339,16 @@ private:
     bool steady_angular_ = true;  // directions from the phase function alone
 };
 
-// The two plugins built from this file (plugins/integrators/path/CMakeLists.txt).
+// The three plugins built from this file (plugins/integrators/path/CMakeLists.txt).
 #ifdef FEMTO_TRANSIENT_PATH
 class TransientPath final : public PathIntegrator {
 public:
     explicit TransientPath(const Properties& props) : PathIntegrator(props, 0) {}
+};
+#elif defined(FEMTO_VOLPATH)
+class VolPath final : public PathIntegrator {
+public:
+    explicit VolPath(const Properties& props) : PathIntegrator(props, 5) {}
 };
 #else
 class Path final : public PathIntegrator {
@@ -373,6 +378,11 @@ FEMTO_PLUGIN(TransientPath, femto::PluginKind::Integrator, "transient_path",
              {{"rr_depth", "integer", "0",
                "path depth at which Russian roulette starts; 0 = never (the window ends paths)"},
               FEMTO_PATH_STRATEGY_PARAMS})
+#elif defined(FEMTO_VOLPATH)
+FEMTO_PLUGIN(VolPath, femto::PluginKind::Integrator, "volpath",
+             "Mitsuba's volumetric path tracer: femto's path, which renders media too (the same "
+             "estimator and defaults)",
+             {FEMTO_PATH_STRATEGY_PARAMS})
 #else
 FEMTO_PLUGIN(Path, femto::PluginKind::Integrator, "path",
              "Unidirectional path tracer with next-event estimation and MIS",
