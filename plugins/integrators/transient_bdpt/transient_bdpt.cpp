@@ -545,15 +545,14 @@ private:
         const LightClock& light_clock = paths.light_clock[size_t(s) - 1];
         const double distance = distance_between(cv.p, lv.p);
         if (!(distance > 0) || !clock.arrives_in_time(light_clock, distance)) return;
-        const Vec3 to_light = towards(cv, lv), to_camera = -to_light;
-        const Color f_light = scattering(lv, to_camera, true);
+        const Vec3 to_light = towards(cv, lv);
+        const Color arriving = light_toward(paths, s, -to_light);
         const Color f_camera = scattering(cv, to_light, false);
-        if (f_light.is_black() || f_camera.is_black()) return;
+        if (arriving.is_black() || f_camera.is_black()) return;
         SegmentDensities segment = segment_densities();
         const ShadowConnection c =
             connection(scene, sampler, cv, lv.p, to_light, distance, segment);
         if (c.blocked()) return;
-        const Color arriving = leaving(lv.event, f_light * paths.light_power[size_t(s) - 1]);
         const float g = float(1.0 / (distance * distance));
         const Join join{segment.forward(lv.kind == Vertex::Kind::Medium),
                         segment.backward(cv.kind == Vertex::Kind::Medium), c.optical_length,
@@ -610,13 +609,7 @@ private:
         const SensorSample ss = scene.sensor().sample_direct(lv.p, sampler.next_2d());
         const LightClock& clock = paths.light_clock[size_t(s) - 1];
         if (!ss.valid() || !clock.arrives_in_time(ss.distance)) return;
-        Color value;
-        if (s == 1) {
-            value = lv.emitter->eval_direction(lv.emission, ss.wi) / lv.pdf_fwd;
-        } else {
-            const Color f = scattering(lv, ss.wi, true);
-            value = leaving(lv.event, f * paths.light_power[size_t(s) - 1]);
-        }
+        const Color value = light_toward(paths, s, ss.wi);
         if (value.is_black()) return;
         SegmentDensities segment = segment_densities();
         const ShadowConnection c =
@@ -694,10 +687,7 @@ private:
         x.pdf_fwd = to_area(ray.pdf_dir, paths.camera[j], x) * x.segment_fwd;
         const Vec3 to_light = towards(x, lv);
         const Color f_camera = scattering(x, to_light, false);
-        const Color arriving =
-            s == 1 ? lv.emitter->eval_direction(lv.emission, -to_light) / float(lv.pdf_fwd)
-                   : leaving(lv.event,
-                             scattering(lv, -to_light, true) * paths.light_power[size_t(s) - 1]);
+        const Color arriving = light_toward(paths, s, -to_light);
         if (f_camera.is_black() || arriving.is_black()) return;
         SegmentDensities segment = segment_densities();
         const ShadowConnection c = connection(scene, sampler, x, lv.p, to_light, distance, segment);
@@ -714,6 +704,15 @@ private:
         const Color value = ray.beta(placed * f_camera * arriving * c.transmittance) * (g * w);
         clock.record(value, light_clock, c.optical_length);
         images_.add(s, int(j) + 2, out.film_position(), value);
+    }
+
+    // The light leaving light vertex s - 1 toward world direction d: what its emitter sends (s =
+    // 1, over the density of the vertex) or what its BSDF or phase function scatters of the light
+    // that arrived there, after its event's colour transfer.
+    static Color light_toward(const Subpaths& paths, int s, const Vec3& d) {
+        const Vertex& lv = paths.light[size_t(s) - 1];
+        if (s == 1) return lv.emitter->eval_direction(lv.emission, d) / float(lv.pdf_fwd);
+        return leaving(lv.event, scattering(lv, d, true) * paths.light_power[size_t(s) - 1]);
     }
 
     // What vertex v sends toward world direction d of what arrived from its previous vertex:
