@@ -26,8 +26,13 @@
 // (line_to_point, equiangular; Fig. 5.6 middle) adds a variant of each strategy (s, t >= 2):
 // its last camera vertex placed on the camera subpath's ray toward light vertex s - 1 instead
 // of by a distance, on the ray's first piece if that lies in a medium; MIS weighs every variant
-// of every strategy (placement_factor()). The angular strategy is refused: a direction chosen
-// by time would need the distance drawn after it in the weights of the other strategies.
+// of every strategy (placement_factor()). The nested <angular> strategy (time: ch. 5.6.3)
+// chooses directions out of medium vertices with the next distance drawn first: light subpaths
+// aim at the camera, camera subpaths at the light subpath's first vertex (so the light subpath
+// is traced first). Its density depends on that distance, which the path shows only when the
+// next vertex is in the medium; the weights take the density at the segment's own length
+// everywhere (angular_densities()), the exact one where the next vertex is a medium vertex and
+// a deterministic stand-in elsewhere, which keeps them a partition of unity.
 // Delta lights: a point or spot light is never hit (no s = 0); a collimated beam is never hit
 // either, and its vertex's position density moves to the next vertex (pdf_light()).
 #include <fmt/format.h>
@@ -181,12 +186,16 @@ public:
             props.child(PluginKind::Connection, "deterministic"));
         connecting_ = connection_->places_vertex();
         only_placed_ = props.get_bool("strategy_placed", false);
-        if (only_placed_ && (only_s_ < 0 || !connecting_))
+        if (only_placed_ && (only_s_ < 1 || only_t_ < 2 || !connecting_))
             props.fail("strategy_placed",
                        "strategy_placed renders the connection strategy's variant of (strategy_s, "
-                       "strategy_t) alone: it needs those and a <connection> strategy that places "
-                       "vertices (line_to_point or equiangular)");
-        check_steady(props, PluginKind::Angular, "angular", "phase");
+                       "strategy_t) alone: it needs strategy_s >= 1 and strategy_t >= 2 (a placed "
+                       "vertex joins a light vertex to a camera ray) and a <connection> strategy "
+                       "that places vertices (line_to_point or equiangular)");
+        // Directions out of medium vertices on both subpaths by the nested <angular> strategy.
+        angular_ =
+            std::static_pointer_cast<AngularSampler>(props.child(PluginKind::Angular, "phase"));
+        steady_angular_ = angular_->steady();
     }
 
     // Strategies t = 1 splat; without them (an orthographic sensor) every contribution is the
@@ -208,15 +217,20 @@ public:
             images_.prepare(film.width(), film.height(), int(max_depth()));
         }
         distance_->prepare({window_end_});
-        starts_.prepare(scene, "transient_bdpt");
+        starts_.prepare(scene, type_name());
     }
 
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
                 ContributionList& out) const override {
         thread_local Subpaths paths;
         paths.clear();
-        camera_subpath(scene, sampler, ray, out, paths);
-        light_subpath(scene, sampler, paths);
+        if (steady_angular_) {
+            camera_subpath(scene, sampler, ray, out, paths);
+            light_subpath(scene, sampler, paths, ray.o);
+        } else {  // the camera subpath aims at the light subpath's first vertex
+            light_subpath(scene, sampler, paths, ray.o);
+            camera_subpath(scene, sampler, ray, out, paths);
+        }
         const int nc = int(paths.camera.size()), nl = int(paths.light.size());
         for (int t = to_sensor_ ? 1 : 2; t <= nc; ++t)
             for (int s = 1; s <= nl; ++s) {
@@ -251,19 +265,6 @@ public:
     }
 
 private:
-    // Refuses a nested time-sampling strategy other than the steady one.
-    static void check_steady(const Properties& props, PluginKind kind, const char* tag,
-                             const char* steady) {
-        const auto child = props.child(kind, steady);
-        if (child && child->type_name() != steady)
-            props.fail(tag, std::string("transient_bdpt supports the distance strategies "
-                                        "(mean_free_path, exponential, with or without mis) and "
-                                        "the connection strategies (deterministic, "
-                                        "line_to_point, equiangular) but only the steady "
-                                        "angular=phase, not <") +
-                                tag + " type=\"" + child->type_name() + "\">");
-    }
-
     // Whether strategy (s, t) is rendered (all, unless a debugging parameter picks some).
     // `placed`: the connection strategy's variant of (s, t).
     bool wanted(int s, int t, bool placed = false) const {
@@ -286,6 +287,7 @@ private:
     void camera_subpath(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
                         ContributionList& out, Subpaths& paths) const {
         Walk walk{camera_ray, MediumTracker::at_sensor(scene), 0.0, segment_densities()};
+        if (!paths.light.empty()) walk.has_target = true, walk.target = paths.light[0].p;
         Vertex cam;
         cam.kind = Vertex::Kind::Camera;
         cam.p = camera_ray.o;
@@ -333,7 +335,9 @@ private:
     }
 
     // The light subpath: a point on an emitter, then the scattering vertices its light meets.
-    void light_subpath(const Scene& scene, Sampler& sampler, Subpaths& paths) const {
+    // Time-angular directions aim at `camera` (the camera sample's ray origin).
+    void light_subpath(const Scene& scene, Sampler& sampler, Subpaths& paths,
+                       const Vec3& camera) const {
         const int limit = max_vertices(false);
         if (limit < 1) return;
         const LightPathStarts::Start start = LightPathStarts::sample(scene, sampler);
@@ -357,6 +361,8 @@ private:
         paths.light_clock.push_back(clock);
         Walk walk{emission_ray(es), light.medium, 0.0, segment_densities()};
         walk.pdf_dir = es.pdf_direction;
+        walk.has_target = true;
+        walk.target = camera;
         Color power = start.power();
         while (int(paths.light.size()) < limit) {
             Vertex v;
@@ -403,6 +409,11 @@ private:
         double pdf_dir = 0;            // density of ray.d at the walk's last vertex
         SegmentDensities segment;      // the media of the segment being walked
         double first_end = kInfinity;  // where the ray's first piece ends (its first surface)
+        // Time-angular sampling: the point the walk aims at, and the next distance's uniform
+        // number when drawn before the direction (-1 when not).
+        bool has_target = false;
+        Vec3 target = Vec3();
+        double next_u = -1.0;
     };
     SegmentDensities segment_densities() const {
         return SegmentDensities(distance_.get(), mis_, DistanceContext{window_end_});
@@ -435,7 +446,8 @@ private:
                 const DistanceMixture strategy(*medium, distance_.get(), mis_,
                                                DistanceContext{window_end_});
                 const double tmax = found ? double(hit.t) : kInfinity;
-                const double u = double(sampler.next_1d());
+                const double u = walk.next_u >= 0 ? walk.next_u : double(sampler.next_1d());
+                walk.next_u = -1.0;
                 const DistanceSample ds =
                     sample_distance(*medium, walk.ray, tmax, strategy, u, sampler);
                 const double piece = ds.scattered ? ds.distance : tmax;
@@ -486,10 +498,14 @@ private:
         Vec3 wo;
         double pdf_rev_dir = 0;
         if (v.kind == Vertex::Kind::Medium) {
-            wo = v.phase->sample(wi, sampler.next_2d());
-            walk.pdf_dir = v.phase->eval(wi, wo);
-            pdf_rev_dir = v.phase->eval(wo, wi);
-            scatter = Color(1.f);
+            if (steady_angular_) {
+                wo = v.phase->sample(wi, sampler.next_2d());
+                walk.pdf_dir = v.phase->eval(wi, wo);
+                scatter = Color(1.f);
+            } else if (!angular_direction(sampler, walk, v, scatter, wo)) {
+                return false;
+            }
+            pdf_rev_dir = v.phase->eval(wo, wi);  // (time-angular: angular_densities())
             walk.ray = Ray{v.p, wo, 0.f, kInfinity};
         } else {
             const float u_lobe = sampler.next_1d();
@@ -511,6 +527,33 @@ private:
         }
         prev.pdf_rev = v.delta ? 0 : to_area(pdf_rev_dir, v, prev) * v.segment_rev;
         return true;
+    }
+
+    // Time-angular sampling at medium vertex v (ch. 5.6.3), as transient_path does it: the next
+    // distance first (kept in walk.next_u for next_vertex()), then a direction by the angular
+    // strategy given that distance, mixed half-half with the phase function under `mis`.
+    // `scatter` gets the phase function over the direction's density given the distance.
+    bool angular_direction(Sampler& sampler, Walk& walk, const Vertex& v, Color& scatter,
+                           Vec3& wo) const {
+        const DistanceMixture strategy(*v.medium.medium, distance_.get(), mis_,
+                                       DistanceContext{window_end_});
+        walk.next_u = double(sampler.next_1d());
+        const AngularQuery q{
+            v.p, v.wi, v.phase, strategy.sample(walk.next_u), walk.has_target, walk.target};
+        const Vec2 u_dir = sampler.next_2d();
+        const bool use_phase = mis_ && sampler.next_1d() < 0.5f;
+        wo = use_phase ? v.phase->sample(v.wi, u_dir) : angular_->sample(q, u_dir);
+        const double f = double(v.phase->eval(v.wi, wo));
+        const double density = angular_density(q, f, wo);
+        if (!(density > 0) || !std::isfinite(density)) return false;
+        scatter = Color(float(f / density));
+        walk.pdf_dir = density;
+        return true;
+    }
+    // The direction density of angular_direction() for query q, where the phase function's is f.
+    double angular_density(const AngularQuery& q, double f, const Vec3& wo) const {
+        const double a = angular_->pdf(q, wo);
+        return mis_ ? 0.5 * (f + a) : a;
     }
 
     // ---- strategies --------------------------------------------------------------------------
@@ -809,20 +852,22 @@ private:
             return i < s ? light_vertex(i) : camera_vertex(s + t - 1 - i);
         }
         // The segment between x_i and x_{i+1}: its optical length, whether it lies in one
-        // medium, and the distance density of reaching x_i walking from x_{i+1}.
+        // medium, and the distance densities of reaching x_i walking from x_{i+1} and of
+        // reaching x_{i+1} walking from x_i.
         struct Segment {
             double optical;
             bool single_medium;
-            double toward_light;
+            double toward_light, toward_camera;
         };
         Segment segment(int i) const {
             if (i + 1 < s) {
                 const Vertex& b = light_vertex(i + 1);
-                return {b.segment_optical, b.segment_single_medium, b.segment_rev};
+                return {b.segment_optical, b.segment_single_medium, b.segment_rev, b.segment_fwd};
             }
-            if (i + 1 == s) return {join.optical, join.single_medium, join.at_light_end};
+            if (i + 1 == s)
+                return {join.optical, join.single_medium, join.at_light_end, join.at_camera_end};
             const Vertex& a = (*this)[i];
-            return {a.segment_optical, a.segment_single_medium, a.segment_fwd};
+            return {a.segment_optical, a.segment_single_medium, a.segment_fwd, a.segment_rev};
         }
     };
 
@@ -833,17 +878,23 @@ private:
     // `placed`: the strategy is the connection strategy's variant of (s, t). A medium vertex's
     // densities include those of the distance strategy that placed it, so the weights favour
     // the strategies whose distances fit the path (the time-sampling strategies of ch. 5.6).
+    // Each vertex's density from either side, and `rel`: the density of strategy k (joining
+    // x_{k-1} and x_k) relative to strategy s.
+    struct Densities {
+        double from_light, from_camera;
+        bool delta;
+        double rel;
+    };
     float mis_weight(const Scene& scene, const Subpaths& paths, int s, int t, const Join& join,
                      const Vertex* light, const Vertex* camera, bool placed = false) const {
         const PathView path{paths, s, t, light, camera, join};
-        // Each vertex's density from either side, and `rel`: the density of strategy k (joining
-        // x_{k-1} and x_k) relative to strategy s.
-        struct Densities {
-            double from_light, from_camera;
-            bool delta;
-            double rel;
-        };
         const int n = s + t;
+        // Time-angular: an emitter hit right after a medium vertex is left to the other
+        // strategies (as transient_path leaves it to light sampling). Its direction aimed at
+        // another light point, and its density at the point hit (the target's own, infinite
+        // when aimed at it) would not describe it.
+        const bool hit_excluded = !steady_angular_ && path[1].kind == Vertex::Kind::Medium;
+        if (s == 0 && hit_excluded) return 0.f;
         // On the stack for the usual depths (a thread_local vector costs a TLS lookup per call).
         constexpr int kStack = 64;
         Densities stack[kStack];
@@ -878,6 +929,7 @@ private:
             xt.from_light = pdf_light_origin(scene, pt);
             x[size_t(s) + 1].from_light = pdf_light(pt, path.camera_vertex(t - 2)) * pt.segment_rev;
         }
+        if (!steady_angular_) angular_densities(path, x);
         auto remap = [](double f) { return f != 0 ? f : 1.0; };
         auto h = [&](double r) { return power_ ? r * r : r; };
         const int last = to_sensor_ ? n - 1 : n - 2;  // the last strategy: t = 1 or t = 2
@@ -896,12 +948,43 @@ private:
             const bool start_delta = k > 0 ? x[size_t(k) - 1].delta : delta_light;
             const bool joins = k == s || (k > s ? !x[size_t(k) - 1].delta && !x[size_t(k)].delta
                                                 : !x[size_t(k)].delta && !start_delta);
-            if (!joins) continue;
+            if (!joins || (k == 0 && hit_excluded)) continue;
             sum += h(x[size_t(k)].rel);
             if (const double c = placement_factor(scene, path, k); c > 0)
                 sum += h(x[size_t(k)].rel * c);
         }
         return float((placed ? h(placement_factor(scene, path, s)) : 1.0) / sum);
+    }
+
+    // Time-angular sampling: the densities of leaving each medium vertex of the path toward its
+    // neighbours, which the subpaths' own depend on (the distance drawn before the direction,
+    // and the point aimed at). Each is the density at the distance to that neighbour, aiming at
+    // the path's camera end (toward the camera) or its light end (toward the light): the joint
+    // density of direction and distance where the neighbour is a medium vertex on the
+    // segment's first piece, and elsewhere a function of the path alone, so every strategy of a
+    // path computes the same weights.
+    void angular_densities(const PathView& path, Densities* x) const {
+        const int n = path.size();
+        const Vec3 camera_end = path[n - 1].p, light_end = path[0].p;
+        for (int i = 1; i + 1 < n; ++i) {
+            const Vertex& v = path[i];
+            if (v.kind != Vertex::Kind::Medium) continue;
+            const Vertex &toward_light = path[i - 1], &toward_camera = path[i + 1];
+            x[size_t(i) + 1].from_light =
+                angular_pdf(v, towards(v, toward_light), toward_camera, camera_end) *
+                path.segment(i).toward_camera;
+            x[size_t(i) - 1].from_camera =
+                angular_pdf(v, towards(v, toward_camera), toward_light, light_end) *
+                path.segment(i - 1).toward_light;
+        }
+    }
+    // The density (area or volume measure) of time-angular sampling at medium vertex v, arrived
+    // at from w_prev and aiming at `target`, choosing `next` at the distance to it.
+    double angular_pdf(const Vertex& v, const Vec3& w_prev, const Vertex& next,
+                       const Vec3& target) const {
+        const Vec3 d = towards(v, next);
+        const AngularQuery q{v.p, w_prev, v.phase, distance_between(v.p, next.p), true, target};
+        return to_area(angular_density(q, double(v.phase->eval(w_prev, d)), d), v, next);
     }
 
     // The connection strategy's variant of strategy k: its last camera vertex x_k placed on the
@@ -966,6 +1049,8 @@ private:
     bool to_sensor_ = true;    // ... and the sensor can be connected to
     std::shared_ptr<DistanceSampler> distance_;
     std::shared_ptr<ConnectionSampler> connection_;
+    std::shared_ptr<AngularSampler> angular_;
+    bool steady_angular_ = true;     // directions at medium vertices from the phase function
     bool connecting_ = false;        // the connection strategy places vertices
     bool only_placed_ = false;       // debugging: strategy_s/t's connection-strategy variant
     bool mis_ = false;               // distances: a mixture of the strategy and mean free paths
@@ -1019,7 +1104,9 @@ public:
          "debugging, with strategy_s/strategy_t: render the connection strategy's variant of "     \
          "that strategy alone"},                                                                   \
     {                                                                                              \
-        "angular", "angular", "phase", "only phase (steady)"                                       \
+        "angular", "angular", "phase",                                                             \
+            "directions at medium vertices on both subpaths (nested <angular>): phase or time "    \
+            "(light subpaths aim at the camera, camera subpaths at the light subpath's start)"     \
     }
 
 #ifdef FEMTO_MITSUBA_BDPT
