@@ -18,9 +18,11 @@
 //  bdpt       the media of `media` rendered by transient_bdpt: steady (mean-free-path
 //             distances) against exponential distances MIS-combined with mean free paths
 //             (bdpt_time), equiangular placed vertices (bdpt_equiangular) and both time
-//             strategies together (exponential + line_to_point, bdpt_time_all), all weighed by
-//             BDPT's MIS; the path tracer's steady sampling alongside (run with --prefix
-//             media_bdpt to keep the other parts' CSVs; bench/run_media_bdpt.sh does).
+//             strategies together (exponential + line_to_point, bdpt_time_all), time-angular
+//             directions MIS-mixed with the phase function (bdpt_angular) and all three time
+//             strategies (bdpt_time_full, the thesis' bundle), all weighed by BDPT's MIS; the path
+//             tracer's steady sampling alongside (run with --prefix media_bdpt to keep the other
+//             parts' CSVs; bench/run_media_bdpt.sh does).
 //
 // Reference per configuration: exponential + equiangular + time angular with MIS at many spp
 // (equiangular has finite variance next to the point light, where line_to_point and shadow
@@ -82,7 +84,8 @@ const Strategy kTime{"time", "exponential", "line_to_point", "time", true};
 // exponential (mean_vertices 3 over this window: lambda = 0.375) only adds weight.
 const Strategy kTimeMfp{"time_mfp", "mean_free_path", "line_to_point", "time", true};
 const Strategy kReference{"reference", "exponential", "equiangular", "time", true};
-// BDPT takes the distance and connection strategies (angular=time is refused).
+// BDPT takes every strategy: `mis` mixes exponential distances with mean free paths and
+// time-angular directions with the phase function.
 const Strategy kBdptSteady{"bdpt_steady", "mean_free_path", "deterministic", "phase",
                            false,         "transient_bdpt"};
 const Strategy kBdptTime{"bdpt_time", "exponential", "deterministic",
@@ -91,6 +94,11 @@ const Strategy kBdptEquiangular{"bdpt_equiangular", "mean_free_path", "equiangul
                                 "transient_bdpt"};
 const Strategy kBdptTimeAll{"bdpt_time_all", "exponential", "line_to_point",
                             "phase",         true,          "transient_bdpt"};
+const Strategy kBdptAngular{"bdpt_angular", "mean_free_path", "deterministic", "time",
+                            true,           "transient_bdpt"};
+// The thesis' full bundle, as the path tracer's `time` above.
+const Strategy kBdptTimeFull{"bdpt_time_full", "exponential", "line_to_point",
+                             "time",           true,          "transient_bdpt"};
 
 struct Medium {
     double sigma_s, g;
@@ -424,8 +432,9 @@ int main(int argc, char** argv) try {
         for (double g : {0.0, 0.8, -0.8})
             for (double sigma_s : {0.2, 0.9, 1.5})
                 run(csv, "bdpt", {sigma_s, g},
-                    {kSteady, kBdptSteady, kBdptTime, kBdptEquiangular, kBdptTimeAll}, o.budgets,
-                    o.seeds, o, false);
+                    {kSteady, kBdptSteady, kBdptTime, kBdptEquiangular, kBdptTimeAll, kBdptAngular,
+                     kBdptTimeFull},
+                    o.budgets, o.seeds, o, false);
     std::ofstream(base + "_meta.txt", std::ios::app) << "load after: " << read_loadavg() << "\n";
     return 0;
 } catch (const std::exception& e) {

@@ -31,9 +31,11 @@ RESULTS = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__f
 METRICS = ("frame_relmse", "pixel_relmse")
 # (strategy, baseline): what each ratio compares.
 PAIRS = (("bdpt_time", "bdpt_steady"), ("bdpt_equiangular", "bdpt_steady"),
-         ("bdpt_time_all", "bdpt_steady"), ("bdpt_steady", "steady"))
+         ("bdpt_time_all", "bdpt_steady"), ("bdpt_angular", "bdpt_steady"),
+         ("bdpt_time_full", "bdpt_steady"), ("bdpt_steady", "steady"))
 COLOURS = {"steady": "tab:blue", "bdpt_steady": "black", "bdpt_time": "tab:red",
-           "bdpt_equiangular": "tab:green", "bdpt_time_all": "tab:purple"}
+           "bdpt_equiangular": "tab:green", "bdpt_time_all": "tab:purple",
+           "bdpt_angular": "tab:orange", "bdpt_time_full": "tab:brown"}
 
 with open(os.path.join(RESULTS, "media_bdpt_error.csv")) as f:
     rows = [r for r in csv.DictReader(f) if r["part"] == "bdpt"]
@@ -83,7 +85,9 @@ lines = [f"Equal-error ratios at {top} spp, samples / wall-clock time (how many 
          f"how much more time the baseline needs for the same median error; * extrapolated "
          f"along slope -1). `bdpt_time`: exponential distances MIS-combined with mean free "
          f"paths; `bdpt_equiangular`: equiangular placed vertices; `bdpt_time_all`: "
-         f"exponential distances (mis) and line_to_point placed vertices; `steady`: the path "
+         f"exponential distances (mis) and line_to_point placed vertices; `bdpt_angular`: "
+         f"time-angular directions MIS-mixed with the phase function; `bdpt_time_full`: all "
+         f"three (exponential, line_to_point, time-angular, mis); `steady`: the path "
          f"tracer's steady sampling.\n",
          "| sigma_s | g | metric | " + " | ".join(f"{a} vs {b}" for a, b in PAIRS) + " |",
          "|---|---|---|" + "---|" * len(PAIRS)]
