@@ -56,8 +56,11 @@ struct IntegratorCase {
     /// direct lighting); -1 when $max_depth sets it.
     int fixed_depth = -1;
     bool media = false;  ///< renders participating media
-    /// It connects light paths to the sensor (light tracing, BDPT) and so needs a pinhole: the
-    /// checks seen through an orthographic camera, which no connection can reach, are skipped.
+    /// It reaches the sensor only by connecting light paths to it (light tracing) and so needs
+    /// a pinhole: the time-of-flight plane and fluorescence checks look through one instead of
+    /// an orthographic camera, which no connection can reach; the checks that see their light
+    /// only through glass or a mirror (which no connection passes), or through a one-pixel
+    /// camera in fog, are skipped.
     bool connects_to_sensor = false;
 };
 
@@ -76,8 +79,7 @@ protected:
     int depth(int wanted) const {
         return GetParam().fixed_depth >= 0 ? GetParam().fixed_depth : wanted;
     }
-    /// True (and the check is to skip) when the integrator cannot see through an orthographic
-    /// camera.
+    /// True when the integrator cannot see through an orthographic camera.
     bool needs_connectable_sensor() const { return GetParam().connects_to_sensor; }
     std::string integrator() const {
         return "<integrator type=\"" + GetParam().type + "\">" + GetParam().parameters +
@@ -133,6 +135,16 @@ inline std::string camera_above(double height, double half, int spp, const std::
            "\" y=\"" + num(half) + "\"/><lookat origin=\"0,0," + num(height) +
            "\" target=\"0,0,0\" up=\"0,1,0\"/></transform>" + extra + sampler(spp) + film +
            "</sensor>";
+}
+
+/// A pinhole camera at height `height` above the origin, looking down, whose image covers
+/// [-half, half]^2 of the plane z = 0 as camera_above()'s does: for integrators that reach the
+/// sensor only by connections.
+inline std::string pinhole_above(double height, double half, int spp, const std::string& film) {
+    const double fov = 2 * std::atan(half / height) * 180 / M_PI;
+    return "<sensor type=\"perspective\"><float name=\"fov\" value=\"" + num(fov) +
+           "\"/><transform name=\"to_world\"><lookat origin=\"0,0," + num(height) +
+           "\" target=\"0,0,0\" up=\"0,1,0\"/></transform>" + sampler(spp) + film + "</sensor>";
 }
 
 inline std::string point_light(const std::string& position, double intensity) {
@@ -203,8 +215,10 @@ namespace conformance {
 // seen from height kTofCamera by an orthographic camera covering [-2, 2]^2.
 constexpr double kTofH = 1.5, kTofI = 5, kTofRho = 0.6, kTofCamera = 5, kTofHalf = 2;
 
-inline std::string tof_plane(int spp, const std::string& film, const std::string& bsdf) {
-    return camera_above(kTofCamera, kTofHalf, spp, film) +
+inline std::string tof_plane(int spp, const std::string& film, const std::string& bsdf,
+                             bool pinhole = false) {
+    return (pinhole ? pinhole_above(kTofCamera, kTofHalf, spp, film)
+                    : camera_above(kTofCamera, kTofHalf, spp, film)) +
            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"10\"/>"
            "</transform>" +
            bsdf + "</shape>" + point_light("0,0," + num(kTofH), kTofI);
@@ -221,30 +235,78 @@ struct Footprint {
 };
 inline Footprint footprint(int res, int px, int py) {
     const double w = 2 * kTofHalf / res;
-    // The orthographic camera looks down -z with up = +y: image x runs along -x in world.
+    // The orthographic camera looks down -z with up = +y: image x runs along -x in world. (The
+    // pinhole's image may be mirrored; the scene is symmetric in x and y, so every value
+    // checked is the same for the mirrored footprint.)
     const double xa = kTofHalf - px * w, ya = kTofHalf - py * w;
     return {xa - w, xa, ya - w, ya};
+}
+
+// The bins pixel (px, py)'s light may arrive in: light reaches a plane point at distance r from
+// the axis after sqrt(r^2 + H^2), and the camera sqrt(r^2 + kTofCamera^2) later through the
+// pinhole, kTofCamera later through the orthographic camera, or at once in world time. Both
+// grow with r, so the footprint's nearest and farthest points bound them (1e-6: float rounding
+// of lengths of ~7 to 6e-8 relative).
+inline std::pair<int, int> tof_bins(const Footprint& f, double start, double width, int bins,
+                                    bool world_time, bool pinhole) {
+    auto arrival = [&](double r) {
+        const double sensor = world_time ? 0.0 : pinhole ? std::hypot(r, kTofCamera) : kTofCamera;
+        return sensor + std::hypot(r, kTofH);
+    };
+    return {bin_of(start, width, bins, arrival(f.r_min()) - 1e-6),
+            bin_of(start, width, bins, arrival(f.r_max()) + 1e-6)};
+}
+
+// The footprint's mean of the closed-form radiance rho / pi * I * H / d^3 (each camera sample
+// sees one point of it: the plane is parallel to the image, so pixel samples are uniform on the
+// footprint), and its standard deviation there, on a 32 x 32 grid.
+inline MeanAndError footprint_radiance(const Footprint& f) {
+    const int grid = 32;
+    double s = 0, s2 = 0;
+    for (int j = 0; j < grid; ++j)
+        for (int i = 0; i < grid; ++i) {
+            const double x = f.x1 - (i + 0.5) / grid * (f.x1 - f.x0);
+            const double y = f.y1 - (j + 0.5) / grid * (f.y1 - f.y0);
+            const double d2 = x * x + y * y + kTofH * kTofH;
+            const double v = kTofRho / M_PI * kTofI * kTofH / (d2 * std::sqrt(d2));
+            s += v, s2 += v * v;
+        }
+    const double mean = s / (grid * grid);
+    return {mean, std::sqrt(std::max(0.0, s2 / (grid * grid) - mean * mean))};
+}
+
+// Energy outside pixel (px, py)'s allowed bins of `cube` (reported as a failure) and inside.
+inline double tof_pixel_energy(const Cube& cube, int px, int py, std::pair<int, int> allowed,
+                               int& failures) {
+    double inside = 0, outside = 0;
+    for (int t = 0; t < cube.T; ++t)
+        (t < allowed.first || t > allowed.second ? outside : inside) += cube.energy(py, px, t) / 3;
+    if (outside != 0 && ++failures <= 10)
+        ADD_FAILURE() << "pixel " << px << "," << py << ": " << outside << " outside bins ["
+                      << allowed.first << ", " << allowed.second << "]";
+    return inside;
 }
 
 }  // namespace conformance
 
 TEST_P(IntegratorConformance, TofPlaneArrivalAndAmplitude) {
     using namespace conformance;
-    if (needs_connectable_sensor())
-        GTEST_SKIP() << "seen through an orthographic camera, which light paths cannot reach "
-                        "(test_light_tracer.cpp checks the light tracer's arrivals)";
-    // Light reaches a point at distance r from the foot of the light after sqrt(r^2 + H^2),
-    // and the camera 5 later (camera time) or at once (world time: the sensor distance is
-    // removed). Every pixel's energy must lie in the bins its footprint spans; its time
-    // integral is the footprint's mean of rho / pi * I * H / d^3, within 4 SE of the jittered
-    // pixel positions. The third run, world time behind an index-matched boundary (a clear
-    // medium between null surfaces at z = 2.5 and 3.5), checks that the sensor distance is
-    // the first scattering vertex's, not the first surface's.
+    // Every pixel's energy must lie in the bins its footprint spans (tof_bins(): camera and
+    // world time); its time integral is the footprint's mean of rho / pi * I * H / d^3. The
+    // third run, world time behind an index-matched boundary (a clear medium between null
+    // surfaces at z = 2.5 and 3.5), checks that the sensor distance is the first scattering
+    // vertex's, not the first surface's. Through the orthographic camera a camera sample's only
+    // randomness is its position in the pixel, so each pixel is within 4 SE of the jittered
+    // positions; an integrator that needs a pinhole (light tracing) is checked over 16 seeds,
+    // by a chi-square of the pixels' deviations in units of their spread across the seeds.
+    const bool pinhole = needs_connectable_sensor();
     for (const int run : {0, 1, 2}) {
         const bool world = run > 0;
         if (run == 2 && !GetParam().media) continue;
         SCOPED_TRACE(run == 0 ? "camera time" : run == 1 ? "world time" : "world, null boundary");
-        const int res = 16, spp = 64, bins = 370;
+        // (Through the pinhole the corners' camera segment is longer: up to 9.0 in camera time.)
+        const int res = 16, spp = 64, bins = pinhole && !world ? 520 : 370,
+                  seeds = pinhole ? 16 : 1;
         const double start = world ? 1.4 : 6.4, width = 0.005;
         const std::string boundary =
             run < 2 ? ""
@@ -253,51 +315,56 @@ TEST_P(IntegratorConformance, TofPlaneArrivalAndAmplitude) {
                       "type=\"cube\"><transform name=\"to_world\"><scale x=\"4\" y=\"4\" "
                       "z=\"0.5\"/><translate z=\"3\"/></transform><bsdf type=\"null\"/><ref "
                       "name=\"interior\" id=\"clear\"/></shape>";
-        auto scene = load(boundary + tof_plane(spp, transient_film(res, start, width, bins, world),
-                                               "<bsdf type=\"diffuse\"><float name=\"reflectance\" "
-                                               "value=\"" +
-                                                   num(kTofRho) + "\"/></bsdf>"),
-                          depth(2));
-        const Cube cube = render_cube(*scene, 17, "tof" + std::to_string(run));
-        ASSERT_EQ(cube.T, bins);
-        const double sensor_segment = world ? 0.0 : kTofCamera;
+        // A scene per seed: a film accumulates every render of its scene.
+        std::vector<Cube> cubes;
+        for (int seed = 0; seed < seeds; ++seed) {
+            auto scene = load(
+                boundary + tof_plane(spp, transient_film(res, start, width, bins, world),
+                                     "<bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"" +
+                                         num(kTofRho) + "\"/></bsdf>",
+                                     pinhole),
+                depth(2));
+            cubes.push_back(render_cube(*scene, uint64_t(17 + seed), "tof" + std::to_string(run)));
+        }
+        ASSERT_EQ(cubes[0].T, bins);
         int failures = 0;
-        for (int py = 0; py < res && failures < 10; ++py)
-            for (int px = 0; px < res && failures < 10; ++px) {
+        double chi2 = 0, total = 0, total_expected = 0, total_var = 0;
+        for (int py = 0; py < res; ++py)
+            for (int px = 0; px < res; ++px) {
                 const Footprint f = footprint(res, px, py);
-                // 1e-6: float rounding of the geometry (lengths of ~7 to 6e-8 relative).
-                const int b0 = bin_of(start, width, bins,
-                                      sensor_segment + std::hypot(f.r_min(), kTofH) - 1e-6);
-                const int b1 = bin_of(start, width, bins,
-                                      sensor_segment + std::hypot(f.r_max(), kTofH) + 1e-6);
-                ASSERT_GE(b0, 0);
-                ASSERT_GE(b1, b0);
-                double inside = 0, outside = 0;
-                for (int t = 0; t < bins; ++t)
-                    (t < b0 || t > b1 ? outside : inside) += cube.energy(py, px, t) / 3;
-                if (outside != 0) {
-                    ++failures;
-                    ADD_FAILURE() << "pixel " << px << "," << py << ": " << outside
-                                  << " outside bins [" << b0 << ", " << b1 << "]";
-                }
-                const int grid = 32;
-                double s = 0, s2 = 0;
-                for (int j = 0; j < grid; ++j)
-                    for (int i = 0; i < grid; ++i) {
-                        const double x = f.x1 - (i + 0.5) / grid * (f.x1 - f.x0);
-                        const double y = f.y1 - (j + 0.5) / grid * (f.y1 - f.y0);
-                        const double d2 = x * x + y * y + kTofH * kTofH;
-                        const double v = kTofRho / M_PI * kTofI * kTofH / (d2 * std::sqrt(d2));
-                        s += v, s2 += v * v;
-                    }
-                const double mean = s / (grid * grid);
-                const double sd = std::sqrt(std::max(0.0, s2 / (grid * grid) - mean * mean));
-                if (std::abs(inside - mean) > 4 * sd / std::sqrt(double(spp)) + 1e-5 * mean) {
-                    ++failures;
-                    ADD_FAILURE() << "pixel " << px << "," << py << ": " << inside << ", expected "
-                                  << mean;
+                const auto allowed = tof_bins(f, start, width, bins, world, pinhole);
+                ASSERT_GE(allowed.first, 0);
+                std::vector<double> inside;
+                for (const Cube& cube : cubes)
+                    inside.push_back(tof_pixel_energy(cube, px, py, allowed, failures));
+                const MeanAndError expected = footprint_radiance(f);
+                if (pinhole) {  // z^2 of the seeds' mean against their standard error
+                    const MeanAndError m = mean_and_error(inside);
+                    const double z = (m.mean - expected.mean) / m.standard_error;
+                    chi2 += z * z;
+                    total += m.mean, total_expected += expected.mean;
+                    total_var += m.standard_error * m.standard_error;
+                } else if (std::abs(inside[0] - expected.mean) >
+                               4 * expected.standard_error / std::sqrt(double(spp)) +
+                                   1e-5 * expected.mean &&
+                           ++failures <= 10) {
+                    ADD_FAILURE() << "pixel " << px << "," << py << ": " << inside[0]
+                                  << ", expected " << expected.mean;
                 }
             }
+        EXPECT_EQ(failures, 0);
+        if (pinhole) {
+            // z follows a t distribution with nu = seeds - 1: the bound is the mean of the sum
+            // of the pixels' z^2 plus 3.72 of its standard deviations (as tests/unit's
+            // agreement checks).
+            const double nu = seeds - 1, n = double(res) * res;
+            const double m = nu / (nu - 2),
+                         v = 2 * nu * nu * (nu - 1) / ((nu - 2) * (nu - 2) * (nu - 4));
+            EXPECT_LT(chi2, n * m + 3.72 * std::sqrt(n * v))
+                << "pixel amplitudes: chi-square over " << n << " pixels (mean " << n * m << ")";
+            // and the image's total (a bias common to all pixels): within 4 SE.
+            EXPECT_NEAR(total, total_expected, 4 * std::sqrt(total_var));
+        }
     }
 }
 
@@ -335,9 +402,7 @@ TEST_P(IntegratorConformance, FurnaceIsAGeometricSeries) {
 
 TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
     using namespace conformance;
-    if (needs_connectable_sensor())
-        GTEST_SKIP() << "seen through an orthographic camera, which light paths cannot reach "
-                        "(test_light_tracer.cpp checks the light tracer's arrivals)";
+    const bool pinhole = needs_connectable_sensor();
     // The tof plane, fluorescent: it absorbs the blue third of the white light and re-emits it
     // as green after an exponential delay of mean tau (efficiency 1, no elastic reflection).
     // Against the same plane white and Lambertian: green carries what blue carried there, red
@@ -347,14 +412,16 @@ TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
     const std::string film = transient_film(res, start, width, bins);
     auto white = load(tof_plane(spp, film,
                                 "<bsdf type=\"diffuse\"><float name=\"reflectance\" "
-                                "value=\"1\"/></bsdf>"),
+                                "value=\"1\"/></bsdf>",
+                                pinhole),
                       depth(2));
     auto fluorescent =
         load(tof_plane(spp, film,
                        "<bsdf type=\"fluorescent\"><rgb name=\"absorption\" value=\"0,0,1\"/><rgb "
                        "name=\"emission\" value=\"0,1,0\"/><float name=\"efficiency\" "
                        "value=\"1\"/><float name=\"lifetime\" value=\"" +
-                           num(tau) + "\"/></bsdf>"),
+                           num(tau) + "\"/></bsdf>",
+                       pinhole),
              depth(2));
     const Cube ref = render_cube(*white, 31, "fluo-white");
     const Cube fl = render_cube(*fluorescent, 31, "fluo");
@@ -392,8 +459,9 @@ TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
 TEST_P(IntegratorConformance, GlassSlabDelay) {
     using namespace conformance;
     if (needs_connectable_sensor())
-        GTEST_SKIP() << "seen through an orthographic camera, which light paths cannot reach "
-                        "(test_light_tracer.cpp checks the light tracer's arrivals)";
+        GTEST_SKIP() << "the emitter is seen only through glass, and no connection to the sensor "
+                        "passes a specular surface (test_light_tracer.cpp checks the light "
+                        "tracer's glass delay from the side)";
     // An emitting rectangle (radiance 1, black) at z = 0 seen from above through a glass slab
     // of index eta filling 1 <= z <= 1 + d. Straight through, light arrives at camera time
     // 5 + (eta - 1) d; 2k internal reflections add 2 k eta d. At normal incidence a camera
@@ -443,8 +511,8 @@ TEST_P(IntegratorConformance, GlassSlabDelay) {
 TEST_P(IntegratorConformance, TimeOfFlightIsExactAtEveryScale) {
     using namespace conformance;
     if (needs_connectable_sensor())
-        GTEST_SKIP() << "seen through an orthographic camera, which light paths cannot reach "
-                        "(test_light_tracer.cpp checks the light tracer's arrivals)";
+        GTEST_SKIP() << "the wall is seen only through glass and a mirror, and no connection to "
+                        "the sensor passes a specular surface";
     // The same scene at scales s = 1e-6 ... 1e6: an orthographic camera at height 5 s with a
     // tiny footprint looks down through a glass slab (index eta, 2 s <= z <= 2.5 s) at a mirror
     // tilted 45 degrees (the plane z = -x), which shows a diffuse wall at x = 5 s lit by a
@@ -509,8 +577,10 @@ TEST_P(IntegratorConformance, TimeOfFlightIsExactAtEveryScale) {
 TEST_P(IntegratorConformance, SingleScatteringInAMedium) {
     using namespace conformance;
     if (needs_connectable_sensor())
-        GTEST_SKIP() << "seen through an orthographic camera, which light paths cannot reach "
-                        "(test_light_tracer.cpp checks the light tracer's arrivals)";
+        GTEST_SKIP() << "a one-pixel camera ray needs an orthographic camera; through a pinhole "
+                        "the pixel's cone is a vanishing target for light paths "
+                        "(test_light_tracer.cpp compares the light tracer in fog with the path "
+                        "tracer)";
     // A 1-pixel orthographic camera at the origin looks along +x through fog (sigma_a 0.1,
     // sigma_s 0.5, isotropic) lit by a point light of intensity 3 at (2, 1, 0). Paths of two
     // segments carry single scattering only: each bin against single_scattering()
