@@ -88,22 +88,40 @@ def time_at(a, b, error):
     return math.exp((math.log(error) - a) / b)
 
 
+def option(name, default=None):
+    """The value after `name` on the command line (e.g. --budgets 64,128), or `default`."""
+    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+
+
 def main():
     warnings.simplefilter("ignore", np.RankWarning)  # bootstrap resamples of few distinct runs
     femto, out_dir = sys.argv[1], sys.argv[2]
     quick = "--quick" in sys.argv
+    # One scene / filter at other budgets, into files of their own (e.g. --scene cornell-box
+    # --tfilter kernel --budgets 64,128,256,512,1024 --prefix bidir_cornell_kernel).
+    only_scene, only_filter = option("--scene"), option("--tfilter")
+    budgets_option, ref_option = option("--budgets"), option("--ref-spp")
+    prefix = option("--prefix", "bidir")
     os.makedirs(out_dir, exist_ok=True)
     work = tempfile.mkdtemp()
-    runs_csv = open(os.path.join(out_dir, "bidir_runs.csv"), "w", newline="")
+    runs_csv = open(os.path.join(out_dir, f"{prefix}_runs.csv"), "w", newline="")
     runs = csv.writer(runs_csv)
     runs.writerow(["scene", "tfilter", "integrator", "spp", "seed", "seconds", "mrays_per_s",
                    "cube_relmse"])
     ratio_rows = []
     results = {}
     for scene, defines, depth, hide, budgets, ref_spp in SCENES:
+        if only_scene and scene != only_scene:
+            continue
         if quick:
             budgets, ref_spp = budgets[:2], 256
+        if budgets_option:
+            budgets = [int(b) for b in budgets_option.split(",")]
+        if ref_option:
+            ref_spp = int(ref_option)
         for tfilter in FILTERS:
+            if only_filter and tfilter != only_filter:
+                continue
             xml = {}
             for integ in INTEGRATORS:
                 xml[integ] = os.path.join(work, f"{scene}-{tfilter}-{integ}.xml")
@@ -129,13 +147,13 @@ def main():
                               f"relMSE {err:.3e} ({rate:.2f} Mrays/s)", flush=True)
             ratio_rows += equal_error_ratios(scene, tfilter, results)
     runs_csv.close()
-    with open(os.path.join(out_dir, "bidir_ratios.csv"), "w", newline="") as f:
+    with open(os.path.join(out_dir, f"{prefix}_ratios.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["scene", "tfilter", "integrator", "slope", "target_relmse",
                     "time_ratio_vs_path", "ratio_p05", "ratio_p95", "mrays_per_s_median",
                     "ray_rate_vs_path"])
         w.writerows(ratio_rows)
-    plot(results, os.path.join(out_dir, "bidir.png"))
+    plot(results, os.path.join(out_dir, f"{prefix}.png"))
 
 
 def resample(runs, rng):

@@ -39,6 +39,9 @@ public:
     }
 
     float eval(const femto::Vec3& wi, const femto::Vec3& wo) const override {
+        // Isotropic: the same value without the square root (a bidirectional integrator
+        // evaluates the phase function several times per connection).
+        if (g_ == 0.0) return static_cast<float>(kInv4Pi);
         double c = -(double(wi.x) * wo.x + double(wi.y) * wo.y + double(wi.z) * wo.z);
         c = std::clamp(c, -1.0, 1.0);
         const double denom = 1.0 + g_ * g_ - 2.0 * g_ * c;  // >= (1 - |g|)^2 > 0
