@@ -713,6 +713,9 @@ private:
         Vertex x;
         x.kind = Vertex::Kind::Medium;
         x.p = ray.ray.at(float(r));
+        // A vertex on top of the ray's origin (a distance that rounds to 0) has no direction
+        // from it, as in the walks: no contribution (probability zero in exact arithmetic).
+        if (!(squared_length(x.p - ray.ray.o) > 0.f)) return;
         x.wi = -ray.ray.d;
         x.phase = &medium.phase();
         x.medium = ray.medium;
