@@ -72,6 +72,20 @@ AgreementCase fog_object_case() {
     return c;
 }
 
+// transient_bdpt with each of `strategies` in its <integrator> against transient_bdpt with
+// steady sampling, on fog_object_case()'s cells.
+void agrees_with_steady_bdpt_on_fog_object(const std::vector<std::string>& strategies) {
+    AgreementCase c = fog_object_case();
+    c.reference = "transient_bdpt";
+    c.path_children = "";
+    c.spp_path = c.spp_light;
+    for (const std::string& children : strategies) {
+        SCOPED_TRACE(children);
+        c.children = children;
+        check_agreement(c, "transient_bdpt");
+    }
+}
+
 TEST(Bdpt, AgreesWithPathTracerOnFogObject) {
     check_agreement(fog_object_case(), "transient_bdpt");
 }
@@ -376,32 +390,20 @@ TEST(Bdpt, AgreesWithPathTracerWithExponentialDistances) {
 // first light out of the dense fog already takes the chi-square of that comparison to 583 of
 // a bound of 621 (mean 481), which leaves no room to see a bias of the new strategies.
 TEST(Bdpt, AgreesWithItselfWithConnectionStrategies) {
-    AgreementCase c = fog_object_case();
-    c.reference = "transient_bdpt";
-    c.path_children = "";
-    c.spp_path = c.spp_light;
-    c.children = "<connection type=\"equiangular\"/>";
-    check_agreement(c, "transient_bdpt");
-    c.children =
-        "<connection type=\"line_to_point\"/><distance type=\"exponential\"/><boolean "
-        "name=\"mis\" value=\"true\"/>";
-    check_agreement(c, "transient_bdpt");
+    agrees_with_steady_bdpt_on_fog_object(
+        {"<connection type=\"equiangular\"/>",
+         "<connection type=\"line_to_point\"/><distance type=\"exponential\"/><boolean "
+         "name=\"mis\" value=\"true\"/>"});
 }
 
 // Every time-sampling strategy at once in fog-object (time-angular directions; exponential
 // distances MIS-mixed with mean free paths; line_to_point placed vertices), and time-angular
 // directions alone, against BDPT with steady sampling.
 TEST(Bdpt, AgreesWithItselfWithTimeAngular) {
-    AgreementCase c = fog_object_case();
-    c.reference = "transient_bdpt";
-    c.path_children = "";
-    c.spp_path = c.spp_light;
-    c.children = "<angular type=\"time\"/>";
-    check_agreement(c, "transient_bdpt");
-    c.children =
-        "<angular type=\"time\"/><connection type=\"line_to_point\"/><distance "
-        "type=\"exponential\"/><boolean name=\"mis\" value=\"true\"/>";
-    check_agreement(c, "transient_bdpt");
+    agrees_with_steady_bdpt_on_fog_object(
+        {"<angular type=\"time\"/>",
+         "<angular type=\"time\"/><connection type=\"line_to_point\"/><distance "
+         "type=\"exponential\"/><boolean name=\"mis\" value=\"true\"/>"});
 }
 
 // A vertex the connection strategy places at its ray's origin (a distance that rounds to 0)
