@@ -297,6 +297,41 @@ private:
     bool mix_;
 };
 
+/// The angular strategy at a medium vertex (ch. 5.6.3): a direction by `strategy` alone, or,
+/// with `mis`, from a half-half mixture of it and the phase function (one-sample MIS, balance
+/// heuristic). The path's weight is the phase function over pdf(), which for time-angular
+/// sampling depends on the next distance, drawn before the direction (AngularQuery::distance).
+class AngularMixture {
+public:
+    AngularMixture(const AngularSampler& strategy, bool mis) : strategy_(strategy), mis_(mis) {}
+
+    struct Sample {
+        Vec3 wo;
+        double phase = 0;  ///< the phase function's value for wo
+        double pdf = 0;    ///< pdf() of wo
+    };
+    /// A direction from two uniform numbers, plus, with mis, one choosing the component.
+    Sample sample(const AngularQuery& q, Sampler& sampler) const {
+        const Vec2 u = sampler.next_2d();
+        const bool use_phase = mis_ && sampler.next_1d() < 0.5f;
+        Sample s;
+        s.wo = use_phase ? q.phase->sample(q.wi, u) : strategy_.sample(q, u);
+        s.phase = double(q.phase->eval(q.wi, s.wo));
+        s.pdf = pdf(q, s.phase, s.wo);
+        return s;
+    }
+    /// Solid-angle density of sample() returning wo, where the phase function's value is
+    /// `phase`.
+    double pdf(const AngularQuery& q, double phase, const Vec3& wo) const {
+        const double a = strategy_.pdf(q, wo);
+        return mis_ ? 0.5 * (phase + a) : a;
+    }
+
+private:
+    const AngularSampler& strategy_;
+    bool mis_;
+};
+
 /// How likely distance sampling (a DistanceMixture in each medium, restarted at every boundary)
 /// is to reach the far end of a segment that crosses media in pieces, walking from either end:
 /// what a bidirectional integrator's MIS weights need of a segment that one strategy samples

@@ -300,13 +300,11 @@ private:
     bool angular_direction(Sampler& sampler, PathState& path, const Vec3& p, const Vec3& wi,
                            const PhaseFunction& phase, double next_distance, Vec3& wo) const {
         const AngularQuery aq{p, wi, &phase, next_distance, path.has_target, path.target};
-        const Vec2 u_dir = sampler.next_2d();
-        const bool use_phase = mis_ && sampler.next_1d() < 0.5f;
-        wo = use_phase ? phase.sample(wi, u_dir) : angular_->sample(aq, u_dir);
-        const double f = double(phase.eval(wi, wo)), q = angular_->pdf(aq, wo);
-        const double density = mis_ ? 0.5 * (f + q) : q;
+        const AngularMixture::Sample as = AngularMixture(*angular_, mis_).sample(aq, sampler);
+        wo = as.wo;
+        const double density = as.pdf;
         if (!(density > 0) || !std::isfinite(density)) return false;
-        path.throughput *= Color(float(f / density));
+        path.throughput *= Color(float(as.phase / density));
         path.prev_pdf = float(density);
         path.hit_share = 0.f;
         return true;

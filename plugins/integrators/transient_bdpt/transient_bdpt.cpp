@@ -540,20 +540,12 @@ private:
         walk.next_u = double(sampler.next_1d());
         const AngularQuery q{
             v.p, v.wi, v.phase, strategy.sample(walk.next_u), walk.has_target, walk.target};
-        const Vec2 u_dir = sampler.next_2d();
-        const bool use_phase = mis_ && sampler.next_1d() < 0.5f;
-        wo = use_phase ? v.phase->sample(v.wi, u_dir) : angular_->sample(q, u_dir);
-        const double f = double(v.phase->eval(v.wi, wo));
-        const double density = angular_density(q, f, wo);
-        if (!(density > 0) || !std::isfinite(density)) return false;
-        scatter = Color(float(f / density));
-        walk.pdf_dir = density;
+        const AngularMixture::Sample as = AngularMixture(*angular_, mis_).sample(q, sampler);
+        if (!(as.pdf > 0) || !std::isfinite(as.pdf)) return false;
+        wo = as.wo;
+        scatter = Color(float(as.phase / as.pdf));
+        walk.pdf_dir = as.pdf;
         return true;
-    }
-    // The direction density of angular_direction() for query q, where the phase function's is f.
-    double angular_density(const AngularQuery& q, double f, const Vec3& wo) const {
-        const double a = angular_->pdf(q, wo);
-        return mis_ ? 0.5 * (f + a) : a;
     }
 
     // ---- strategies --------------------------------------------------------------------------
@@ -987,7 +979,8 @@ private:
                        const Vec3& target) const {
         const Vec3 d = towards(v, next);
         const AngularQuery q{v.p, w_prev, v.phase, distance_between(v.p, next.p), true, target};
-        return to_area(angular_density(q, double(v.phase->eval(w_prev, d)), d), v, next);
+        return to_area(AngularMixture(*angular_, mis_).pdf(q, double(v.phase->eval(w_prev, d)), d),
+                       v, next);
     }
 
     // The connection strategy's variant of strategy k: its last camera vertex x_k placed on the
