@@ -33,10 +33,12 @@ ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, con
     for (int crossings = 0; crossings < 256; ++crossings) {
         Hit hit;
         const bool found = scene.intersect(ray, hit);
-        const double segment = found ? double(hit.t) : double(ray.tmax);
-        if (medium.medium) c.transmittance *= medium.medium->transmittance(ray, segment, sampler);
         const Vec3 next = found ? hit.p : to;
         const double length = distance_between(last, next);
+        // Attenuation over the length light travels, not over the ray's: a shadow ray stops
+        // short of its target (by 1e-4 of its length), which would leave exp(1e-4 sigma_t d)
+        // too much light.
+        if (medium.medium) c.transmittance *= medium.medium->transmittance(ray, length, sampler);
         if (pieces) pieces->piece(medium.medium, length);
         c.optical_length += length * medium.eta();
         last = next;
