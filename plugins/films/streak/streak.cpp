@@ -46,7 +46,7 @@ public:
     }
     PixelSums& sums(size_t slot) { return sums_[slot]; }
     void add(size_t slot, int bin, float w, const Color& v) {
-        float* dst = &data_[(slot * size_t(bins_) + size_t(bin)) * 3];
+        double* dst = &data_[(slot * size_t(bins_) + size_t(bin)) * 3];
         dst[0] += w * v.r;
         dst[1] += w * v.g;
         dst[2] += w * v.b;
@@ -55,7 +55,7 @@ public:
     int bins_;
     std::vector<int> rows_;        // recorded rows inside [y0_, y0_ + h_)
     std::vector<int> slot_of_y_;   // per block row: index into rows_, or -1
-    std::vector<float> data_;      // [rows_][w_][bins][3]
+    std::vector<double> data_;     // [rows_][w_][bins][3]; double as the transient film's blocks
     std::vector<PixelSums> sums_;  // [rows_][w_]
 };
 
@@ -142,9 +142,9 @@ public:
                 const PixelSums& in_sums = block.sums_[src];
                 if (in_sums.empty()) continue;
                 sums_[dst] += in_sums;
-                const float* in = &block.data_[src * T3];
+                const double* in = &block.data_[src * T3];
                 float* out = &data_[dst * T3];
-                for (size_t i = 0; i < T3; ++i) out[i] += in[i];
+                for (size_t i = 0; i < T3; ++i) out[i] += float(in[i]);
             }
         }
     }

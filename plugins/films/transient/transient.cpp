@@ -5,9 +5,9 @@
 // io::OutputSet: the files replace earlier outputs together or not at all.
 //
 // Memory: the cube (W*H*T*3 floats) is allocated once; per-pixel filter weights and depth
-// sums are doubles. Blocks hold one tile (plus the filter border) of the cube each. Sums are
-// accumulated per sample, then per pass in a block, then into the cube, so a single small
-// contribution is never added directly to a large running total.
+// sums are doubles. Blocks hold one tile (plus the filter border) of the cube each, in double.
+// Sums are accumulated per sample, then per pass in a block, then into the cube, so a single
+// small contribution is never added directly to a large running total.
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -35,9 +35,11 @@ class TransientFilm;
 struct BlockStorage {
     // Time-major ([bins][h][w]): a contribution splatted over the filter footprint touches a
     // few neighbouring cache lines of one bin rather than one line per pixel.
-    std::vector<float> cube;   // [bins][h][w][3]
+    // Double: a pass may add many contributions to one entry (a light tracer's splats onto a
+    // one-pixel meter: every light path of the pass), and float sums of that many lose digits.
+    std::vector<double> cube;  // [bins][h][w][3]
     std::vector<float> count;  // [bins][h][w] contributions per bin (aovs="count")
-    std::vector<float> sq;     // [bins][h][w][3] sum of w * (per-sample bin value)^2
+    std::vector<double> sq;    // [bins][h][w][3] sum of w * (per-sample bin value)^2
     std::vector<PixelSums> weights;
     std::vector<uint64_t> touched_bits;  // one bit per (pixel, bin)
     std::vector<uint32_t> touched;       // the (bin * pixels + pixel) entries set, in order
@@ -58,7 +60,7 @@ public:
     PixelSums& sums(size_t local) { return st_->weights[local]; }
     void add(size_t local, int bin, float w, const Color& v) {
         const size_t flat = touch(local, bin);
-        float* dst = &st_->cube[flat * 3];
+        double* dst = &st_->cube[flat * 3];
         dst[0] += w * v.r;
         dst[1] += w * v.g;
         dst[2] += w * v.b;
@@ -168,7 +170,7 @@ public:
     // A block stores every bin of its pixels (cube, second moment, counts, touched bits).
     size_t block_bytes_per_pixel() const override {
         const size_t per_bin =
-            3 * sizeof(float) * (variance_enabled_ ? 2 : 1) + (count_enabled_ ? sizeof(float) : 0);
+            3 * sizeof(double) * (variance_enabled_ ? 2 : 1) + (count_enabled_ ? sizeof(float) : 0);
         return size_t(grid_.bins) * per_bin + size_t(grid_.bins + 7) / 8;
     }
 
@@ -186,8 +188,8 @@ public:
         const size_t entries = pixels * size_t(grid_.bins);
         if (st->weights.size() < pixels) {  // growing keeps the all-zero invariant
             st->weights.resize(pixels);
-            st->cube.resize(entries * 3, 0.f);
-            if (variance_enabled_) st->sq.resize(entries * 3, 0.f);
+            st->cube.resize(entries * 3, 0.0);
+            if (variance_enabled_) st->sq.resize(entries * 3, 0.0);
             if (count_enabled_) st->count.resize(entries, 0.f);
             st->touched_bits.resize((entries + 63) / 64, 0);
         }
@@ -211,15 +213,15 @@ public:
             const size_t dst = dst_of[local];
             if (dst != SIZE_MAX) {
                 for (int c = 0; c < 3; ++c)
-                    cube_[(dst * bins + bin) * 3 + c] += st.cube[size_t(flat) * 3 + c];
+                    cube_[(dst * bins + bin) * 3 + c] += float(st.cube[size_t(flat) * 3 + c]);
                 if (variance_enabled_)
                     for (int c = 0; c < 3; ++c)
-                        sq_[(dst * bins + bin) * 3 + c] += st.sq[size_t(flat) * 3 + c];
+                        sq_[(dst * bins + bin) * 3 + c] += float(st.sq[size_t(flat) * 3 + c]);
                 if (count_enabled_) count_[dst * bins + bin] += st.count[flat];
             }
-            for (int c = 0; c < 3; ++c) st.cube[size_t(flat) * 3 + c] = 0.f;
+            for (int c = 0; c < 3; ++c) st.cube[size_t(flat) * 3 + c] = 0.0;
             if (variance_enabled_)
-                for (int c = 0; c < 3; ++c) st.sq[size_t(flat) * 3 + c] = 0.f;
+                for (int c = 0; c < 3; ++c) st.sq[size_t(flat) * 3 + c] = 0.0;
             if (count_enabled_) st.count[flat] = 0.f;
             st.touched_bits[flat >> 6] = 0;  // whole words: every bit in them is in `touched`
         }
@@ -341,8 +343,8 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h)
 
 CubeBlock::~CubeBlock() {
     if (!clean_) {  // never merged (an exception): restore the all-zero invariant
-        std::fill(st_->cube.begin(), st_->cube.end(), 0.f);
-        std::fill(st_->sq.begin(), st_->sq.end(), 0.f);
+        std::fill(st_->cube.begin(), st_->cube.end(), 0.0);
+        std::fill(st_->sq.begin(), st_->sq.end(), 0.0);
         std::fill(st_->count.begin(), st_->count.end(), 0.f);
         std::fill(st_->touched_bits.begin(), st_->touched_bits.end(), 0);
         std::fill(st_->weights.begin(), st_->weights.end(), PixelSums());
