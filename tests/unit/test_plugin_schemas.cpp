@@ -118,6 +118,13 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
         p.set_int("bins", 4);
         p.set_float("bin_width", 0.5);
     };
+    // The meters measure one value: their film must have one pixel.
+    const auto one_pixel_film = [](Properties& p) {
+        Properties film("hdrfilm", {});
+        film.set_int("width", 1);
+        film.set_int("height", 1);
+        p.set_object("film", femto::create_object(PluginKind::Film, "hdrfilm", film));
+    };
     return {
         {"shape obj", [&](Properties& p) { p.set_string("filename", in("tri.obj")); }},
         {"shape ply", [&](Properties& p) { p.set_string("filename", in("tri.ply")); }},
@@ -137,6 +144,8 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
          [](Properties& p) {
              p.set_object("bsdf", femto::create_default_object(PluginKind::Bsdf, "diffuse", {}));
          }},
+        {"sensor radiancemeter", one_pixel_film},
+        {"sensor irradiancemeter", one_pixel_film},
     };
 }
 

@@ -64,6 +64,10 @@ public:
         items_.clear();
         sensor_distance_ = -1.0;
     }
+    /// Multiplies every contribution by `k` (the renderer applies Sensor::ray_weight()).
+    void scale(float k) {
+        for (Contribution& c : items_) c.radiance *= k;
+    }
     /// Index of this camera sample within its pixel (0, 1, ...), set by the renderer. A
     /// progressive temporal filter uses it as the iteration number of its bandwidth schedule.
     void set_sample_index(uint32_t index) { sample_index_ = index; }

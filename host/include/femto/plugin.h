@@ -29,7 +29,9 @@ namespace femto {
 /// (9: splats and light paths: Integrator::source()/sample_light()/begin_pass(), SplatList,
 ///  Film::add_splat_weight(), Sensor::sample_direct(), Emitter::sample_emission().)
 /// (10: shadow connections report their medium pieces (MediumPieces); SegmentDensities.)
-inline constexpr uint32_t kPluginAbiVersion = 10;
+/// (11: measurement sensors: Sensor::has_area()/ray_weight()/attach()/needs_shape(),
+///  Shape::sensor_ptr(), ContributionList::scale().)
+inline constexpr uint32_t kPluginAbiVersion = 11;
 
 struct PluginDescriptor {
     uint32_t abi_version;

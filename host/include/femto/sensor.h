@@ -13,6 +13,7 @@
 namespace femto {
 
 class Medium;
+class Shape;
 
 /// A connection from a point in the scene to the sensor, for light paths the camera sees
 /// (light tracing, BDPT's strategies that end on the sensor).
@@ -45,8 +46,24 @@ public:
     /// is outside the field of view or the clipping range.
     virtual SensorSample sample_direct(const Vec3& /*ref*/, Vec2 /*u*/) const { return {}; }
     /// Solid-angle density with which sample_ray() at a uniformly drawn film position leaves in
-    /// world direction `d` (unit); 0 outside the field of view.
+    /// world direction `d` (unit); 0 outside the field of view, and 0 for a sensor with area
+    /// (a direction alone has no density there).
     virtual float pdf_direction(const Vec3& /*d*/) const { return 0.f; }
+    /// True when rays start anywhere on a surface (an irradiance meter), not at one point:
+    /// sample_direct() then picks the point too. BDPT, whose MIS treats the sensor as one
+    /// point, leaves its connections to such a sensor (strategies t = 1) out.
+    virtual bool has_area() const { return false; }
+    /// Factor on the radiance every camera ray brings back, applied by the renderer: 1 for
+    /// sensors that measure radiance, pi for an irradiance meter (its cosine-distributed rays
+    /// then estimate irradiance).
+    virtual float ray_weight() const { return 1.f; }
+
+    /// Called once, when the scene is built, for a sensor nested in a <shape> (Mitsuba 3's
+    /// irradiancemeter); the shape is complete by then. The default refuses: most sensors do
+    /// not measure on a surface.
+    virtual void attach(const Shape& shape);
+    /// True for a sensor that only works nested in a <shape>; a top-level one is refused.
+    virtual bool needs_shape() const { return false; }
 
     Film& film() const { return *film_; }
     Sampler& sampler() const { return *sampler_; }

@@ -19,6 +19,7 @@ namespace femto {
 class Bsdf;
 class Emitter;
 class Medium;
+class Sensor;
 class Shape;
 
 /// A ray-surface intersection, everything an integrator needs at a path vertex.
@@ -85,6 +86,10 @@ public:
     bool has_media() const { return interior_ || exterior_; }
     const Emitter* emitter() const { return emitter_.get(); }
     std::shared_ptr<Emitter> emitter_ptr() const { return emitter_; }
+    /// A sensor nested in the shape (an irradiance meter measuring on it), or null.
+    std::shared_ptr<Sensor> sensor_ptr() const { return sensor_; }
+    /// The medium on the side the normal points to, shared (a sensor on the shape sits in it).
+    std::shared_ptr<Medium> exterior_ptr() const { return exterior_; }
     float surface_area() const { return area_; }
 
     /// Fills `hit` for primitive `prim` hit at distance `t` with Embree's (u, v).
@@ -125,6 +130,7 @@ private:
     float area_ = 0.f;
     std::shared_ptr<Bsdf> bsdf_;
     std::shared_ptr<Emitter> emitter_;
+    std::shared_ptr<Sensor> sensor_;
     std::shared_ptr<Medium> interior_, exterior_;
 };
 

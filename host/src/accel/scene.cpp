@@ -10,6 +10,7 @@
 #include "accel/embree_scene.h"
 #include "femto/integrator.h"
 #include "femto/medium.h"
+#include "femto/sensor.h"
 
 namespace femto {
 
@@ -42,6 +43,8 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
             emitters_.push_back(e);
         }
     for (const auto& e : emitters_) emitter_list_.push_back(e.get());
+    for (const auto& s : shapes_)
+        if (s->sensor_ptr() == sensor_) sensor_->attach(*s);
     has_media_ = sensor_->medium() != nullptr;
     for (const auto& s : shapes_) has_media_ = has_media_ || s->has_media();
     for (const Emitter* e : emitter_list_) has_media_ = has_media_ || e->medium() != nullptr;

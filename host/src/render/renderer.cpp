@@ -132,6 +132,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
     Film& film = sensor.film();
     const Integrator& integrator = scene.integrator();
     auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
+    const float ray_weight = sensor.ray_weight();
     list.set_splat_list(splats);
     uint64_t taken = 0;
     for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
@@ -153,6 +154,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
                 list.set_film_position(pos);
                 if (splats) splats->set_sample_index(s);
                 integrator.sample(scene, sampler, ray, list);
+                if (ray_weight != 1.f) list.scale(ray_weight);
                 block->put(pos, list);
             }
         }

@@ -572,13 +572,17 @@ public:
                     integrator = std::static_pointer_cast<Integrator>(obj);
                     break;
                 case PluginKind::Sensor:
-                    if (sensor)
-                        throw SceneError(
-                            c.location, "the scene has more than one <sensor> (femto renders one)");
-                    sensor = std::static_pointer_cast<Sensor>(obj);
+                    take_sensor(std::static_pointer_cast<Sensor>(obj), c.location, sensor);
+                    if (sensor->needs_shape())
+                        throw SceneError(c.location,
+                                         fmt::format("<sensor type=\"{}\"> measures on a surface: "
+                                                     "nest it in the <shape> it measures on",
+                                                     sensor->type_name()));
                     break;
                 case PluginKind::Shape:
                     shapes.push_back(std::static_pointer_cast<Shape>(obj));
+                    if (auto nested = shapes.back()->sensor_ptr())
+                        take_sensor(nested, nested->location(), sensor);
                     break;
                 case PluginKind::Emitter:
                     emitters.push_back(std::static_pointer_cast<Emitter>(obj));
@@ -599,6 +603,16 @@ public:
             integrator = std::static_pointer_cast<Integrator>(
                 create_default(PluginKind::Integrator, "path", root.location));
         return std::make_unique<Scene>(integrator, sensor, std::move(shapes), std::move(emitters));
+    }
+
+    // The scene's one sensor, at the top level or nested in a shape (an irradiance meter).
+    static void take_sensor(std::shared_ptr<Sensor> found, const SourceLocation& where,
+                            std::shared_ptr<Sensor>& sensor) {
+        if (sensor)
+            throw SceneError(where, fmt::format("the scene has more than one <sensor> (femto "
+                                                "renders one; the first is at {})",
+                                                sensor->location().str()));
+        sensor = std::move(found);
     }
 
     // Properties written directly in <scene>: Mitsuba's scene reads only the settings of its

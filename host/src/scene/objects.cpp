@@ -42,6 +42,12 @@ Sensor::Sensor(const Properties& props) {
     medium_ = std::static_pointer_cast<Medium>(props.child(PluginKind::Medium));
 }
 
+void Sensor::attach(const Shape&) {
+    throw SceneError(location(), "a <sensor type=\"" + type_name() +
+                                     "\"> cannot be nested in a <shape>: only irradiancemeter "
+                                     "measures on a surface; put this sensor in <scene>");
+}
+
 std::vector<ParamSpec> Sampler::inherited_params() {
     return inherit_params(Object::inherited_params(), "Sampler",
                           {{"sample_count", "integer", "4", "samples per pixel (> 0)"},

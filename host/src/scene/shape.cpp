@@ -8,6 +8,7 @@
 #include "femto/bsdf.h"
 #include "femto/emitter.h"
 #include "femto/medium.h"
+#include "femto/sensor.h"
 #include "femto/warp.h"
 
 namespace femto {
@@ -27,6 +28,7 @@ std::vector<ParamSpec> Shape::inherited_params() {
          {"flip_normals", "boolean", "false", "make the inside the outside"},
          {"bsdf", "bsdf", "diffuse", "material of the surface"},
          {"emitter", "emitter", "", "area emitter attached to the surface"},
+         {"sensor", "sensor", "", "sensor measuring on the surface (irradiancemeter)"},
          {"interior", "medium", "", "medium inside the shape (nested or <ref name=\"interior\">)"},
          {"exterior", "medium", "", "medium outside the shape"}});
 }
@@ -49,6 +51,7 @@ Shape::Shape(const Properties& props) : location_(props.location()) {
                              "only area emitters can be attached to a shape; put "
                              "point, spot and collimated emitters at the top level");
     }
+    sensor_ = std::static_pointer_cast<Sensor>(props.child(PluginKind::Sensor));
 }
 
 Shape::~Shape() = default;

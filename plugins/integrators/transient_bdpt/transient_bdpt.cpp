@@ -205,8 +205,9 @@ public:
     void preprocess(const Scene& scene) override {
         MonteCarloIntegrator::preprocess(scene);
         // A sensor no connection can reach (orthographic) leaves out the strategies t = 1, and
-        // so does light_image=false.
-        to_sensor_ = light_image_ && scene.sensor().connectable();
+        // so does light_image=false. So does a sensor with area (an irradiance meter): the MIS
+        // weights below take the sensor for one point.
+        to_sensor_ = light_image_ && scene.sensor().connectable() && !scene.sensor().has_area();
         window_end_ = scene.time_window().end;
         if (images_.enabled) {
             if (max_depth() < 0)
@@ -214,7 +215,8 @@ public:
                                  "strategy_images needs a finite max_depth (one image per (s, t) "
                                  "with s + t - 1 <= max_depth)");
             const Film& film = scene.sensor().film();
-            images_.prepare(film.width(), film.height(), int(max_depth()));
+            images_.prepare(film.width(), film.height(), int(max_depth()),
+                            scene.sensor().ray_weight());
         }
         distance_->prepare({window_end_});
         starts_.prepare(scene, type_name());
@@ -1020,17 +1022,19 @@ private:
     struct StrategyImages {
         bool enabled = false;
         int width = 0, height = 0, depth = 0;
+        float camera_weight = 1;                        // Sensor::ray_weight()
         mutable std::vector<std::atomic<double>> sums;  // [(s * (depth + 2) + t) * pixels][3]
-        void prepare(int w, int h, int d) {
-            width = w, height = h, depth = d;
+        void prepare(int w, int h, int d, float ray_weight) {
+            width = w, height = h, depth = d, camera_weight = ray_weight;
             sums = std::vector<std::atomic<double>>(size_t(d + 1) * size_t(d + 2) * size_t(w) *
                                                     size_t(h) * 3);
         }
         size_t offset(int s, int t) const {
             return size_t(s * (depth + 2) + t) * size_t(width) * size_t(height) * 3;
         }
-        void add(int s, int t, Vec2 pos, const Color& value) const {
+        void add(int s, int t, Vec2 pos, Color value) const {
             if (!enabled || !value.is_finite()) return;
+            if (t >= 2) value *= camera_weight;  // what the renderer applies to camera samples
             const int x = std::clamp(int(pos.x), 0, width - 1),
                       y = std::clamp(int(pos.y), 0, height - 1);
             const size_t i = offset(s, t) + (size_t(y) * size_t(width) + size_t(x)) * 3;
