@@ -92,6 +92,9 @@ render_demo)
   [ "$(exr_attr out/demo.exr femto:samples)" = 4 ] || fail "samples attribute"
   [ "$(exr_attr out/demo.exr femto:integrator)" = transient_path ] || fail "integrator attribute"
   [ "$(exr_attr out/demo.exr femto:bins)" = 256 ] || fail "bins attribute"
+  for kind in nan infinite negative; do
+    [ "$(exr_attr out/demo.exr femto:rejected_$kind)" = 0 ] || fail "rejected_$kind attribute"
+  done
   [ -s out/demo_steady.exr ] || fail "steady image missing"
   no_temp_files out || fail "temporary files left";;
 bad_xml)

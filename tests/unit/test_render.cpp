@@ -167,3 +167,28 @@ TEST(Render, StopFlagTakesEffectWithinAPass) {
     const auto img = scene->sensor().film().steady_image();
     EXPECT_NEAR(img[3 * (4 * 8 + 4)], 2.f, 1e-5f);
 }
+
+// hdrfilm refuses a camera sample with a NaN, infinite or negative contribution as the
+// time-resolved films do (test_viz.cpp, StreakFilm.RejectsBadSamplesAsTheTransientFilm): the
+// image is that of the good samples alone and each bad contribution is counted by its kind.
+TEST(HdrFilm, RejectsBadSamplesAndCountsThem) {
+    auto scene = load_scene_string(test::scene_xml(test::kRect));
+    Film& film = scene->sensor().film();
+    ContributionList good, nan, inf, negative;
+    good.add(Color(1.f), 0.0);
+    nan.add(Color(1.f), 0.0);
+    nan.add(Color(std::nanf(""), 0.f, 0.f), 0.0);
+    inf.add(Color(0.f, INFINITY, 0.f), 0.0);
+    negative.add(Color(1.f, -1e-6f, 1.f), 0.0);
+    negative.add(Color(0.f, 0.f, -2.f), 0.0);
+    auto block = film.make_block(0, 0, 8, 8);
+    for (const ContributionList* sample : {&nan, &good, &inf, &negative})
+        block->put(Vec2{2.5f, 3.5f}, *sample);
+    film.merge(*block);
+    const RejectedContributions r = film.rejected();
+    EXPECT_EQ(r.nan, 1u);
+    EXPECT_EQ(r.infinite, 1u);
+    EXPECT_EQ(r.negative, 2u);
+    const std::vector<float> img = film.steady_image();
+    for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(img[(3 * 8 + 2) * 3 + size_t(c)], 1.f);
+}

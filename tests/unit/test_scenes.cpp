@@ -1,5 +1,6 @@
-// Every scene shipped in scenes/ loads and renders (at 8x8 pixels, 2 spp): a scene that stops
-// loading after a change of the format or of a plugin fails here, not in a user's hands.
+// Every scene shipped in scenes/ loads and renders (at 8x8 pixels, 2 spp), and its film refuses
+// no contribution (NaN, infinite, negative): a scene that stops loading after a change of the
+// format or of a plugin fails here, not in a user's hands.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -27,6 +28,9 @@ TEST(ShippedScenes, EveryOneLoadsAndRenders) {
         double sum = 0;
         for (const float v : scene->sensor().film().steady_image()) sum += v;
         EXPECT_GT(sum, 0.0) << "no light reached the film";
+        const RejectedContributions r = stats.rejected;
+        EXPECT_EQ(r.total(), 0u) << "refused contributions: " << r.nan << " NaN, " << r.infinite
+                                 << " infinite, " << r.negative << " negative";
         ++count;
     }
     EXPECT_GE(count, 9);

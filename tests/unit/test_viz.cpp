@@ -798,25 +798,31 @@ TEST(StreakFilm, UnwarpEqualsUnwarpedCubeRow) {
     std::filesystem::remove_all(dir);
 }
 
-// Both time-resolved films splat through TimeResolvedBlock: a camera sample with a NaN or
-// infinite radiance adds nothing, not even its filter weight, and is counted once.
-TEST(StreakFilm, RejectsNonFiniteSamplesAsTheTransientFilm) {
+// Both time-resolved films splat through TimeResolvedBlock: a camera sample with a NaN,
+// infinite or negative radiance adds nothing, not even its filter weight, and each bad
+// contribution is counted by its kind.
+TEST(StreakFilm, RejectsBadSamplesAsTheTransientFilm) {
     for (const std::string type : {"transient", "streak"}) {
         auto scene = load_scene_string(streak_scene(
             type, type == "streak" ? "<integer name=\"row\" value=\"3\"/>" : "", "box"));
         Film& film = scene->sensor().film();
         const auto* trf = dynamic_cast<const TimeResolvedFilm*>(&film);
         ASSERT_NE(trf, nullptr) << type;
-        ContributionList good, nan, inf;
+        ContributionList good, nan, inf, negative;
         good.add(Color(1.f), 7.0);  // bin 5 of [6.5, 10.5)
         nan.add(Color(1.f), 7.0);
         nan.add(Color(std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f), 7.0);
         inf.add(Color(0.f, std::numeric_limits<float>::infinity(), 0.f), 7.0);
+        negative.add(Color(1.f, -1e-6f, 1.f), 7.0);
+        negative.add(Color(0.f, 0.f, -2.f), 8.0);
         auto block = film.make_block(0, 0, 8, 8);
-        for (const ContributionList* sample : {&nan, &good, &inf})
+        for (const ContributionList* sample : {&nan, &good, &inf, &negative})
             block->put(Vec2{2.5f, 3.5f}, *sample);  // the box filter: pixel (2, 3) alone
         film.merge(*block);
-        EXPECT_EQ(trf->rejected_samples(), 2u) << type;
+        const RejectedContributions r = trf->rejected();
+        EXPECT_EQ(r.nan, 1u) << type;
+        EXPECT_EQ(r.infinite, 1u) << type;
+        EXPECT_EQ(r.negative, 2u) << type;
         const std::vector<float> img = film.steady_image();
         for (int c = 0; c < 3; ++c) EXPECT_EQ(img[(3 * 40 + 2) * 3 + size_t(c)], 1.f) << type;
     }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -52,6 +53,28 @@ public:
 private:
     std::vector<Splat> items_;
     uint32_t sample_index_ = 0;
+};
+
+/// Contributions a film refused, by reason. A NaN, infinite or negative radiance is a bug or a
+/// numerical failure upstream; the film drops the whole camera sample (or splat) that carried
+/// it, counts each bad contribution here, records the counts in every output's metadata
+/// (femto:rejected_*) and warns in the log.
+struct RejectedContributions {
+    uint64_t nan = 0, infinite = 0, negative = 0;
+    uint64_t total() const { return nan + infinite + negative; }
+    /// Counts `radiance` when it is bad (NaN first, then infinite, then any channel < 0) and
+    /// returns true then.
+    bool count(const Color& radiance) {
+        const float c[3] = {radiance.r, radiance.g, radiance.b};
+        if (std::isnan(c[0]) || std::isnan(c[1]) || std::isnan(c[2])) return ++nan, true;
+        if (!radiance.is_finite()) return ++infinite, true;
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0) return ++negative, true;
+        return false;
+    }
+    RejectedContributions& operator+=(const RejectedContributions& o) {
+        nan += o.nan, infinite += o.infinite, negative += o.negative;
+        return *this;
+    }
 };
 
 /// What the integrator reports for one camera sample.
@@ -107,6 +130,15 @@ private:
     Vec2 film_position_;
 };
 
+/// True when every contribution of `sample` is a valid radiance; otherwise counts the bad ones
+/// into `rejected` (the film then drops the sample).
+inline bool accept_sample(const ContributionList& sample, RejectedContributions& rejected) {
+    bool ok = true;
+    for (const Contribution& c : sample.items())
+        if (rejected.count(c.radiance)) ok = false;
+    return ok;
+}
+
 /// Metadata recorded into every output file.
 struct RenderInfo {
     std::string scene_file;
@@ -118,6 +150,7 @@ struct RenderInfo {
     bool write_npy = false;  ///< transient films: also write OUTBASE.npy (float32 [H, W, T, C])
     double render_seconds = 0;
     bool interrupted = false;
+    RejectedContributions rejected;  ///< written as femto:rejected_nan / _infinite / _negative
 };
 
 /// Calls f(x, y, weight) for every pixel of [x0, x1) x [y0, y1) whose centre lies within
@@ -200,10 +233,23 @@ public:
     virtual std::vector<std::string> write(const std::string& out_base,
                                            const RenderInfo& info) const = 0;
 
+    /// Contributions refused so far (NaN, infinite, negative), over every merged block.
+    RejectedContributions rejected() const {
+        return {rejected_nan_.load(), rejected_infinite_.load(), rejected_negative_.load()};
+    }
+
     /// `width`, `height` and `rfilter`: what the constructor reads, for the plugin schemas.
     static std::vector<ParamSpec> inherited_params();
 
 protected:
+    /// Adds a block's refused contributions (thread-safe: blocks of different tiles merge
+    /// concurrently).
+    void add_rejected(const RejectedContributions& r) {
+        rejected_nan_ += r.nan;
+        rejected_infinite_ += r.infinite;
+        rejected_negative_ += r.negative;
+    }
+
     /// For each pixel column (`horizontal`) or row, the integral of the reconstruction filter
     /// centred on it over the film's extent: camera samples drawn uniformly over the film give a
     /// pixel (x, y) the expected weight spp x integral_x[x] x integral_y[y].
@@ -214,6 +260,9 @@ protected:
 
     int width_ = 0, height_ = 0;
     std::shared_ptr<ReconstructionFilter> rfilter_;
+
+private:
+    std::atomic<uint64_t> rejected_nan_{0}, rejected_infinite_{0}, rejected_negative_{0};
 };
 
 }  // namespace femto

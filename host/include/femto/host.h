@@ -67,6 +67,8 @@ struct RenderStats {
     uint64_t rays = 0;
     uint64_t camera_samples = 0;
     bool interrupted = false;
+    /// What the film refused over its life (every render into it), by reason.
+    RejectedContributions rejected;
 };
 
 /// Renders into the sensor's film (passes over tiles, TBB threads, deterministic for a

@@ -30,7 +30,8 @@ namespace femto {
 ///  Film::add_splat_weight(), Sensor::sample_direct(), Emitter::sample_emission().)
 /// (10: shadow connections report their medium pieces (MediumPieces); SegmentDensities.)
 /// (11: measurement sensors: Sensor::has_area()/ray_weight()/attach()/needs_shape(),
-///  Shape::sensor_ptr(), ContributionList::scale().)
+///  Shape::sensor_ptr(), ContributionList::scale(); films count refused contributions:
+///  RejectedContributions, Film::rejected()/add_rejected(), TimeResolvedBlock::rejected().)
 inline constexpr uint32_t kPluginAbiVersion = 11;
 
 struct PluginDescriptor {

@@ -143,9 +143,9 @@ class TimeResolvedFilm;
 /// subclass keeps only the storage and calls splat() from put().
 class TimeResolvedBlock : public FilmBlock {
 public:
-    /// Camera samples this block rejected because a contribution's radiance was NaN or
-    /// infinite (the whole sample is dropped).
-    uint64_t rejected() const { return rejected_; }
+    /// Contributions this block refused (a NaN, infinite or negative radiance; the whole
+    /// sample that carried one is dropped).
+    const RejectedContributions& rejected() const { return rejected_; }
     /// Arrivals (camera-sample contributions with light) this block saw, the earliest and
     /// latest recorded time among them, and how many fell in the film's window.
     struct Arrivals {
@@ -188,7 +188,8 @@ protected:
     /// (e.g. for a second moment w * v^2), instead of add() per (contribution, bin) pair:
     ///     bool totals() const;
     ///     void add_total(size_t slot, int bin, float w, const Color& v, int n);
-    /// A sample with a NaN or infinite radiance adds nothing and is counted in rejected().
+    /// A sample with a NaN, infinite or negative radiance adds nothing; its bad contributions
+    /// are counted in rejected().
     template <typename Storage>
     void splat(Vec2 pos, const ContributionList& sample, Storage& storage);
 
@@ -202,7 +203,7 @@ private:
 
     std::vector<BinWeight> scratch_;
     std::vector<std::pair<int, Color>> sample_bins_;  // splat_totals: one sample's bin values
-    uint64_t rejected_ = 0;
+    RejectedContributions rejected_;
     Arrivals arrivals_;
 };
 
@@ -214,7 +215,7 @@ private:
 ///     if (auto b = make_pilot_block(x0, y0, w, h)) return b;   // in make_block()
 ///     if (merge_pilot(block)) return;                           // in merge()
 ///     merge_rejected(static_cast<const MyBlock&>(block));      // then, in merge()
-/// and calls warn_rejected() when it writes.
+/// and calls warn_empty_window() when it writes.
 class TimeResolvedFilm : public Film {
 public:
     uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
@@ -229,8 +230,6 @@ public:
     const TemporalFilter& tfilter() const { return *tfilter_; }
     /// True when the film records world time (the sensor segment removed, eq. 4.1).
     bool world_time() const { return grid_.frame == TimeFrame::World; }
-    /// Camera samples rejected so far for a NaN or infinite radiance (TimeResolvedBlock).
-    uint64_t rejected_samples() const { return rejected_; }
 
     /// Film's parameters, the time window (time_grid_params()), `world_time`, `exposure` and
     /// the <tfilter> child (default `histogram`): what the constructor reads.
@@ -242,18 +241,18 @@ protected:
     std::unique_ptr<FilmBlock> make_pilot_block(int x0, int y0, int w, int h) const;
     /// During the pilot pass, hands the block's arrivals to the filter and returns true.
     bool merge_pilot(const FilmBlock& block);
-    /// Adds the block's count of rejected samples (and its arrivals) to the film's.
+    /// Adds the block's refused contributions (and its arrivals) to the film's.
     void merge_rejected(const TimeResolvedBlock& block) {
-        rejected_ += block.rejected();
+        add_rejected(block.rejected());
         arrivals_ += block.arrivals();
     }
     /// Film::add_splat_weight() for pixel sums `sums` kept row by row (width() per row): of
     /// every row, or of the pixel rows `rows` (sums row i is pixel row rows[i]).
     void add_expected_weight(double samples_per_pixel, std::vector<PixelSums>& sums,
                              const std::vector<int>* rows = nullptr) const;
-    /// Logs a warning with the number of rejected samples, if any, and one when no light
-    /// arrived within the time window (with the times it arrived at instead).
-    void warn_rejected() const;
+    /// Logs a warning when no light arrived within the time window (with the times it arrived
+    /// at instead).
+    void warn_empty_window() const;
 
     TimeGrid grid_;       ///< its frame is camera or world time (`world_time`)
     float exposure_ = 0;  ///< preview exposure in stops (0: automatic)
@@ -261,7 +260,6 @@ protected:
 
 private:
     bool pilot_ = false;  // between begin_pilot() and end_pilot()
-    uint64_t rejected_ = 0;
     TimeResolvedBlock::Arrivals arrivals_;
 };
 
@@ -275,11 +273,7 @@ inline TimeResolvedBlock::TimeResolvedBlock(const TimeResolvedFilm& film, int x0
 
 template <typename Storage>
 void TimeResolvedBlock::splat(Vec2 pos, const ContributionList& sample, Storage& storage) {
-    for (const Contribution& c : sample.items())
-        if (!c.radiance.is_finite()) {
-            ++rejected_;
-            return;
-        }
+    if (!accept_sample(sample, rejected_)) return;
     const double sensor = sample.sensor_distance();
     const TemporalFilter& tfilter = film_.tfilter();
     const TimeGrid& grid = film_.grid();

@@ -34,6 +34,9 @@ Attributes render_attributes(const RenderInfo& info) {
         {"femto:samples_requested", std::to_string(info.samples_requested)},
         {"femto:render_seconds", fmt::format("{:.3f}", info.render_seconds)},
         {"femto:interrupted", info.interrupted ? "true" : "false"},
+        {"femto:rejected_nan", std::to_string(info.rejected.nan)},
+        {"femto:rejected_infinite", std::to_string(info.rejected.infinite)},
+        {"femto:rejected_negative", std::to_string(info.rejected.negative)},
     };
 }
 

@@ -22,6 +22,7 @@
 
 #include "femto/host.h"
 #include "femto/integrator.h"
+#include "femto/log.h"
 #include "femto/sensor.h"
 
 namespace femto {
@@ -373,6 +374,12 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.rays = scene.rays_traced() - rays_before;
     stats.camera_samples = pixels * stats.spp_done;
+    stats.rejected = film.rejected();
+    if (const RejectedContributions& r = stats.rejected; r.total() > 0)
+        log_warning(
+            fmt::format("the film refused {} contributions ({} NaN, {} infinite, {} "
+                        "negative) and dropped the samples that carried them",
+                        r.total(), r.nan, r.infinite, r.negative));
     return stats;
 }
 
@@ -387,6 +394,7 @@ RenderInfo make_render_info(const Scene& scene, const RenderOptions& options,
     info.samples_requested = stats.spp_requested;
     info.render_seconds = stats.seconds;
     info.interrupted = stats.interrupted;
+    info.rejected = stats.rejected;
     return info;
 }
 

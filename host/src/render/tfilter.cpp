@@ -84,10 +84,7 @@ std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, in
     return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time());
 }
 
-void TimeResolvedFilm::warn_rejected() const {
-    if (rejected_ > 0)
-        log_warning(fmt::format("{} camera samples with a NaN or infinite radiance were discarded",
-                                rejected_));
+void TimeResolvedFilm::warn_empty_window() const {
     const char* frame = world_time() ? "world" : "camera";
     if (arrivals_.count > 0 && arrivals_.inside == 0)
         log_warning(fmt::format(

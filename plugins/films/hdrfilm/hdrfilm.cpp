@@ -34,12 +34,9 @@ public:
           pixels_(size_t(w_) * size_t(h_)) {}
 
     void put(Vec2 pos, const ContributionList& sample) override {
+        if (!accept_sample(sample, rejected_)) return;
         Color L;
         for (const auto& c : sample.items()) L += c.radiance;
-        if (!L.is_finite()) {
-            ++invalid_;
-            return;
-        }
         // Pixels whose centre lies within the filter radius of pos.
         const int xa = int(std::ceil(pos.x - 0.5f - radius_)),
                   xb = int(std::floor(pos.x - 0.5f + radius_));
@@ -62,7 +59,7 @@ public:
     float radius_;
     int x0_, y0_, w_, h_;
     std::vector<PixelSum> pixels_;
-    uint64_t invalid_ = 0;
+    RejectedContributions rejected_;
 };
 
 class HdrFilm final : public Film {
@@ -101,7 +98,7 @@ public:
     // The renderer never merges overlapping blocks concurrently, so no lock is needed here.
     void merge(const FilmBlock& block_in) override {
         const auto& block = static_cast<const HdrBlock&>(block_in);
-        invalid_ += block.invalid_;
+        add_rejected(block.rejected_);
         for (int by = 0; by < block.h_; ++by) {
             const int y = block.y0_ + by;
             if (y < 0 || y >= height_) continue;
@@ -136,9 +133,6 @@ public:
 
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
-        if (invalid_ > 0)
-            log_warning(fmt::format("{} samples with NaN or infinite radiance were discarded",
-                                    invalid_.load()));
         const std::vector<float> rgb = steady_image();
         const io::Attributes attrs = io::render_attributes(info);
         io::OutputSet files;
@@ -151,7 +145,6 @@ private:
     float exposure_ = 0;
     int border_ = 0;
     std::vector<PixelSum> pixels_;
-    std::atomic<uint64_t> invalid_{0};
 };
 
 }  // namespace

@@ -196,7 +196,7 @@ public:
 
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
-        warn_rejected();
+        warn_empty_window();
         io::OutputSet files;
         for (size_t s = 0; s < rows_.size(); ++s) {
             io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());

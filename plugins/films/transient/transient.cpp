@@ -273,7 +273,7 @@ public:
 
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
-        warn_rejected();
+        warn_empty_window();
         const size_t pixels = size_t(width_) * size_t(height_);
         std::vector<float> depth(pixels);
         for (size_t p = 0; p < pixels; ++p) depth[p] = weights_[p].depth();
