@@ -25,7 +25,7 @@ cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DFEMTO_TESTS=ON -DFEMTO_SANITIZE=ON
 cmake --build build-sanitize -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j "$JOBS" \
-  -R '^(Mutation|Loader|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|MeasurementSensors|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^(LightTracer|Bdpt)\.(BadInput|BitIdentical|TofPlaneArrival|GlassSlab|SplatsConserve|EachStrategyAloneEstimatesTheSameImage$)|^StreakFilm\.EqualsTransientRowsKernel|^cli\.(bad|unknown|missing|unwritable|compat)' 
+  -R '^(Mutation|Loader|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|MeasurementSensors|Stress|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^(LightTracer|Bdpt)\.(BadInput|BitIdentical|TofPlaneArrival|GlassSlab|SplatsConserve|EachStrategyAloneEstimatesTheSameImage$)|^StreakFilm\.EqualsTransientRowsKernel|^cli\.(bad|unknown|missing|unwritable|compat)' 
 # Fuzzing (fuzz/, docs/fuzzing.md): each libFuzzer harness (the scene loader, the PLY, OBJ,
 # serialized and .vol readers) for 20 s on its seed corpus, clang with ASan + UBSan, in
 # build-fuzz.

@@ -2,7 +2,8 @@
 // start off it by an amount that follows the scene's own floating-point error, and time is
 // measured between the actual vertices. The conformance matrix checks exact arrival times at
 // scales 1e-6 ... 1e6 (TimeOfFlightIsExactAtEveryScale); these tests check the offsets
-// themselves and whole scenes (the Cornell box, glass and mirror spheres) against scale 1.
+// themselves and whole scenes (the Cornell box, glass and mirror spheres, fog around a light,
+// a glass slab) against scale 1, with films that refuse no contribution at any scale.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -163,6 +164,7 @@ void expect_scale_free(SceneAt scene_at, double start, double width) {
             auto scene = load_scene_string(scene_at(s));
             const SceneSummary m =
                 summarize(render_cube(*scene, uint64_t(seed), "scale"), start * s, width * s);
+            EXPECT_EQ(scene->sensor().film().rejected().total(), 0u);  // no NaN, Inf, negative
             energy.push_back(m.energy);
             time.push_back(m.mean_time / s);
         }
@@ -270,6 +272,41 @@ TEST(Scale, GlassAndMirrorSpheresAreTheSameAtEveryScale) {
                "</scene>";
     };
     expect_scale_free(scene_at, 4.5, 0.25);
+}
+
+TEST(Scale, FogPointIsTheSameAtEveryScale) {
+    // scenes/fog-point: a ball of radius 2 of fog (sigma_t 4.1 / s: the same optical depths at
+    // every scale, albedo 0.98) around a small bright bead, seen from 10 away.
+    auto scene_at = [](double s) {
+        return "<scene version=\"3.0.0\"><medium type=\"homogeneous\" id=\"fog\"><float "
+               "name=\"sigma_t\" value=\"" +
+               num(4.1 / s) + "\"/><float name=\"albedo\" value=\"0.98\"/></medium>" +
+               camera(s, "<lookat origin=\"0, 0, 10\" target=\"0, 0, 0\" up=\"0, 1, 0\"/>", 26,
+                      film(s, 8, 0.5, 24)) +
+               shape(s, "sphere", "<scale value=\"2\"/>",
+                     "<bsdf type=\"null\"/><ref name=\"interior\" id=\"fog\"/>") +
+               shape(s, "sphere", "<scale value=\"0.25\"/>",
+                     "<bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0\"/></bsdf>"
+                     "<emitter type=\"area\"><rgb name=\"radiance\" value=\"100\"/></emitter>") +
+               "</scene>";
+    };
+    expect_scale_free(scene_at, 8, 0.5);
+}
+
+TEST(Scale, GlassSlabIsTheSameAtEveryScale) {
+    // A glass slab (index 1.5, 0.4 thick) between the camera and a light panel: the refraction
+    // delay and the light through it must not depend on the scene's size.
+    auto scene_at = [](double s) {
+        return "<scene version=\"3.0.0\">" +
+               camera(s, "<lookat origin=\"0, 0, 4\" target=\"0, 0, 0\" up=\"0, 1, 0\"/>", 30,
+                      film(s, 5, 0.1, 40)) +
+               shape(s, "cube", "<scale x=\"2\" y=\"2\" z=\"0.2\"/>",
+                     "<bsdf type=\"dielectric\"><float name=\"int_ior\" value=\"1.5\"/></bsdf>") +
+               shape(s, "rectangle", "<scale value=\"1.5\"/><translate z=\"-1.5\"/>",
+                     "<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>") +
+               "</scene>";
+    };
+    expect_scale_free(scene_at, 5, 0.1);
 }
 
 }  // namespace
