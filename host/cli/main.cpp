@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 
+#include "bench.h"
 #include "femto/host.h"
 #include "femto/integrator.h"
 #include "femto/log.h"
@@ -324,6 +325,7 @@ int main(int argc, char** argv) {
     plugins->add_option("--plugin-dir", opts.plugin_dirs, kPluginDirHelp);
     plugins->add_flag("--markdown", markdown, "Print the reference in Markdown (docs/plugins.md)");
     CLI::App* viz = femto::cli::add_viz_command(app);
+    CLI::App* bench = femto::cli::add_bench_command(app);
 
     try {
         check_command_words(app, argc, argv);
@@ -341,6 +343,10 @@ int main(int argc, char** argv) {
             return cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet, npy, opts);
         if (plugins->parsed()) return cmd_plugins(plugin_name, markdown, opts);
         if (viz->parsed()) return femto::cli::run_viz_command();
+        if (bench->parsed()) {
+            handle_stop_signals(true);  // Ctrl-C: stop after the current run, keep the rows
+            return femto::cli::run_bench_command(g_stop);
+        }
     } catch (const femto::SceneError& e) {
         return report_bad_input(e.what());
     } catch (const std::exception& e) {

@@ -74,9 +74,9 @@ plugins_unknown)
   expect_exit 2 '^femto: error: no plugin named "nosuch" \(`femto plugins` lists them\)' -- "$femto" plugins nosuch
   expect_exit 2 '^femto: error: no plugin named "transient_pth"; did you mean "transient_path"\?' -- "$femto" plugins transient_pth;;
 unknown_command)
-  expect_exit 2 '^femto: error: unknown command "rendr"; did you mean "render"\? \(commands: render, plugins, viz\)$' -- "$femto" rendr x.xml
-  expect_exit 2 '^femto: error: unknown command "scene\.xml" \(commands: render, plugins, viz\)$' -- "$femto" scene.xml
-  expect_exit 2 '^femto: error: `femto` needs a command \(commands: render, plugins, viz\)$' -- "$femto"
+  expect_exit 2 '^femto: error: unknown command "rendr"; did you mean "render"\? \(commands: render, plugins, viz, bench\)$' -- "$femto" rendr x.xml
+  expect_exit 2 '^femto: error: unknown command "scene\.xml" \(commands: render, plugins, viz, bench\)$' -- "$femto" scene.xml
+  expect_exit 2 '^femto: error: `femto` needs a command \(commands: render, plugins, viz, bench\)$' -- "$femto"
   expect_exit 2 '^femto: error: unknown viz command "peaktime"; did you mean "peak-time"\? \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz peaktime x.exr -o p.png
   expect_exit 2 '^femto: error: `femto viz` needs a viz command \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz
   # Help still works without a command.
@@ -86,6 +86,18 @@ plugin_docs_fresh)
   "$femto" plugins --markdown > plugins.md || fail "exit code"
   diff -u "$src/docs/plugins.md" plugins.md > diff.txt ||
     { head -40 diff.txt >&2; fail "docs/plugins.md is stale: run scripts/gen-plugin-docs.sh"; };;
+bench_example)
+  # The shipped example study: 18 runs and their report; a second call resumes (no new rows).
+  "$femto" bench "$src/bench/experiments/fog-point-connections.xml" -o out/b -q || fail "exit code"
+  [ "$(wc -l < out/b/results.csv)" = 19 ] || fail "results.csv has $(wc -l < out/b/results.csv) lines"
+  for f in report.md plot.svg frames.csv; do [ -s "out/b/$f" ] || fail "$f missing"; done
+  grep -q '^| equiangular | 9 | ' out/b/report.md || fail "report row"
+  "$femto" bench "$src/bench/experiments/fog-point-connections.xml" -o out/b -q || fail "resume"
+  [ "$(wc -l < out/b/results.csv)" = 19 ] || fail "resuming added rows";;
+bench_bad_input)
+  printf '<experiment>\n<scenery/>\n</experiment>\n' > e.xml
+  expect_exit 2 'e\.xml:2:1: unknown element <scenery> in <experiment>' -- "$femto" bench e.xml
+  expect_exit 2 'experiment file "none\.xml" cannot be read' -- "$femto" bench none.xml;;
 render_demo)
   "$femto" render "$scene" -o out/demo -D spp=4 -D res=64 -q || fail "render failed"
   [ -s out/demo.exr ] && [ -s out/demo.png ] || fail "outputs missing"

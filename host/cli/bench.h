@@ -1,0 +1,18 @@
+// `femto bench EXPERIMENT`: convergence studies (docs/bench.md).
+#pragma once
+
+#include <atomic>
+
+namespace CLI {
+class App;
+}
+
+namespace femto::cli {
+
+/// Adds the `bench` subcommand to `app`.
+CLI::App* add_bench_command(CLI::App& app);
+/// Runs the parsed `bench` subcommand; `stop` is raised by Ctrl-C. Returns the exit code (130
+/// when stopped: the finished runs are kept and reported). Bad input throws SceneError.
+int run_bench_command(const std::atomic<bool>& stop);
+
+}  // namespace femto::cli

@@ -1,0 +1,74 @@
+// `femto bench` experiments (docs/bench.md): what an experiment file declares, and its reader.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "femto/error.h"
+
+namespace femto::bench {
+
+using Defines = std::vector<std::pair<std::string, std::string>>;
+
+/// One scene of the experiment: a scene file (relative to the experiment file) and the -D
+/// values every variant renders it with.
+struct SceneSpec {
+    std::string name;  ///< `name`, or the file's folder name
+    std::string file;  ///< resolved path
+    Defines defines;
+    SourceLocation location;
+};
+
+/// One way of rendering: -D values on top of the scene's, and plugin folders searched first
+/// (an out-of-tree integrator joins through them).
+struct Variant {
+    std::string name;
+    Defines defines;
+    std::vector<std::string> plugin_dirs;
+    SourceLocation location;
+};
+
+/// The reference every run is measured against: a file (.npy cube [H, W, T, C] or .exr image),
+/// or `variant` rendered at `spp` samples (seed `seed`), rendered once and cached.
+struct ReferenceSpec {
+    std::string file;
+    std::string variant;
+    uint32_t spp = 0;
+    uint64_t seed = 0;
+    SourceLocation location;
+};
+
+/// A time window of the error measures: bins whose centre is in [start, end) (scene units).
+struct Window {
+    std::string name;
+    double start = 0, end = 0;
+};
+
+struct Experiment {
+    std::string file;  ///< the experiment file
+    std::string name;
+    std::vector<SceneSpec> scenes;
+    std::vector<Variant> variants;
+    std::vector<uint32_t> spp_budgets;  ///< either these ...
+    std::vector<double> time_budgets;   ///< ... or wall-clock seconds per run
+    std::vector<uint64_t> seeds;
+    ReferenceSpec reference;
+    std::vector<Window> windows;
+    int threads = 0;     ///< 0: all cores
+    std::string digest;  ///< of the file's bytes: a changed experiment does not resume old rows
+
+    const Variant* find_variant(const std::string& name) const;
+    /// The budgets in the order they run, as text ("16" spp or "2.5" s).
+    std::vector<std::string> budget_labels() const;
+    bool timed() const { return !time_budgets.empty(); }
+};
+
+/// Reads an experiment file; bad input is a SceneError at its file:line:col.
+Experiment load_experiment(const std::string& path);
+
+/// FNV-1a 64-bit of `bytes`, as 16 hex digits (cache keys, the experiment digest).
+std::string digest_hex(const std::string& bytes);
+
+}  // namespace femto::bench

@@ -1,0 +1,195 @@
+#include "bench/measures.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+namespace femto::bench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Bin t of the cube is inside [t0, t1) (a steady image's single "bin" always is).
+bool bin_inside(const Cube& c, size_t t, double t0, double t1) {
+    if (c.T == 1) return true;
+    const double centre = c.start + (double(t) + 0.5) * c.bin_width;
+    return centre >= t0 && centre < t1;
+}
+
+struct Sums {
+    double se = 0, rr = 0;
+    void add(float x, float r) {
+        const double d = double(x) - double(r);
+        se += d * d;
+        rr += double(r) * double(r);
+    }
+    double rel() const { return rr > 0 ? se / rr : kNaN; }
+};
+
+}  // namespace
+
+void check_same_shape(const Cube& x, const Cube& ref) {
+    if (x.H != ref.H || x.W != ref.W || x.T != ref.T || x.C != ref.C)
+        throw std::runtime_error("the render and its reference differ in shape ([" +
+                                 std::to_string(x.H) + ", " + std::to_string(x.W) + ", " +
+                                 std::to_string(x.T) + ", " + std::to_string(x.C) + "] against [" +
+                                 std::to_string(ref.H) + ", " + std::to_string(ref.W) + ", " +
+                                 std::to_string(ref.T) + ", " + std::to_string(ref.C) + "])");
+}
+
+double rel_mse(const Cube& x, const Cube& ref, double t0, double t1) {
+    check_same_shape(x, ref);
+    Sums s;
+    for (size_t p = 0; p < x.H * x.W; ++p)
+        for (size_t t = 0; t < x.T; ++t) {
+            if (!bin_inside(x, t, t0, t1)) continue;
+            const size_t i = (p * x.T + t) * x.C;
+            for (size_t c = 0; c < x.C; ++c) s.add(x.data[i + c], ref.data[i + c]);
+        }
+    return s.rel();
+}
+
+double rel_mse(const Cube& x, const Cube& ref) {
+    return rel_mse(x, ref, -std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity());
+}
+
+double pixel_rel_mse(const Cube& x, const Cube& ref, double t0, double t1) {
+    check_same_shape(x, ref);
+    double sum = 0;
+    size_t lit = 0;
+    for (size_t p = 0; p < x.H * x.W; ++p) {
+        Sums s;
+        for (size_t t = 0; t < x.T; ++t) {
+            if (!bin_inside(x, t, t0, t1)) continue;
+            const size_t i = (p * x.T + t) * x.C;
+            for (size_t c = 0; c < x.C; ++c) s.add(x.data[i + c], ref.data[i + c]);
+        }
+        if (s.rr > 0) sum += s.rel(), ++lit;
+    }
+    return lit ? sum / double(lit) : kNaN;
+}
+
+std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref) {
+    check_same_shape(x, ref);
+    std::vector<Sums> frames(x.T);
+    for (size_t p = 0; p < x.H * x.W; ++p)
+        for (size_t t = 0; t < x.T; ++t) {
+            const size_t i = (p * x.T + t) * x.C;
+            for (size_t c = 0; c < x.C; ++c) frames[t].add(x.data[i + c], ref.data[i + c]);
+        }
+    std::vector<double> out;
+    for (const Sums& s : frames) out.push_back(s.rel());
+    return out;
+}
+
+double energy_error(const Cube& x, const Cube& ref) {
+    check_same_shape(x, ref);
+    double sx = 0, sr = 0;
+    for (size_t i = 0; i < x.size(); ++i) sx += x.data[i], sr += ref.data[i];
+    return sr != 0 ? (sx - sr) / sr : kNaN;
+}
+
+double student_t975(int dof) {
+    // Exact to 3 digits for 1 ... 30 (the table every statistics text prints); the
+    // expansion of t in powers of 1 / dof around the normal quantile beyond.
+    static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306,
+                                   2.262,  2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120,
+                                   2.110,  2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064,
+                                   2.060,  2.056, 2.052, 2.048, 2.045, 2.042};
+    if (dof < 1) return kNaN;
+    if (dof <= 30) return table[dof - 1];
+    const double z = 1.959964, n = dof;
+    return z + (z * z * z + z) / (4 * n) +
+           (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * n * n);
+}
+
+double Fit::seconds_at(double error) const {
+    return std::exp((std::log(error) - intercept) / slope);
+}
+
+Fit fit_log_log(const std::vector<double>& seconds, const std::vector<double>& errors) {
+    std::vector<double> lx, ly;
+    for (size_t i = 0; i < seconds.size() && i < errors.size(); ++i)
+        if (seconds[i] > 0 && errors[i] > 0 && std::isfinite(errors[i]))
+            lx.push_back(std::log(seconds[i])), ly.push_back(std::log(errors[i]));
+    Fit f;
+    f.n = int(lx.size());
+    if (f.n < 2) return {kNaN, kNaN, kNaN, f.n};
+    double mx = 0, my = 0;
+    for (int i = 0; i < f.n; ++i) mx += lx[i], my += ly[i];
+    mx /= f.n, my /= f.n;
+    double sxx = 0, sxy = 0;
+    for (int i = 0; i < f.n; ++i)
+        sxx += (lx[i] - mx) * (lx[i] - mx), sxy += (lx[i] - mx) * (ly[i] - my);
+    if (!(sxx > 0)) return {kNaN, kNaN, kNaN, f.n};
+    f.slope = sxy / sxx;
+    f.intercept = my - f.slope * mx;
+    if (f.n < 3) {
+        f.slope_ci95 = kNaN;
+        return f;
+    }
+    double rss = 0;
+    for (int i = 0; i < f.n; ++i) {
+        const double r = ly[i] - (f.intercept + f.slope * lx[i]);
+        rss += r * r;
+    }
+    f.slope_ci95 = student_t975(f.n - 2) * std::sqrt(rss / (f.n - 2) / sxx);
+    return f;
+}
+
+namespace {
+
+double ratio_of(const Fit& a, const Fit& b, const std::vector<double>& errors_a) {
+    double log_mean = 0;
+    int n = 0;
+    for (double e : errors_a)
+        if (e > 0 && std::isfinite(e)) log_mean += std::log(e), ++n;
+    if (n == 0 || !std::isfinite(a.slope) || !std::isfinite(b.slope) || a.slope >= 0 ||
+        b.slope >= 0)
+        return kNaN;
+    const double target = std::exp(log_mean / n);
+    return b.seconds_at(target) / a.seconds_at(target);
+}
+
+}  // namespace
+
+Ratio equal_error_ratio(const std::vector<double>& seconds_a, const std::vector<double>& errors_a,
+                        const std::vector<double>& seconds_b, const std::vector<double>& errors_b) {
+    Ratio r;
+    r.value =
+        ratio_of(fit_log_log(seconds_a, errors_a), fit_log_log(seconds_b, errors_b), errors_a);
+    std::mt19937_64 rng(20141201);  // fixed: the interval reproduces run to run
+    std::vector<double> samples;
+    auto resample = [&](const std::vector<double>& s, const std::vector<double>& e,
+                        std::vector<double>& rs, std::vector<double>& re) {
+        std::uniform_int_distribution<size_t> pick(0, s.size() - 1);
+        rs.clear(), re.clear();
+        for (size_t i = 0; i < s.size(); ++i) {
+            const size_t k = pick(rng);
+            rs.push_back(s[k]), re.push_back(e[k]);
+        }
+    };
+    if (seconds_a.size() >= 3 && seconds_b.size() >= 3) {
+        std::vector<double> sa, ea, sb, eb;
+        for (int k = 0; k < 2000; ++k) {
+            resample(seconds_a, errors_a, sa, ea);
+            resample(seconds_b, errors_b, sb, eb);
+            const double v = ratio_of(fit_log_log(sa, ea), fit_log_log(sb, eb), ea);
+            if (std::isfinite(v)) samples.push_back(v);
+        }
+    }
+    if (samples.size() < 100) {
+        r.lo = r.hi = kNaN;
+        return r;
+    }
+    std::sort(samples.begin(), samples.end());
+    r.lo = samples[size_t(0.025 * double(samples.size()))];
+    r.hi = samples[std::min(samples.size() - 1, size_t(0.975 * double(samples.size())))];
+    return r;
+}
+
+}  // namespace femto::bench

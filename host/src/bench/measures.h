@@ -1,0 +1,58 @@
+// `femto bench`: error measures of a render against its reference, and the statistics of a
+// convergence study (docs/bench.md gives every formula).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace femto::bench {
+
+/// A render as a cube [H, W, T, C] (a steady image is T = 1), and its time grid (the centre
+/// of bin t is start + (t + 0.5) * bin_width; unused when T = 1).
+struct Cube {
+    size_t H = 0, W = 0, T = 0, C = 0;
+    std::vector<float> data;
+    double start = 0, bin_width = 0;
+    size_t size() const { return H * W * T * C; }
+};
+
+/// relMSE = sum_v (x_v - r_v)^2 / sum_v r_v^2 over the voxels v (pixel, bin, channel) whose bin
+/// centre lies in [t0, t1): the squared relative L2 error of that part of the cube. NaN when
+/// the reference is black there.
+double rel_mse(const Cube& x, const Cube& ref, double t0, double t1);
+/// rel_mse over the whole cube.
+double rel_mse(const Cube& x, const Cube& ref);
+/// Mean over the pixels that the reference lights in [t0, t1) of each pixel's own relMSE over
+/// that window: every lit pixel weighs the same, however bright.
+double pixel_rel_mse(const Cube& x, const Cube& ref, double t0, double t1);
+/// relMSE of each frame (bin) t, NaN where the reference frame is black.
+std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref);
+/// (sum x - sum r) / sum r: the relative error of the total energy.
+double energy_error(const Cube& x, const Cube& ref);
+/// Throws std::runtime_error when the two cubes' shapes differ.
+void check_same_shape(const Cube& x, const Cube& ref);
+
+/// Least squares of log(error) = a + b log(seconds) over runs with positive error and time:
+/// `slope` b with the half-width of its 95 % confidence interval (Student t, n - 2 degrees of
+/// freedom), NaN when fewer than 3 runs.
+struct Fit {
+    double slope = 0, intercept = 0, slope_ci95 = 0;
+    int n = 0;
+    double seconds_at(double error) const;  ///< the fitted time to reach `error`
+};
+Fit fit_log_log(const std::vector<double>& seconds, const std::vector<double>& errors);
+
+/// Equal-error time ratio of B over A: the fitted time B needs to reach the geometric mean of
+/// A's errors over the fitted time A needs for it (< 1: B is faster). The 95 % interval comes
+/// from 2000 bootstrap resamples of each variant's runs (a fixed seed: reports reproduce).
+struct Ratio {
+    double value = 0, lo = 0, hi = 0;
+};
+Ratio equal_error_ratio(const std::vector<double>& seconds_a, const std::vector<double>& errors_a,
+                        const std::vector<double>& seconds_b, const std::vector<double>& errors_b);
+
+/// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
+double student_t975(int dof);
+
+}  // namespace femto::bench

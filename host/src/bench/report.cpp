@@ -1,0 +1,230 @@
+// report.md and plot.svg of `femto bench`. The plot is a few dozen SVG elements written by
+// hand: a plotting library would be a heavier dependency than the plot (docs/bench.md).
+#include "bench/report.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "bench/measures.h"
+#include "femto/host.h"
+
+namespace fs = std::filesystem;
+
+namespace femto::bench {
+
+namespace {
+
+std::string first_line_of(const char* path, const std::string& prefix = "") {
+    std::ifstream in(path);
+    for (std::string line; std::getline(in, line);)
+        if (prefix.empty() || line.rfind(prefix, 0) == 0)
+            return prefix.empty() ? line : line.substr(line.find(':') + 2);
+    return "unknown";
+}
+
+std::string load_average() {
+    std::istringstream in(first_line_of("/proc/loadavg"));
+    std::string a, b, c;
+    in >> a >> b >> c;
+    return a + " " + b + " " + c;
+}
+
+// Writes `text` to `path` through a temporary file, so a reader never sees half a report.
+void write_atomically(const fs::path& path, const std::string& text) {
+    const fs::path tmp = path.string() + ".tmp";
+    {
+        std::ofstream out(tmp);
+        out << text;
+        if (!out) throw SceneError(fmt::format("cannot write \"{}\"", tmp.string()));
+    }
+    fs::rename(tmp, path);
+}
+
+struct Series {
+    std::vector<double> seconds, errors;
+    std::map<std::string, std::vector<double>> by_budget;
+};
+
+// The runs of one scene, by variant (in the experiment's order).
+std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
+                                                      const std::vector<RunRow>& rows,
+                                                      const std::string& scene) {
+    std::vector<std::pair<std::string, Series>> out;
+    for (const Variant& v : e.variants) {
+        Series s;
+        for (const RunRow& r : rows)
+            if (r.scene == scene && r.variant == v.name) {
+                s.seconds.push_back(r.seconds);
+                s.errors.push_back(r.rel_mse);
+                s.by_budget[r.budget].push_back(r.rel_mse);
+            }
+        out.emplace_back(v.name, std::move(s));
+    }
+    return out;
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return NAN;
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.3g}", v) : "–"; }
+
+std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
+                          const SceneSpec& scene) {
+    const auto series = series_of(e, rows, scene.name);
+    const std::vector<std::string> budgets = e.budget_labels();
+    std::string md = fmt::format("## {}\n\n`{}`\n\n", scene.name, scene.file);
+    md += fmt::format(
+        "| variant | runs | slope of relMSE vs time (95 %) | time to equal error vs "
+        "`{}` (95 %) |",
+        e.variants.front().name);
+    for (const std::string& b : budgets)
+        md += fmt::format(" median relMSE @ {}{} |", b, e.timed() ? " s" : " spp");
+    md += "\n|---|---|---|---|";
+    for (size_t i = 0; i < budgets.size(); ++i) md += "---|";
+    md += "\n";
+    const Series& base = series.front().second;
+    for (const auto& [name, s] : series) {
+        const Fit f = fit_log_log(s.seconds, s.errors);
+        const Ratio r = equal_error_ratio(base.seconds, base.errors, s.seconds, s.errors);
+        md += fmt::format("| {} | {} | {} ± {} | {} [{}, {}] |", name, s.seconds.size(), g(f.slope),
+                          g(f.slope_ci95), g(r.value), g(r.lo), g(r.hi));
+        for (const std::string& b : budgets) {
+            auto it = s.by_budget.find(b);
+            md += " " + (it == s.by_budget.end() ? std::string("–") : g(median(it->second))) + " |";
+        }
+        md += "\n";
+    }
+    return md + "\n";
+}
+
+// ---- plot.svg --------------------------------------------------------------------------------
+
+constexpr const char* kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
+                                    "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
+
+std::string svg_panel(const Experiment& e, const std::vector<RunRow>& rows, const SceneSpec& scene,
+                      double y0) {
+    const auto series = series_of(e, rows, scene.name);
+    double x_lo = INFINITY, x_hi = -INFINITY, y_lo = INFINITY, y_hi = -INFINITY;
+    for (const auto& [name, s] : series)
+        for (size_t i = 0; i < s.seconds.size(); ++i)
+            if (s.seconds[i] > 0 && s.errors[i] > 0 && std::isfinite(s.errors[i])) {
+                x_lo = std::min(x_lo, std::log10(s.seconds[i]));
+                x_hi = std::max(x_hi, std::log10(s.seconds[i]));
+                y_lo = std::min(y_lo, std::log10(s.errors[i]));
+                y_hi = std::max(y_hi, std::log10(s.errors[i]));
+            }
+    std::string out = fmt::format(
+        "<text x=\"70\" y=\"{}\" font-size=\"14\">{}: relMSE against render seconds</text>\n",
+        y0 + 20, scene.name);
+    if (!(x_hi >= x_lo))
+        return out + fmt::format("<text x=\"70\" y=\"{}\">no runs</text>\n", y0 + 60);
+    x_lo = std::floor(x_lo), x_hi = std::max(x_lo + 1, std::ceil(x_hi));
+    y_lo = std::floor(y_lo), y_hi = std::max(y_lo + 1, std::ceil(y_hi));
+    const double left = 70, top = y0 + 35, w = 480, h = 260;
+    auto px = [&](double lx) { return left + (lx - x_lo) / (x_hi - x_lo) * w; };
+    auto py = [&](double ly) { return top + (y_hi - ly) / (y_hi - y_lo) * h; };
+    out += fmt::format(
+        "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" "
+        "stroke=\"black\"/>\n",
+        left, top, w, h);
+    for (double d = x_lo; d <= x_hi + 1e-9; ++d)
+        out += fmt::format(
+            "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" "
+            "text-anchor=\"middle\">1e{}</text>\n",
+            px(d), top + h + 15, int(d));
+    for (double d = y_lo; d <= y_hi + 1e-9; ++d)
+        out += fmt::format(
+            "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"11\" "
+            "text-anchor=\"end\">1e{}</text>\n",
+            left - 5, py(d) + 4, int(d));
+    for (size_t k = 0; k < series.size(); ++k) {
+        const auto& [name, s] = series[k];
+        const char* colour = kColours[k % std::size(kColours)];
+        double lo = INFINITY, hi = -INFINITY;
+        for (size_t i = 0; i < s.seconds.size(); ++i) {
+            if (!(s.seconds[i] > 0 && s.errors[i] > 0 && std::isfinite(s.errors[i]))) continue;
+            const double lx = std::log10(s.seconds[i]);
+            lo = std::min(lo, lx), hi = std::max(hi, lx);
+            out += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>\n",
+                               px(lx), py(std::log10(s.errors[i])), colour);
+        }
+        const Fit f = fit_log_log(s.seconds, s.errors);
+        if (std::isfinite(f.slope) && hi > lo) {
+            auto fit_y = [&](double lx) {
+                return (f.intercept + f.slope * lx * std::log(10.0)) / std::log(10.0);
+            };
+            out += fmt::format(
+                "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" "
+                "stroke=\"{}\" stroke-width=\"1.5\"/>\n",
+                px(lo), py(fit_y(lo)), px(hi), py(fit_y(hi)), colour);
+        }
+        out += fmt::format(
+            "<text x=\"{}\" y=\"{}\" font-size=\"12\" fill=\"{}\">{} (slope "
+            "{})</text>\n",
+            left + w + 15, top + 15 + 18 * double(k), colour, name, g(f.slope));
+    }
+    return out;
+}
+
+}  // namespace
+
+Machine Machine::now(int threads) {
+    Machine m;
+    m.cpu = first_line_of("/proc/cpuinfo", "model name");
+    m.cores = std::thread::hardware_concurrency();
+    m.threads = threads;
+    m.femto_version = version();
+    const std::time_t t = std::time(nullptr);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&t));
+    m.date = buf;
+    m.load_before = load_average();
+    return m;
+}
+
+Machine Machine::finish() const {
+    Machine m = *this;
+    m.load_after = load_average();
+    return m;
+}
+
+void write_report(const Experiment& e, const std::vector<RunRow>& rows, const Machine& machine,
+                  const fs::path& dir) {
+    std::string md = fmt::format("# {}\n\n", e.name);
+    md += fmt::format(
+        "Experiment `{}` (digest {}), femto {}. Machine: {}, {} cores, {} threads; {}; load "
+        "average {} before, {} after the last session's runs. Error: relMSE of the whole cube "
+        "(docs/bench.md); time: the render alone, wall clock.\n\n",
+        e.file, e.digest, machine.femto_version, machine.cpu, machine.cores,
+        machine.threads > 0 ? std::to_string(machine.threads) : std::string("all"), machine.date,
+        machine.load_before, machine.load_after);
+    for (const SceneSpec& scene : e.scenes) md += scene_section(e, rows, scene);
+    md +=
+        "Rows: `results.csv` (one per run), per-frame errors: `frames.csv`, plot: "
+        "`plot.svg`.\n";
+    write_atomically(dir / "report.md", md);
+
+    const double panel = 330;
+    std::string svg = fmt::format(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"800\" height=\"{}\" "
+        "font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
+        panel * double(e.scenes.size()) + 10);
+    for (size_t i = 0; i < e.scenes.size(); ++i)
+        svg += svg_panel(e, rows, e.scenes[i], panel * double(i));
+    write_atomically(dir / "plot.svg", svg + "</svg>\n");
+}
+
+}  // namespace femto::bench

@@ -1,0 +1,373 @@
+// The run loop of `femto bench`: references (rendered once, cached by content hash), the runs
+// interleaved variant by variant within each (budget, seed), one CSV row per finished run.
+#include "bench/runner.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "bench/measures.h"
+#include "bench/report.h"
+#include "femto/host.h"
+#include "femto/image_io.h"
+#include "femto/sensor.h"
+#include "femto/tfilter.h"
+
+namespace fs = std::filesystem;
+
+namespace femto::bench {
+
+namespace {
+
+std::string read_bytes(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+LoadOptions load_options(const SceneSpec& scene, const Variant& variant,
+                         const RunnerOptions& options) {
+    LoadOptions lo;
+    lo.defines = variant.defines;  // a variant's value wins over its scene's
+    for (const auto& d : scene.defines)
+        if (std::none_of(variant.defines.begin(), variant.defines.end(),
+                         [&](const auto& v) { return v.first == d.first; }))
+            lo.defines.push_back(d);
+    lo.plugin_dirs = options.plugin_dirs;
+    for (const auto& d : variant.plugin_dirs) lo.plugin_dirs.push_back(d);
+    return lo;
+}
+
+// The film's cube [H, W, T, 3] through its own writer (OUTBASE.npy) for a time-resolved film
+// with a cube; the steady image otherwise (T = 1).
+Cube film_cube(Scene& scene, const RenderOptions& ro, const RenderStats& stats,
+               const fs::path& scratch) {
+    const Film& film = scene.sensor().film();
+    Cube out;
+    out.H = size_t(film.height()), out.W = size_t(film.width()), out.C = 3;
+    if (const auto* trf = dynamic_cast<const TimeResolvedFilm*>(&film)) {
+        out.start = trf->grid().start, out.bin_width = trf->grid().bin_width;
+        RenderInfo info = make_render_info(scene, ro, stats);
+        info.write_npy = true;
+        fs::create_directories(scratch);
+        film.write((scratch / "run").string(), info);
+        if (fs::exists(scratch / "run.npy")) {
+            std::vector<size_t> shape;
+            out.data = io::read_npy((scratch / "run.npy").string(), shape);
+            fs::remove_all(scratch);
+            if (shape.size() != 4) throw std::runtime_error("the film's .npy is not [H, W, T, C]");
+            out.H = shape[0], out.W = shape[1], out.T = shape[2], out.C = shape[3];
+            return out;
+        }
+        fs::remove_all(scratch);
+    }
+    out.data = film.steady_image();
+    out.T = 1;
+    return out;
+}
+
+Cube read_reference_file(const std::string& path) {
+    Cube c;
+    if (fs::path(path).extension() == ".npy") {
+        std::vector<size_t> shape;
+        c.data = io::read_npy(path, shape);
+        if (shape.size() != 4)
+            throw SceneError(
+                fmt::format("reference \"{}\": a .npy reference must be [H, W, T, C]", path));
+        c.H = shape[0], c.W = shape[1], c.T = shape[2], c.C = shape[3];
+        return c;
+    }
+    try {  // a femto transient .exr, else any RGB image (steady)
+        io::Cube cube = io::read_exr_cube(path);
+        c.H = size_t(cube.height), c.W = size_t(cube.width), c.T = size_t(cube.bins), c.C = 3;
+        c.data = std::move(cube.data);
+        return c;
+    } catch (const SceneError&) {
+    }
+    int w = 0, h = 0;
+    c.data = io::read_image_rgb(path, w, h, false);
+    c.H = size_t(h), c.W = size_t(w), c.T = 1, c.C = 3;
+    return c;
+}
+
+// What a rendered reference depends on: the scene file, every file of the plugin folders in
+// use (femto's own included), the defines, spp, seed and femto's version.
+std::string reference_key(const Experiment& e, const SceneSpec& scene,
+                          const RunnerOptions& options) {
+    const Variant& v = *e.find_variant(e.reference.variant);
+    const LoadOptions lo = load_options(scene, v, options);
+    std::string text = read_bytes(scene.file);
+    for (const auto& [k, val] : lo.defines) text += "\n-D" + k + "=" + val;
+    text += fmt::format("\nspp {} seed {} femto {}", e.reference.spp, e.reference.seed, version());
+    for (const std::string& dir : plugin_search_path(lo)) {
+        std::vector<fs::path> files;
+        for (const auto& f : fs::directory_iterator(dir))
+            if (f.is_regular_file()) files.push_back(f.path());
+        std::sort(files.begin(), files.end());
+        for (const fs::path& f : files) text += "\n" + f.filename().string() + read_bytes(f);
+    }
+    return digest_hex(text);
+}
+
+// Renders `lo`'s scene with `seed` for the budget: spp samples, or as many as fit in `seconds`
+// (the render is stopped then; its passes end within a few samples' work).
+struct Rendered {
+    Cube cube;
+    RenderStats stats;
+    bool stopped = false;  // by the user: the run does not count
+};
+
+Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t seed, uint32_t spp,
+                    double seconds, int threads, const RunnerOptions& options,
+                    const fs::path& scratch) {
+    auto scene = load_scene(file, lo);
+    std::atomic<bool> stop{false};
+    RenderOptions ro;
+    ro.seed = seed;
+    ro.threads = threads;
+    ro.progress = false;
+    ro.scene_file = file;
+    ro.spp = seconds > 0 ? (1u << 30) : spp;
+    ro.stop = &stop;
+    std::mutex m;
+    std::condition_variable cv;
+    bool done = false;
+    // Stops the render at the budget's time, or at once when the user asks.
+    std::thread watcher([&] {
+        using Clock = std::chrono::steady_clock;
+        const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                              std::chrono::duration<double>(seconds));
+        std::unique_lock<std::mutex> lock(m);
+        while (!done) {
+            if (options.stop && options.stop->load()) break;
+            const auto now = Clock::now();
+            if (seconds > 0 && now >= until) break;
+            auto wait = std::chrono::duration_cast<Clock::duration>(std::chrono::milliseconds(20));
+            if (seconds > 0) wait = std::min(wait, until - now);
+            cv.wait_for(lock, wait);
+        }
+        stop.store(true);
+    });
+    Rendered r;
+    try {
+        r.stats = render(*scene, ro);
+    } catch (...) {
+        {
+            std::lock_guard<std::mutex> lock(m);
+            done = true;
+        }
+        cv.notify_all();
+        watcher.join();
+        throw;
+    }
+    {
+        std::lock_guard<std::mutex> lock(m);
+        done = true;
+    }
+    cv.notify_all();
+    watcher.join();
+    r.stopped = options.stop && options.stop->load();
+    if (seconds <= 0 && r.stats.interrupted) r.stopped = true;
+    if (!r.stopped) r.cube = film_cube(*scene, ro, r.stats, scratch);
+    return r;
+}
+
+std::string csv_header(const Experiment& e) {
+    std::string h = "scene,variant,budget,seed,spp,seconds,rays,relmse,pixel_relmse,energy";
+    for (const Window& w : e.windows) h += ",window:" + w.name;
+    return h;
+}
+
+std::string number_text(double v) { return std::isfinite(v) ? fmt::format("{:.9g}", v) : "nan"; }
+
+void append_row(const fs::path& csv, const Experiment& e, const RunRow& r) {
+    const bool fresh = !fs::exists(csv);
+    std::ofstream out(csv, std::ios::app);
+    if (fresh) out << csv_header(e) << "\n";
+    out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << r.spp << ","
+        << number_text(r.seconds) << "," << r.rays << "," << number_text(r.rel_mse) << ","
+        << number_text(r.pixel_rel_mse) << "," << number_text(r.energy);
+    for (double w : r.windows) out << "," << number_text(w);
+    out << "\n";
+    out.flush();
+    if (!out) throw SceneError(fmt::format("cannot write \"{}\"", csv.string()));
+}
+
+void append_frames(const fs::path& csv, const RunRow& r, const std::vector<double>& frames) {
+    const bool fresh = !fs::exists(csv);
+    std::ofstream out(csv, std::ios::app);
+    if (fresh) out << "scene,variant,budget,seed,frame,relmse\n";
+    for (size_t t = 0; t < frames.size(); ++t)
+        out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << t << ","
+            << number_text(frames[t]) << "\n";
+}
+
+// The output folder, checked against the experiment that wrote it (a changed experiment file
+// must not mix its rows with the old ones).
+void prepare_out_dir(const Experiment& e, const fs::path& dir) {
+    std::error_code ec;
+    fs::create_directories(dir / "cache", ec);
+    if (ec || access(dir.c_str(), W_OK) != 0)
+        throw SceneError(fmt::format("cannot write into the output folder \"{}\"", dir.string()));
+    const fs::path digest = dir / "experiment.digest";
+    if (fs::exists(dir / "results.csv") && fs::exists(digest)) {
+        std::string old = read_bytes(digest);
+        while (!old.empty() && (old.back() == '\n' || old.back() == ' ')) old.pop_back();
+        if (old != e.digest)
+            throw SceneError(fmt::format(
+                "\"{}\" holds the results of another version of this experiment (the file "
+                "changed since): give another -o folder, or delete its results.csv to start over",
+                dir.string()));
+    }
+    std::ofstream(digest) << e.digest << "\n";
+}
+
+// The scene's reference: the experiment's file, or its reference variant rendered once and
+// kept in OUT/cache under the hash of what it depends on. Empty when the user stopped it.
+std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
+                                   const RunnerOptions& options, int threads, const fs::path& dir) {
+    if (!e.reference.file.empty()) return read_reference_file(e.reference.file);
+    const fs::path cached =
+        dir / "cache" /
+        ("reference-" + scene.name + "-" + reference_key(e, scene, options) + ".npy");
+    if (fs::exists(cached)) {
+        Cube c = read_reference_file(cached.string());
+        return c;
+    }
+    if (options.progress)
+        fmt::print(stderr, "rendering the reference of {}: {} at {} spp (cached in {})\n",
+                   scene.name, e.reference.variant, e.reference.spp, cached.string());
+    Rendered r =
+        render_run(scene.file, load_options(scene, *e.find_variant(e.reference.variant), options),
+                   e.reference.seed, e.reference.spp, 0, threads, options, dir / "scratch");
+    if (r.stopped) return std::nullopt;
+    const fs::path partial = cached.string() + ".tmp";
+    io::write_npy(partial.string(), {r.cube.H, r.cube.W, r.cube.T, r.cube.C}, r.cube.data.data());
+    fs::rename(partial, cached);
+    return std::move(r.cube);
+}
+
+}  // namespace
+
+std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& e) {
+    std::vector<RunRow> rows;
+    std::ifstream in(csv_path);
+    if (!in) return rows;
+    std::string line;
+    std::getline(in, line);
+    if (line != csv_header(e))
+        throw SceneError(
+            fmt::format("\"{}\" is not this experiment's results.csv (its header "
+                        "differs)",
+                        csv_path));
+    int number = 1;
+    while (std::getline(in, line)) {
+        ++number;
+        if (line.empty()) continue;
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+        if (f.size() != 10 + e.windows.size())
+            throw SceneError(fmt::format("{}:{}: expected {} fields, found {}", csv_path, number,
+                                         10 + e.windows.size(), f.size()));
+        RunRow r;
+        try {
+            r.scene = f[0], r.variant = f[1], r.budget = f[2];
+            r.seed = std::stoull(f[3]), r.spp = uint32_t(std::stoul(f[4]));
+            r.seconds = std::stod(f[5]), r.rays = std::stoull(f[6]);
+            r.rel_mse = std::stod(f[7]), r.pixel_rel_mse = std::stod(f[8]),
+            r.energy = std::stod(f[9]);
+            for (size_t k = 10; k < f.size(); ++k) r.windows.push_back(std::stod(f[k]));
+        } catch (const std::exception&) {
+            throw SceneError(fmt::format("{}:{}: not a row femto bench wrote", csv_path, number));
+        }
+        rows.push_back(std::move(r));
+    }
+    return rows;
+}
+
+bool run_experiment(const Experiment& e, const RunnerOptions& options) {
+    const fs::path dir(options.out_dir);
+    prepare_out_dir(e, dir);
+    const fs::path csv = dir / "results.csv";
+    std::vector<RunRow> rows = read_results(csv.string(), e);
+    std::set<std::string> done;
+    auto key = [](const std::string& s, const std::string& v, const std::string& b, uint64_t seed) {
+        return s + "\n" + v + "\n" + b + "\n" + std::to_string(seed);
+    };
+    for (const RunRow& r : rows) done.insert(key(r.scene, r.variant, r.budget, r.seed));
+    const int threads = options.threads > 0 ? options.threads : e.threads;
+    const std::vector<std::string> labels = e.budget_labels();
+    const size_t total = e.scenes.size() * labels.size() * e.seeds.size() * e.variants.size();
+    const Machine machine = Machine::now(threads);
+    size_t index = 0;
+    bool stopped = false;
+    for (const SceneSpec& scene : e.scenes) {
+        if (stopped) break;
+        const std::optional<Cube> found = reference_cube(e, scene, options, threads, dir);
+        if (!found) {
+            stopped = true;
+            break;
+        }
+        const Cube& reference = *found;
+        for (size_t b = 0; b < labels.size() && !stopped; ++b)
+            for (uint64_t seed : e.seeds) {
+                if (stopped) break;
+                for (const Variant& v : e.variants) {  // interleaved: A B A B ...
+                    ++index;
+                    if (done.count(key(scene.name, v.name, labels[b], seed))) continue;
+                    if (options.stop && options.stop->load()) {
+                        stopped = true;
+                        break;
+                    }
+                    const uint32_t spp = e.timed() ? 0 : e.spp_budgets[b];
+                    const double seconds = e.timed() ? e.time_budgets[b] : 0;
+                    Rendered r = render_run(scene.file, load_options(scene, v, options), seed, spp,
+                                            seconds, threads, options, dir / "scratch");
+                    if (r.stopped) {
+                        stopped = true;
+                        break;
+                    }
+                    RunRow row;
+                    row.scene = scene.name, row.variant = v.name, row.budget = labels[b];
+                    row.seed = seed, row.spp = r.stats.spp_done;
+                    row.seconds = r.stats.seconds, row.rays = r.stats.rays;
+                    try {
+                        check_same_shape(r.cube, reference);
+                    } catch (const std::runtime_error& err) {
+                        throw SceneError(v.location,
+                                         fmt::format("variant \"{}\" on scene \"{}\": {}; a "
+                                                     "variant must keep the film's size and bins",
+                                                     v.name, scene.name, err.what()));
+                    }
+                    row.rel_mse = rel_mse(r.cube, reference);
+                    row.pixel_rel_mse = pixel_rel_mse(r.cube, reference, -INFINITY, INFINITY);
+                    row.energy = energy_error(r.cube, reference);
+                    for (const Window& w : e.windows)
+                        row.windows.push_back(rel_mse(r.cube, reference, w.start, w.end));
+                    append_row(csv, e, row);
+                    append_frames(dir / "frames.csv", row, frame_rel_mse(r.cube, reference));
+                    if (options.progress)
+                        fmt::print(stderr,
+                                   "[{}/{}] {} {} budget {} seed {}: relMSE {:.4g} in {:.2f} s\n",
+                                   index, total, scene.name, v.name, labels[b], seed, row.rel_mse,
+                                   row.seconds);
+                    rows.push_back(std::move(row));
+                }
+            }
+    }
+    write_report(e, rows, machine.finish(), dir);
+    return !stopped;
+}
+
+}  // namespace femto::bench

@@ -1,0 +1,40 @@
+// `femto bench`: runs an experiment's renders, measures them against the reference and writes
+// results.csv, frames.csv, report.md and plot.svg into the output folder (docs/bench.md).
+#pragma once
+
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "bench/experiment.h"
+
+namespace femto::bench {
+
+struct RunnerOptions {
+    std::string out_dir;
+    int threads = 0;                          ///< overrides the experiment's <threads> when > 0
+    std::vector<std::string> plugin_dirs;     ///< searched before every variant's own
+    bool progress = true;                     ///< a line per run on stderr
+    const std::atomic<bool>* stop = nullptr;  ///< Ctrl-C: finish nothing more, keep the rows
+};
+
+/// One finished run: a row of results.csv.
+struct RunRow {
+    std::string scene, variant, budget;
+    uint64_t seed = 0;
+    uint32_t spp = 0;
+    double seconds = 0;
+    uint64_t rays = 0;
+    double rel_mse = 0, pixel_rel_mse = 0, energy = 0;
+    std::vector<double> windows;  ///< rel_mse per <window>, in the experiment's order
+};
+
+/// Runs what results.csv in `out_dir` does not hold yet (a re-run resumes), then writes the
+/// report from every row. Returns false when stopped early (the finished rows are kept).
+bool run_experiment(const Experiment& e, const RunnerOptions& options);
+
+/// The rows of a results.csv (for the report and for resuming); throws SceneError when the
+/// file is not one `femto bench` wrote for this experiment's windows.
+std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& e);
+
+}  // namespace femto::bench
