@@ -53,7 +53,9 @@ def scene_xml(name, integrator, max_depth, hide, tfilter):
     text = (text[:a] + f'<integrator type="{integrator}"><integer name="max_depth" '
             f'value="{max_depth}"/><boolean name="hide_emitters" '
             f'value="{"true" if hide else "false"}"/></integrator>' + text[b:])
-    text = re.sub(r'<tfilter type="histogram"\s*/>', FILTERS[tfilter], text, count=1)
+    text, n = re.subn(r'<tfilter type="[^"]*"\s*/>', FILTERS[tfilter], text, count=1)
+    if n != 1:
+        raise SystemExit(f"{name}: no <tfilter .../> to replace")
     return text
 
 

@@ -16,10 +16,6 @@ bench_log_header "$log"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 scene="$root/scenes/cornell-box/scene.xml"
-for integrator in transient_path transient_light; do
-    sed "s/<integrator type=\"transient_path\">/<integrator type=\"$integrator\">/" "$scene" \
-        > "$work/$integrator.xml"
-done
 cube_kib=$((256 * 256 * 1024 * 3 * 4 / 1024))
 csv="$results/splat_memory.csv"
 echo "integrator,run,bins,peak_kib,seconds" > "$csv"
@@ -27,7 +23,7 @@ for run in $(seq 1 "$runs"); do
     for integrator in transient_path transient_light; do
         for bins in 1 1024; do
             /usr/bin/time -f "%M %e" -o "$work/time.txt" "$build/bin/femto" render \
-                "$work/$integrator.xml" -D res=256 -D spp=8 -D bins=$bins --threads 2 -q \
+                "$scene" -D integrator=$integrator -D res=256 -D spp=8 -D bins=$bins --threads 2 -q \
                 -o "$work/out"
             read -r peak seconds < "$work/time.txt"
             echo "$integrator,$run,$bins,$peak,$seconds" | tee -a "$csv"

@@ -205,7 +205,7 @@ struct CornellBox {
     }
     /// `integrator` (with its parameters) into an hdrfilm.
     std::string steady(const std::string& integrator_xml) const {
-        std::string s = replace_block(xml, "<integrator type=\"transient_path\">", "</integrator>",
+        std::string s = replace_block(xml, "<integrator type=\"$integrator\">", "</integrator>",
                                       integrator_xml);
         return replace_block(s, "<film type=\"transient\">", "</film>",
                              "<film type=\"hdrfilm\">\n"

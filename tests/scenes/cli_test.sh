@@ -172,7 +172,7 @@ bad_define)
 unused_define)
   # A -D the scene does not use is a typo until proven otherwise: an error naming the scene's
   # parameters and the closest one; --lenient makes it a warning and renders.
-  expect_exit 2 '^femto: error: -D sppp=4: .*scene\.xml has no parameter "sppp" \(did you mean "spp"\?\); its parameters \(<default> names and \$names\): bins, max_depth, res, spp$' -- "$femto" render "$scene" -D sppp=4 -o out/u -q
+  expect_exit 2 '^femto: error: -D sppp=4: .*scene\.xml has no parameter "sppp" \(did you mean "spp"\?\); its parameters \(<default> names and \$names\): bins, integrator, max_depth, res, spp, tfilter$' -- "$femto" render "$scene" -D sppp=4 -o out/u -q
   [ ! -e out/u.exr ] || fail "output written"
   expect_exit 0 '^warning: -D sppp=4: .* -- ignored \(--lenient\)$' -- "$femto" render "$scene" -D sppp=4 -D spp=1 -D res=8 -D bins=4 --lenient -o out/l -q
   [ -s out/l.exr ] || fail "--lenient did not render";;
@@ -236,7 +236,7 @@ sigint_partial)
 sigint_latency)
   # Ctrl-C takes effect within a few samples' work, not at the end of a pass: one pixel whose
   # pass holds 2^22 volumetric samples (~10 s), and a kernel filter's 65536-spp pilot pass.
-  sed 's|<tfilter type="histogram"/>|<tfilter type="kernel"><integer name="pilot_spp" value="65536"/></tfilter>|' \
+  sed 's|<tfilter type="$tfilter"/>|<tfilter type="kernel"><integer name="pilot_spp" value="65536"/></tfilter>|' \
     "$scene" > "$src/scenes/cornell-box/.pilot-$$.xml"
   trap 'rm -f "$src/scenes/cornell-box/.pilot-$$.xml"' EXIT
   for run in fog pilot; do

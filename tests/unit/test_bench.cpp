@@ -62,6 +62,14 @@ TEST(BenchMeasures, FormulasOnAHandComputedCube) {
     Cube other = ref;
     other.T = 2;
     EXPECT_THROW(rel_mse(x, other), std::runtime_error);
+    // With the reference's variance known, it is taken out of the squared differences:
+    // (3 - (0.5 + 0.25)) / 21 for the cube, (1 - 0.5 + 1 - 0.25) / 17 for bin 0.
+    Cube noisy = ref;
+    noisy.variance = {0.5f, 0, 0, 0.25f, 0, 0};
+    EXPECT_DOUBLE_EQ(rel_mse(x, noisy), 2.25 / 21.0);
+    EXPECT_DOUBLE_EQ(rel_mse(x, noisy, 0, 1), 1.25 / 17.0);
+    EXPECT_DOUBLE_EQ(frame_rel_mse(x, noisy)[0], 1.25 / 17.0);
+    EXPECT_DOUBLE_EQ(rel_mse(x, without_variance(noisy)), 3.0 / 21.0);
 }
 
 TEST(BenchMeasures, LogLogFitRecoversAKnownSlope) {
@@ -133,6 +141,8 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
          ":3:1: <variant> has no attribute \"integrator\""},
         {head + "<variant name=\"a\"/><variant name=\"a\"/>\n</experiment>",
          "two variants are named \"a\""},
+        {head + "<variant name=\"a, b\"/>\n</experiment>",
+         ":3:1: <variant> name \"a, b\": a name may not hold ,"},
         {"<experiment>\n<scene file=\"scene.xml\">\n</experiment>", ":3:3: malformed XML"},
         {"<scene version=\"3.0.0\"/>", ":1:1: the root element is <scene>, not <experiment>"},
     };
@@ -191,6 +201,14 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     EXPECT_EQ(rows[1].variant, "bdpt");
     for (const char* f : {"report.md", "plot.svg", "frames.csv"})
         EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+    int cached = 0;  // the reference's two halves: their mean and its variance
+    for (const auto& f : fs::directory_iterator(dir / "out" / "cache")) {
+        const std::string name = f.path().filename().string();
+        cached += name.find("-mean.npy") != std::string::npos ||
+                  name.find("-variance.npy") != std::string::npos;
+    }
+    EXPECT_EQ(cached, 2);
+    for (const RunRow& r : rows) EXPECT_LT(r.rel_mse, r.rel_mse_raw);  // its noise taken out
     // Resuming: nothing left to run, the rows stay as they were.
     EXPECT_TRUE(run_experiment(e, o));
     EXPECT_EQ(read_results((dir / "out" / "results.csv").string(), e).size(), 8u);

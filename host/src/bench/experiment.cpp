@@ -131,6 +131,16 @@ private:
     std::vector<size_t> line_starts_;
 };
 
+// Names go into CSV cells and cache file names: no separators, quotes or line breaks.
+std::string checked_name(const Reader& r, const pugi::xml_node& n, const std::string& name) {
+    if (name.empty()) r.fail(n, fmt::format("<{}> has an empty name", n.name()));
+    if (name.find_first_of(",\"/\\\n\r") != std::string::npos)
+        r.fail(n, fmt::format("<{}> name \"{}\": a name may not hold , \" / \\ or a line break "
+                              "(it names CSV cells and files)",
+                              n.name(), name));
+    return name;
+}
+
 void read_budgets(const Reader& r, const pugi::xml_node& n, Experiment& e) {
     r.check_attributes(n, {"spp", "seconds"});
     r.only_children(n, {});
@@ -173,8 +183,10 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
         r.only_children(c, {"define"});
         SceneSpec s;
         s.file = r.resolve(c, r.required(c, "file"), false);
-        s.name = c.attribute("name") ? c.attribute("name").value()
-                                     : fs::path(s.file).parent_path().filename().string();
+        s.name =
+            checked_name(r, c,
+                         c.attribute("name") ? c.attribute("name").value()
+                                             : fs::path(s.file).parent_path().filename().string());
         s.defines = r.defines(c);
         s.location = r.at(c);
         e.scenes.push_back(std::move(s));
@@ -182,7 +194,7 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
         r.check_attributes(c, {"name"});
         r.only_children(c, {"define", "plugin_dir"});
         Variant v;
-        v.name = r.required(c, "name");
+        v.name = checked_name(r, c, r.required(c, "name"));
         v.defines = r.defines(c);
         for (const pugi::xml_node& d : c.children("plugin_dir")) {
             r.check_attributes(d, {"path"});
@@ -212,7 +224,8 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
     } else if (tag == "window") {
         r.check_attributes(c, {"name", "start", "end"});
         r.only_children(c, {});
-        Window w{r.required(c, "name"), r.number(c, "start", r.required(c, "start")),
+        Window w{checked_name(r, c, r.required(c, "name")),
+                 r.number(c, "start", r.required(c, "start")),
                  r.number(c, "end", r.required(c, "end"))};
         if (!(w.end > w.start)) r.fail(c, "<window> needs start < end");
         e.windows.push_back(w);

@@ -19,19 +19,27 @@ bool bin_inside(const Cube& c, size_t t, double t0, double t1) {
     return centre >= t0 && centre < t1;
 }
 
+// Sums of (x - r)^2 less the reference's own variance (when it is known), and of r^2.
 struct Sums {
     double se = 0, rr = 0;
-    void add(float x, float r) {
-        const double d = double(x) - double(r);
-        se += d * d;
-        rr += double(r) * double(r);
+    void add(const Cube& x, const Cube& ref, size_t i) {
+        const double d = double(x.data[i]) - double(ref.data[i]);
+        se += d * d - (ref.variance.empty() ? 0.0 : double(ref.variance[i]));
+        rr += double(ref.data[i]) * double(ref.data[i]);
     }
     double rel() const { return rr > 0 ? se / rr : kNaN; }
 };
 
 }  // namespace
 
+Cube without_variance(Cube c) {
+    c.variance.clear();
+    return c;
+}
+
 void check_same_shape(const Cube& x, const Cube& ref) {
+    if (!ref.variance.empty() && ref.variance.size() != ref.data.size())
+        throw std::runtime_error("the reference's variance does not match its cube");
     if (x.H != ref.H || x.W != ref.W || x.T != ref.T || x.C != ref.C)
         throw std::runtime_error("the render and its reference differ in shape ([" +
                                  std::to_string(x.H) + ", " + std::to_string(x.W) + ", " +
@@ -47,7 +55,7 @@ double rel_mse(const Cube& x, const Cube& ref, double t0, double t1) {
         for (size_t t = 0; t < x.T; ++t) {
             if (!bin_inside(x, t, t0, t1)) continue;
             const size_t i = (p * x.T + t) * x.C;
-            for (size_t c = 0; c < x.C; ++c) s.add(x.data[i + c], ref.data[i + c]);
+            for (size_t c = 0; c < x.C; ++c) s.add(x, ref, i + c);
         }
     return s.rel();
 }
@@ -66,7 +74,7 @@ double pixel_rel_mse(const Cube& x, const Cube& ref, double t0, double t1) {
         for (size_t t = 0; t < x.T; ++t) {
             if (!bin_inside(x, t, t0, t1)) continue;
             const size_t i = (p * x.T + t) * x.C;
-            for (size_t c = 0; c < x.C; ++c) s.add(x.data[i + c], ref.data[i + c]);
+            for (size_t c = 0; c < x.C; ++c) s.add(x, ref, i + c);
         }
         if (s.rr > 0) sum += s.rel(), ++lit;
     }
@@ -79,7 +87,7 @@ std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref) {
     for (size_t p = 0; p < x.H * x.W; ++p)
         for (size_t t = 0; t < x.T; ++t) {
             const size_t i = (p * x.T + t) * x.C;
-            for (size_t c = 0; c < x.C; ++c) frames[t].add(x.data[i + c], ref.data[i + c]);
+            for (size_t c = 0; c < x.C; ++c) frames[t].add(x, ref, i + c);
         }
     std::vector<double> out;
     for (const Sums& s : frames) out.push_back(s.rel());

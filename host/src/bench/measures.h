@@ -13,13 +13,19 @@ namespace femto::bench {
 struct Cube {
     size_t H = 0, W = 0, T = 0, C = 0;
     std::vector<float> data;
+    /// For a reference: the variance of each voxel's estimate, or empty when unknown. The
+    /// measures then subtract it: for a render x independent of the reference r,
+    /// E sum (x - r)^2 = sum E (x - truth)^2 + sum Var r, so what remains is x's own error.
+    std::vector<float> variance;
     double start = 0, bin_width = 0;
     size_t size() const { return H * W * T * C; }
 };
 
-/// relMSE = sum_v (x_v - r_v)^2 / sum_v r_v^2 over the voxels v (pixel, bin, channel) whose bin
-/// centre lies in [t0, t1): the squared relative L2 error of that part of the cube. NaN when
-/// the reference is black there.
+/// relMSE = sum_v ((x_v - r_v)^2 - Var r_v) / sum_v r_v^2 over the voxels v (pixel, bin,
+/// channel) whose bin centre lies in [t0, t1): the squared relative L2 error of that part of
+/// the cube against the truth (Var r = 0 when the reference's variance is unknown; with it, a
+/// render as good as the reference may come out slightly negative). NaN when the reference is
+/// black there. Every measure below subtracts Var r the same way.
 double rel_mse(const Cube& x, const Cube& ref, double t0, double t1);
 /// rel_mse over the whole cube.
 double rel_mse(const Cube& x, const Cube& ref);
@@ -30,6 +36,8 @@ double pixel_rel_mse(const Cube& x, const Cube& ref, double t0, double t1);
 std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref);
 /// (sum x - sum r) / sum r: the relative error of the total energy.
 double energy_error(const Cube& x, const Cube& ref);
+/// `c` with its variance dropped (the measures then compare against r as it is).
+Cube without_variance(Cube c);
 /// Throws std::runtime_error when the two cubes' shapes differ.
 void check_same_shape(const Cube& x, const Cube& ref);
 

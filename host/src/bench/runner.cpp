@@ -182,8 +182,11 @@ Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t see
     return r;
 }
 
+constexpr size_t kFixedColumns = 11;  // the columns before the windows
+
 std::string csv_header(const Experiment& e) {
-    std::string h = "scene,variant,budget,seed,spp,seconds,rays,relmse,pixel_relmse,energy";
+    std::string h =
+        "scene,variant,budget,seed,spp,seconds,rays,relmse,pixel_relmse,energy,relmse_raw";
     for (const Window& w : e.windows) h += ",window:" + w.name;
     return h;
 }
@@ -196,7 +199,8 @@ void append_row(const fs::path& csv, const Experiment& e, const RunRow& r) {
     if (fresh) out << csv_header(e) << "\n";
     out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << r.spp << ","
         << number_text(r.seconds) << "," << r.rays << "," << number_text(r.rel_mse) << ","
-        << number_text(r.pixel_rel_mse) << "," << number_text(r.energy);
+        << number_text(r.pixel_rel_mse) << "," << number_text(r.energy) << ","
+        << number_text(r.rel_mse_raw);
     for (double w : r.windows) out << "," << number_text(w);
     out << "\n";
     out.flush();
@@ -232,29 +236,48 @@ void prepare_out_dir(const Experiment& e, const fs::path& dir) {
     std::ofstream(digest) << e.digest << "\n";
 }
 
-// The scene's reference: the experiment's file, or its reference variant rendered once and
-// kept in OUT/cache under the hash of what it depends on. Empty when the user stopped it.
+// The scene's reference: the experiment's file, or its reference variant rendered in two
+// independent halves (seeds seed and seed + 1, spp / 2 each): their mean is the reference and
+// (a - b)^2 / 4 per voxel the variance of that mean (valid for any sampler), which the measures
+// take out. Both are kept in OUT/cache under the hash of what they depend on. Empty when the
+// user stopped it.
 std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
                                    const RunnerOptions& options, int threads, const fs::path& dir) {
     if (!e.reference.file.empty()) return read_reference_file(e.reference.file);
-    const fs::path cached =
-        dir / "cache" /
-        ("reference-" + scene.name + "-" + reference_key(e, scene, options) + ".npy");
-    if (fs::exists(cached)) {
-        Cube c = read_reference_file(cached.string());
+    const std::string stem =
+        (dir / "cache" / ("reference-" + scene.name + "-" + reference_key(e, scene, options)))
+            .string();
+    const std::string mean_file = stem + "-mean.npy", variance_file = stem + "-variance.npy";
+    if (fs::exists(mean_file) && fs::exists(variance_file)) {
+        Cube c = read_reference_file(mean_file);
+        c.variance = read_reference_file(variance_file).data;
         return c;
     }
     if (options.progress)
-        fmt::print(stderr, "rendering the reference of {}: {} at {} spp (cached in {})\n",
-                   scene.name, e.reference.variant, e.reference.spp, cached.string());
-    Rendered r =
-        render_run(scene.file, load_options(scene, *e.find_variant(e.reference.variant), options),
-                   e.reference.seed, e.reference.spp, 0, threads, options, dir / "scratch");
-    if (r.stopped) return std::nullopt;
-    const fs::path partial = cached.string() + ".tmp";
-    io::write_npy(partial.string(), {r.cube.H, r.cube.W, r.cube.T, r.cube.C}, r.cube.data.data());
-    fs::rename(partial, cached);
-    return std::move(r.cube);
+        fmt::print(stderr, "rendering the reference of {}: {} at {} spp in two halves (cached in "
+                           "{}-*.npy)\n",
+                   scene.name, e.reference.variant, e.reference.spp, stem);
+    const LoadOptions lo = load_options(scene, *e.find_variant(e.reference.variant), options);
+    const uint32_t half = std::max<uint32_t>(1, e.reference.spp / 2);
+    Rendered a = render_run(scene.file, lo, e.reference.seed, half, 0, threads, options,
+                            dir / "scratch");
+    if (a.stopped) return std::nullopt;
+    Rendered b = render_run(scene.file, lo, e.reference.seed + 1, half, 0, threads, options,
+                            dir / "scratch");
+    if (b.stopped) return std::nullopt;
+    Cube r = std::move(a.cube);
+    r.variance.resize(r.data.size());
+    for (size_t i = 0; i < r.data.size(); ++i) {
+        const double x = r.data[i], y = b.cube.data[i];
+        r.data[i] = float(0.5 * (x + y));
+        r.variance[i] = float(0.25 * (x - y) * (x - y));
+    }
+    const std::vector<size_t> shape{r.H, r.W, r.T, r.C};
+    io::write_npy(variance_file + ".tmp", shape, r.variance.data());
+    io::write_npy(mean_file + ".tmp", shape, r.data.data());
+    fs::rename(variance_file + ".tmp", variance_file);
+    fs::rename(mean_file + ".tmp", mean_file);
+    return r;
 }
 
 }  // namespace
@@ -277,17 +300,17 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
         std::vector<std::string> f;
         std::stringstream ss(line);
         for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
-        if (f.size() != 10 + e.windows.size())
+        if (f.size() != kFixedColumns + e.windows.size())
             throw SceneError(fmt::format("{}:{}: expected {} fields, found {}", csv_path, number,
-                                         10 + e.windows.size(), f.size()));
+                                         kFixedColumns + e.windows.size(), f.size()));
         RunRow r;
         try {
             r.scene = f[0], r.variant = f[1], r.budget = f[2];
             r.seed = std::stoull(f[3]), r.spp = uint32_t(std::stoul(f[4]));
             r.seconds = std::stod(f[5]), r.rays = std::stoull(f[6]);
             r.rel_mse = std::stod(f[7]), r.pixel_rel_mse = std::stod(f[8]),
-            r.energy = std::stod(f[9]);
-            for (size_t k = 10; k < f.size(); ++k) r.windows.push_back(std::stod(f[k]));
+            r.energy = std::stod(f[9]), r.rel_mse_raw = std::stod(f[10]);
+            for (size_t k = kFixedColumns; k < f.size(); ++k) r.windows.push_back(std::stod(f[k]));
         } catch (const std::exception&) {
             throw SceneError(fmt::format("{}:{}: not a row femto bench wrote", csv_path, number));
         }
@@ -351,6 +374,7 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
                                                      v.name, scene.name, err.what()));
                     }
                     row.rel_mse = rel_mse(r.cube, reference);
+                    row.rel_mse_raw = rel_mse(r.cube, without_variance(reference));
                     row.pixel_rel_mse = pixel_rel_mse(r.cube, reference, -INFINITY, INFINITY);
                     row.energy = energy_error(r.cube, reference);
                     for (const Window& w : e.windows)
