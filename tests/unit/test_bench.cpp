@@ -53,6 +53,9 @@ TEST(BenchMeasures, FormulasOnAHandComputedCube) {
     EXPECT_DOUBLE_EQ(rel_mse(x, ref, 0, 1), 2.0 / 17.0);
     // Per pixel: pixel 0 (1 + 0 + 1) / (1 + 4), pixel 1 1 / 16; their mean.
     EXPECT_DOUBLE_EQ(pixel_rel_mse(x, ref, -1e9, 1e9), 0.5 * (2.0 / 5.0 + 1.0 / 16.0));
+    EXPECT_DOUBLE_EQ(pixel_profile_rel_mse(x, ref, 0, 0), 2.0 / 5.0);
+    EXPECT_EQ(pixel_profile(x, 1, 0), (std::vector<double>{3, 0, 0}));
+    EXPECT_THROW(pixel_profile(x, 2, 0), std::runtime_error);
     const std::vector<double> frames = frame_rel_mse(x, ref);
     ASSERT_EQ(frames.size(), 3u);
     EXPECT_DOUBLE_EQ(frames[0], 2.0 / 17.0);
@@ -141,6 +144,8 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
          ":3:1: <variant> has no attribute \"integrator\""},
         {head + "<variant name=\"a\"/><variant name=\"a\"/>\n</experiment>",
          "two variants are named \"a\""},
+        {head + "<variant name=\"a\"/>\n<pixel name=\"p\" x=\"-1\" y=\"0\"/>\n</experiment>",
+         ":4:1: <pixel> x: -1 is not a whole number from 0"},
         {head + "<variant name=\"a, b\"/>\n</experiment>",
          ":3:1: <variant> name \"a, b\": a name may not hold ,"},
         {"<experiment>\n<scene file=\"scene.xml\">\n</experiment>", ":3:3: malformed XML"},
@@ -176,6 +181,7 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
         "<variant name=\"path\"/><variant name=\"bdpt\"><define name=\"integrator\" "
         "value=\"transient_bdpt\"/></variant><budgets spp=\"2 8\"/><seeds count=\"2\"/>"
         "<reference variant=\"path\" spp=\"64\"/><window name=\"early\" start=\"3\" end=\"5\"/>"
+        "<pixel name=\"centre\" x=\"4\" y=\"4\"/>"
         "<threads value=\"1\"/></experiment>";
     write(dir / "e.xml", experiment);
     const Experiment e = load_experiment((dir / "e.xml").string());
@@ -196,10 +202,13 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
         EXPECT_GT(r.rel_mse, 0);
         EXPECT_LT(r.rel_mse, 10);
         ASSERT_EQ(r.windows.size(), 1u);
+        ASSERT_EQ(r.pixels.size(), 1u);
+        EXPECT_GT(r.pixels[0], 0);  // the centre pixel sees the lit plane
     }
     EXPECT_EQ(rows[0].variant, "path");  // interleaved: path, bdpt, path, bdpt, ...
     EXPECT_EQ(rows[1].variant, "bdpt");
-    for (const char* f : {"report.md", "plot.svg", "frames.csv"})
+    for (const char* f :
+         {"report.md", "plot.svg", "frames.csv", "profiles.csv", "reference_profiles_plane.csv"})
         EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
     int cached = 0;  // the reference's two halves: their mean and its variance
     for (const auto& f : fs::directory_iterator(dir / "out" / "cache")) {

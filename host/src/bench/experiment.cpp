@@ -229,13 +229,20 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
                  r.number(c, "end", r.required(c, "end"))};
         if (!(w.end > w.start)) r.fail(c, "<window> needs start < end");
         e.windows.push_back(w);
+    } else if (tag == "pixel") {
+        r.check_attributes(c, {"name", "x", "y"});
+        r.only_children(c, {});
+        PixelSpec p{checked_name(r, c, r.required(c, "name")),
+                    int(r.whole(c, "x", r.number(c, "x", r.required(c, "x")), 0, 1e6)),
+                    int(r.whole(c, "y", r.number(c, "y", r.required(c, "y")), 0, 1e6)), r.at(c)};
+        e.pixels.push_back(p);
     } else if (tag == "threads") {
         r.check_attributes(c, {"value"});
         r.only_children(c, {});
         e.threads = int(r.whole(c, "value", r.number(c, "value", r.required(c, "value")), 1, 4096));
     } else {
         r.fail(c, fmt::format("unknown element <{}> in <experiment>; valid: scene, variant, "
-                              "budgets, seeds, reference, window, threads",
+                              "budgets, seeds, reference, window, pixel, threads",
                               tag));
     }
 }

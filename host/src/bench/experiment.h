@@ -46,6 +46,13 @@ struct Window {
     double start = 0, end = 0;
 };
 
+/// A pixel whose time profile is measured on its own (thesis Fig. 5.5: one pixel over time).
+struct PixelSpec {
+    std::string name;
+    int x = 0, y = 0;  ///< film pixel (0, 0 is the top left)
+    SourceLocation location;
+};
+
 struct Experiment {
     std::string file;  ///< the experiment file
     std::string name;
@@ -56,6 +63,7 @@ struct Experiment {
     std::vector<uint64_t> seeds;
     ReferenceSpec reference;
     std::vector<Window> windows;
+    std::vector<PixelSpec> pixels;
     int threads = 0;     ///< 0: all cores
     std::string digest;  ///< of the file's bytes: a changed experiment does not resume old rows
 

@@ -81,6 +81,32 @@ double pixel_rel_mse(const Cube& x, const Cube& ref, double t0, double t1) {
     return lit ? sum / double(lit) : kNaN;
 }
 
+namespace {
+size_t pixel_index(const Cube& x, int px, int py) {
+    if (px < 0 || py < 0 || size_t(px) >= x.W || size_t(py) >= x.H)
+        throw std::runtime_error("pixel (" + std::to_string(px) + ", " + std::to_string(py) +
+                                 ") is outside the " + std::to_string(x.W) + " x " +
+                                 std::to_string(x.H) + " film");
+    return size_t(py) * x.W + size_t(px);
+}
+}  // namespace
+
+double pixel_profile_rel_mse(const Cube& x, const Cube& ref, int px, int py) {
+    check_same_shape(x, ref);
+    const size_t p = pixel_index(x, px, py);
+    Sums s;
+    for (size_t i = p * x.T * x.C; i < (p + 1) * x.T * x.C; ++i) s.add(x, ref, i);
+    return s.rel();
+}
+
+std::vector<double> pixel_profile(const Cube& x, int px, int py) {
+    const size_t p = pixel_index(x, px, py);
+    std::vector<double> out(x.T, 0.0);
+    for (size_t t = 0; t < x.T; ++t)
+        for (size_t c = 0; c < x.C; ++c) out[t] += x.data[(p * x.T + t) * x.C + c] / double(x.C);
+    return out;
+}
+
 std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref) {
     check_same_shape(x, ref);
     std::vector<Sums> frames(x.T);

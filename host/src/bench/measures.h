@@ -32,6 +32,11 @@ double rel_mse(const Cube& x, const Cube& ref);
 /// Mean over the pixels that the reference lights in [t0, t1) of each pixel's own relMSE over
 /// that window: every lit pixel weighs the same, however bright.
 double pixel_rel_mse(const Cube& x, const Cube& ref, double t0, double t1);
+/// The relMSE of pixel (px, py)'s time profile (its bins and channels); throws
+/// std::runtime_error when the pixel is outside the film.
+double pixel_profile_rel_mse(const Cube& x, const Cube& ref, int px, int py);
+/// Pixel (px, py)'s time profile: the mean over channels of each bin.
+std::vector<double> pixel_profile(const Cube& x, int px, int py);
 /// relMSE of each frame (bin) t, NaN where the reference frame is black.
 std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref);
 /// (sum x - sum r) / sum r: the relative error of the total energy.

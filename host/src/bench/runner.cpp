@@ -188,6 +188,7 @@ std::string csv_header(const Experiment& e) {
     std::string h =
         "scene,variant,budget,seed,spp,seconds,rays,relmse,pixel_relmse,energy,relmse_raw";
     for (const Window& w : e.windows) h += ",window:" + w.name;
+    for (const PixelSpec& p : e.pixels) h += ",pixel:" + p.name;
     return h;
 }
 
@@ -202,6 +203,7 @@ void append_row(const fs::path& csv, const Experiment& e, const RunRow& r) {
         << number_text(r.pixel_rel_mse) << "," << number_text(r.energy) << ","
         << number_text(r.rel_mse_raw);
     for (double w : r.windows) out << "," << number_text(w);
+    for (double p : r.pixels) out << "," << number_text(p);
     out << "\n";
     out.flush();
     if (!out) throw SceneError(fmt::format("cannot write \"{}\"", csv.string()));
@@ -214,6 +216,46 @@ void append_frames(const fs::path& csv, const RunRow& r, const std::vector<doubl
     for (size_t t = 0; t < frames.size(); ++t)
         out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << t << ","
             << number_text(frames[t]) << "\n";
+}
+
+// Pixel p's time profile of a run, appended to profiles.csv (time = the bin's centre).
+void append_profile(const fs::path& csv, const RunRow& r, const PixelSpec& p, const Cube& c) {
+    const bool fresh = !fs::exists(csv);
+    std::ofstream out(csv, std::ios::app);
+    if (fresh) out << "scene,variant,budget,seed,pixel,frame,time,value\n";
+    const std::vector<double> profile = pixel_profile(c, p.x, p.y);
+    for (size_t t = 0; t < profile.size(); ++t)
+        out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << p.name
+            << "," << t << "," << number_text(c.start + (double(t) + 0.5) * c.bin_width) << ","
+            << number_text(profile[t]) << "\n";
+}
+
+// The reference's profiles of the experiment's pixels, with their standard deviation where the
+// reference's variance is known: reference_profiles_SCENE.csv (rewritten each session). A pixel
+// outside the film is an error at its <pixel>.
+void write_reference_profiles(const Experiment& e, const SceneSpec& scene, const Cube& ref,
+                              const fs::path& dir) {
+    if (e.pixels.empty()) return;
+    std::ofstream out(dir / ("reference_profiles_" + scene.name + ".csv"));
+    out << "pixel,frame,value,stddev\n";
+    for (const PixelSpec& p : e.pixels) {
+        if (p.x < 0 || p.y < 0 || size_t(p.x) >= ref.W || size_t(p.y) >= ref.H)
+            throw SceneError(p.location, fmt::format("pixel ({}, {}) is outside scene \"{}\"'s "
+                                                     "{} x {} film",
+                                                     p.x, p.y, scene.name, ref.W, ref.H));
+        const std::vector<double> profile = pixel_profile(ref, p.x, p.y);
+        for (size_t t = 0; t < profile.size(); ++t) {
+            double var = 0;  // of the channels' mean
+            if (!ref.variance.empty())
+                for (size_t c = 0; c < ref.C; ++c)
+                    var += ref.variance[((size_t(p.y) * ref.W + size_t(p.x)) * ref.T + t) * ref.C +
+                                        c] /
+                           double(ref.C * ref.C);
+            out << p.name << "," << t << "," << number_text(profile[t]) << ","
+                << (ref.variance.empty() ? std::string("nan") : number_text(std::sqrt(var)))
+                << "\n";
+        }
+    }
 }
 
 // The output folder, checked against the experiment that wrote it (a changed experiment file
@@ -254,13 +296,14 @@ std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
         return c;
     }
     if (options.progress)
-        fmt::print(stderr, "rendering the reference of {}: {} at {} spp in two halves (cached in "
-                           "{}-*.npy)\n",
+        fmt::print(stderr,
+                   "rendering the reference of {}: {} at {} spp in two halves (cached in "
+                   "{}-*.npy)\n",
                    scene.name, e.reference.variant, e.reference.spp, stem);
     const LoadOptions lo = load_options(scene, *e.find_variant(e.reference.variant), options);
     const uint32_t half = std::max<uint32_t>(1, e.reference.spp / 2);
-    Rendered a = render_run(scene.file, lo, e.reference.seed, half, 0, threads, options,
-                            dir / "scratch");
+    Rendered a =
+        render_run(scene.file, lo, e.reference.seed, half, 0, threads, options, dir / "scratch");
     if (a.stopped) return std::nullopt;
     Rendered b = render_run(scene.file, lo, e.reference.seed + 1, half, 0, threads, options,
                             dir / "scratch");
@@ -300,9 +343,10 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
         std::vector<std::string> f;
         std::stringstream ss(line);
         for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
-        if (f.size() != kFixedColumns + e.windows.size())
+        const size_t columns = kFixedColumns + e.windows.size() + e.pixels.size();
+        if (f.size() != columns)
             throw SceneError(fmt::format("{}:{}: expected {} fields, found {}", csv_path, number,
-                                         kFixedColumns + e.windows.size(), f.size()));
+                                         columns, f.size()));
         RunRow r;
         try {
             r.scene = f[0], r.variant = f[1], r.budget = f[2];
@@ -310,7 +354,9 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
             r.seconds = std::stod(f[5]), r.rays = std::stoull(f[6]);
             r.rel_mse = std::stod(f[7]), r.pixel_rel_mse = std::stod(f[8]),
             r.energy = std::stod(f[9]), r.rel_mse_raw = std::stod(f[10]);
-            for (size_t k = kFixedColumns; k < f.size(); ++k) r.windows.push_back(std::stod(f[k]));
+            for (size_t k = kFixedColumns; k < f.size(); ++k)
+                (k < kFixedColumns + e.windows.size() ? r.windows : r.pixels)
+                    .push_back(std::stod(f[k]));
         } catch (const std::exception&) {
             throw SceneError(fmt::format("{}:{}: not a row femto bench wrote", csv_path, number));
         }
@@ -343,6 +389,7 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
             break;
         }
         const Cube& reference = *found;
+        write_reference_profiles(e, scene, reference, dir);
         for (size_t b = 0; b < labels.size() && !stopped; ++b)
             for (uint64_t seed : e.seeds) {
                 if (stopped) break;
@@ -379,6 +426,10 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
                     row.energy = energy_error(r.cube, reference);
                     for (const Window& w : e.windows)
                         row.windows.push_back(rel_mse(r.cube, reference, w.start, w.end));
+                    for (const PixelSpec& p : e.pixels) {
+                        row.pixels.push_back(pixel_profile_rel_mse(r.cube, reference, p.x, p.y));
+                        append_profile(dir / "profiles.csv", row, p, r.cube);
+                    }
                     append_row(csv, e, row);
                     append_frames(dir / "frames.csv", row, frame_rel_mse(r.cube, reference));
                     if (options.progress)

@@ -26,8 +26,9 @@ struct RunRow {
     double seconds = 0;
     uint64_t rays = 0;
     double rel_mse = 0, pixel_rel_mse = 0, energy = 0;
-    double rel_mse_raw = 0;  ///< rel_mse without the reference's variance taken out
+    double rel_mse_raw = 0;       ///< rel_mse without the reference's variance taken out
     std::vector<double> windows;  ///< rel_mse per <window>, in the experiment's order
+    std::vector<double> pixels;   ///< rel_mse of each <pixel>'s time profile, in order
 };
 
 /// Runs what results.csv in `out_dir` does not hold yet (a re-run resumes), then writes the
