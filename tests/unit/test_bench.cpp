@@ -210,6 +210,11 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     for (const char* f :
          {"report.md", "plot.svg", "frames.csv", "profiles.csv", "reference_profiles_plane.csv"})
         EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+    std::ifstream report_file(dir / "out" / "report.md");
+    const std::string report((std::istreambuf_iterator<char>(report_file)),
+                             std::istreambuf_iterator<char>());
+    for (const char* row : {"| path | 4 | ", "| bdpt | 4 | "})
+        EXPECT_NE(report.find(row), std::string::npos) << row << "\n" << report;
     int cached = 0;  // the reference's two halves: their mean and its variance
     for (const auto& f : fs::directory_iterator(dir / "out" / "cache")) {
         const std::string name = f.path().filename().string();

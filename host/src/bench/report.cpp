@@ -173,8 +173,8 @@ std::string svg_panel(const Experiment& e, const std::vector<RunRow>& rows, cons
         }
         out += fmt::format(
             "<text x=\"{}\" y=\"{}\" font-size=\"12\" fill=\"{}\">{} (slope "
-            "{})</text>\n",
-            left + w + 15, top + 15 + 18 * double(k), colour, name, g(f.slope));
+            "{} ± {})</text>\n",
+            left + w + 15, top + 15 + 18 * double(k), colour, name, g(f.slope), g(f.slope_ci95));
     }
     return out;
 }
