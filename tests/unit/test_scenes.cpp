@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <set>
 #include <string>
 
 #include "femto/host.h"
@@ -34,4 +36,48 @@ TEST(ShippedScenes, EveryOneLoadsAndRenders) {
         ++count;
     }
     EXPECT_GE(count, 9);
+}
+
+// A render loads the plugin libraries its scene names (and the defaults of what it leaves
+// out), no others (issue 12 §4): read from this process's own memory map after rendering
+// scenes/cornell-box (each test runs in its own process).
+namespace {
+// The plugin libraries mapped into this process.
+std::set<std::string> loaded_plugins() {
+    std::ifstream maps("/proc/self/maps");
+    std::set<std::string> loaded;
+    for (std::string line; std::getline(maps, line);) {
+        const size_t slash = line.rfind('/');
+        if (slash == std::string::npos || line.find("/plugins/") == std::string::npos) continue;
+        const std::string name = line.substr(slash + 1);
+        if (name.size() > 3 && name.substr(name.size() - 3) == ".so") loaded.insert(name);
+    }
+    return loaded;
+}
+}  // namespace
+
+TEST(ShippedScenes, ARenderLoadsOnlyThePluginsItsSceneNames) {
+    if (!loaded_plugins().empty())
+        GTEST_SKIP() << "an earlier test in this process loaded plugins; run this test alone "
+                        "(ctest runs each test in its own process)";
+    const std::filesystem::path file =
+        std::filesystem::path(FEMTO_SOURCE_DIR) / "scenes" / "cornell-box" / "scene.xml";
+    LoadOptions options;
+    options.defines = {{"res", "4"}, {"spp", "1"}, {"bins", "4"}};
+    auto scene = load_scene(file.string(), options);
+    RenderOptions render_options;
+    render(*scene, render_options);
+    const std::set<std::string> loaded = loaded_plugins();
+    // The scene's types (histogram and transient_path are its $tfilter and $integrator), and
+    // the defaults of the elements it leaves out: transient_path's time-sampling strategies
+    // (<distance>, <connection>, <angular>), built at load even in a scene without media, where
+    // the integrator never calls them.
+    const std::set<std::string> expected = {"area.so",           "box.so",
+                                            "cube.so",           "diffuse.so",
+                                            "ldsampler.so",      "perspective.so",
+                                            "rectangle.so",      "transient.so",
+                                            "histogram.so",      "transient_path.so",
+                                            "mean_free_path.so", "deterministic.so",
+                                            "phase.so"};
+    EXPECT_EQ(loaded, expected);
 }
