@@ -57,7 +57,12 @@ int run_bench_command(const std::atomic<bool>& stop) {
     options.plugin_dirs = g_args.plugin_dirs;
     options.progress = !g_args.quiet;
     options.stop = &stop;
-    const bool complete = bench::run_experiment(e, options);
+    bool complete = false;
+    try {
+        complete = bench::run_experiment(e, options);
+    } catch (const fs::filesystem_error& err) {  // a folder or file of the study: bad input
+        throw SceneError(err.what());
+    }
     if (!g_args.quiet)
         fmt::print(stderr, "{}: {}/report.md, results.csv, frames.csv, plot.svg\n",
                    complete ? "done" : "stopped (the finished runs are kept; run again to resume)",

@@ -345,7 +345,9 @@ int main(int argc, char** argv) {
         if (viz->parsed()) return femto::cli::run_viz_command();
         if (bench->parsed()) {
             handle_stop_signals(true);  // Ctrl-C: stop after the current run, keep the rows
-            return femto::cli::run_bench_command(g_stop);
+            const int code = femto::cli::run_bench_command(g_stop);
+            if (const int sig = g_first_signal.load()) return kExitSignalBase + sig;
+            return code;
         }
     } catch (const femto::SceneError& e) {
         return report_bad_input(e.what());

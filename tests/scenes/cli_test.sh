@@ -91,7 +91,7 @@ bench_example)
   "$femto" bench "$src/bench/experiments/fog-point-connections.xml" -o out/b -q || fail "exit code"
   [ "$(wc -l < out/b/results.csv)" = 19 ] || fail "results.csv has $(wc -l < out/b/results.csv) lines"
   for f in report.md plot.svg frames.csv; do [ -s "out/b/$f" ] || fail "$f missing"; done
-  grep -q '^| equiangular | 9 | ' out/b/report.md || fail "report row"
+  grep -q '^| equiangular | 9 (9 fitted) | ' out/b/report.md || fail "report row"
   "$femto" bench "$src/bench/experiments/fog-point-connections.xml" -o out/b -q || fail "resume"
   [ "$(wc -l < out/b/results.csv)" = 19 ] || fail "resuming added rows";;
 bench_bad_input)

@@ -144,6 +144,12 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
          ":3:1: <variant> has no attribute \"integrator\""},
         {head + "<variant name=\"a\"/><variant name=\"a\"/>\n</experiment>",
          "two variants are named \"a\""},
+        {head + "<variant name=\"a\"/>\n<budgets spp=\"4 8 4\"/>\n</experiment>",
+         ":4:1: <budgets> lists a budget twice"},
+        {head + rest + "<seeds count=\"2\"/>\n<seeds count=\"3\"/>\n</experiment>",
+         ":7:1: a second <seeds>"},
+        {head + rest + "<seeds values=\"1 1000003\"/>\n</experiment>",
+         ":5:1: run seed 1000003 is one of the reference's two halves' seeds"},
         {head + "<variant name=\"a\"/>\n<pixel name=\"p\" x=\"-1\" y=\"0\"/>\n</experiment>",
          ":4:1: <pixel> x: -1 is not a whole number from 0"},
         {head + "<variant name=\"a, b\"/>\n</experiment>",
@@ -213,7 +219,7 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     std::ifstream report_file(dir / "out" / "report.md");
     const std::string report((std::istreambuf_iterator<char>(report_file)),
                              std::istreambuf_iterator<char>());
-    for (const char* row : {"| path | 4 | ", "| bdpt | 4 | "})
+    for (const char* row : {"| path | 4 (4 fitted) | ", "| bdpt | 4 (4 fitted) | "})
         EXPECT_NE(report.find(row), std::string::npos) << row << "\n" << report;
     int cached = 0;  // the reference's two halves: their mean and its variance
     for (const auto& f : fs::directory_iterator(dir / "out" / "cache")) {
@@ -226,9 +232,67 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     // Resuming: nothing left to run, the rows stay as they were.
     EXPECT_TRUE(run_experiment(e, o));
     EXPECT_EQ(read_results((dir / "out" / "results.csv").string(), e).size(), 8u);
-    // The experiment changed: its rows must not mix with the old ones.
-    write(dir / "e.xml", experiment + "\n");
-    const Experiment changed = load_experiment((dir / "e.xml").string());
-    EXPECT_THROW(run_experiment(changed, o), femto::SceneError);
+    // More seeds: the study resumes, rendering only the new runs (4 more rows).
+    std::string more = experiment;
+    const std::string two_seeds = "<seeds count=\"2\"/>";
+    more.replace(more.find(two_seeds), two_seeds.size(), "<seeds count=\"3\"/>");
+    write(dir / "e.xml", more);
+    EXPECT_TRUE(run_experiment(load_experiment((dir / "e.xml").string()), o));
+    EXPECT_EQ(read_results((dir / "out" / "results.csv").string(), e).size(), 12u);
+    // A row cut short by a kill is dropped on resume, and its run renders again.
+    {
+        const fs::path csv = dir / "out" / "results.csv";
+        std::string text;
+        {
+            std::ifstream in(csv);
+            text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        }
+        text.resize(text.size() - 7);  // the last row loses its end
+        std::ofstream(csv, std::ios::trunc) << text;
+    }
+    EXPECT_EQ(read_results((dir / "out" / "results.csv").string(), e).size(), 11u);
+    EXPECT_TRUE(run_experiment(load_experiment((dir / "e.xml").string()), o));
+    EXPECT_EQ(read_results((dir / "out" / "results.csv").string(), e).size(), 12u);
+    // The experiment changed beyond its seeds and budgets: its rows must not mix with the old.
+    std::string changed = more;
+    const std::string bdpt = "value=\"transient_bdpt\"";
+    changed.replace(changed.find(bdpt), bdpt.size(), "value=\"transient_light\"");
+    write(dir / "e.xml", changed);
+    EXPECT_THROW(run_experiment(load_experiment((dir / "e.xml").string()), o), femto::SceneError);
+    // The same with a thread count other than the one the rows were measured with.
+    write(dir / "e.xml", more);
+    RunnerOptions two = o;
+    two.threads = 2;
+    EXPECT_THROW(run_experiment(load_experiment((dir / "e.xml").string()), two), femto::SceneError);
+    fs::remove_all(dir);
+}
+
+// Time budgets: each becomes the sample count that fills it (from a calibration render), so
+// every pixel of a run has its full samples; a larger budget gets more samples.
+TEST(BenchRunner, TimeBudgetsBecomeSampleCounts) {
+    const fs::path dir = femto::testing::temp_dir("bench-timed");
+    write(dir / "scene.xml",
+          "<scene version=\"3.0.0\"><integrator type=\"path\"/><sensor type=\"perspective\">"
+          "<film type=\"hdrfilm\"><integer name=\"width\" value=\"16\"/><integer "
+          "name=\"height\" value=\"16\"/></film></sensor><shape type=\"rectangle\"><transform "
+          "name=\"to_world\"><rotate x=\"1\" angle=\"180\"/><translate z=\"2\"/></transform>"
+          "<emitter type=\"area\"/></shape>"
+          "</scene>");
+    write(dir / "e.xml",
+          "<experiment><scene file=\"scene.xml\" name=\"s\"/><variant name=\"v\"/><budgets "
+          "seconds=\"0.02 0.2\"/><reference variant=\"v\" spp=\"16\"/><threads value=\"1\"/>"
+          "</experiment>");
+    const Experiment e = load_experiment((dir / "e.xml").string());
+    RunnerOptions o;
+    o.out_dir = (dir / "out").string();
+    o.progress = false;
+    ASSERT_TRUE(run_experiment(e, o));
+    const std::vector<RunRow> rows = read_results((dir / "out" / "results.csv").string(), e);
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_GE(rows[0].spp, 1u);
+    EXPECT_GT(rows[1].spp, rows[0].spp);
+    // A directly seen emitter: every pixel is exact whatever its samples, so no pixel was left
+    // without samples (a stopped render would leave some black).
+    EXPECT_LT(rows[0].rel_mse_raw, 1e-10);
     fs::remove_all(dir);
 }

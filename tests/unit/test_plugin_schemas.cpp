@@ -118,11 +118,14 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
         p.set_int("bins", 4);
         p.set_float("bin_width", 0.5);
     };
-    // The meters measure one value: their film must have one pixel.
+    // The meters measure one value: their film must have one pixel (and a box filter: the
+    // irradiance meter picks its point on the shape by the film position).
     const auto one_pixel_film = [](Properties& p) {
         Properties film("hdrfilm", {});
         film.set_int("width", 1);
         film.set_int("height", 1);
+        film.set_object("rfilter", femto::create_default_object(PluginKind::ReconstructionFilter,
+                                                                "box", {}));
         p.set_object("film", femto::create_object(PluginKind::Film, "hdrfilm", film));
     };
     return {

@@ -220,14 +220,13 @@ TEST(SphericalSensor, BallisticTermOfAPointLightInAMediumIsExact) {
 // its front sees 0.7, so the irradiance is pi x 0.7 exactly for the camera-side integrators
 // (BDPT leaves out its connections to a sensor with area; with them its weights would not sum
 // to one here). The light tracer estimates it from the sphere's emission; its error comes from
-// eight independent renders. The default reconstruction filter (gaussian) is kept on purpose:
-// the meter's connections must not depend on it.
+// eight independent renders.
 TEST(IrradianceMeter, InsideAnEmittingSphereReadsPiL) {
     const std::string meter =
         "<shape type=\"disk\"><transform name=\"to_world\"><scale value=\"0.5\"/><translate "
         "x=\"1\" y=\"2\" z=\"3\"/></transform><bsdf type=\"diffuse\"><float name=\"reflectance\" "
         "value=\"0\"/></bsdf><sensor type=\"irradiancemeter\">" +
-        sampler(4096) + film_1x1("hdrfilm") + "</sensor></shape>";
+        sampler(4096) + film_1x1("hdrfilm", "<rfilter type=\"box\"/>") + "</sensor></shape>";
     for (const char* integrator : {"path", "transient_bdpt"}) {
         SCOPED_TRACE(integrator);
         auto sc = load_scene_string(scene(integrator, meter + emitting_sphere("1,2,3")));
@@ -317,7 +316,7 @@ TEST(RadianceMeter, LambertianPlaneUnderAPointLight) {
 TEST(MeasurementSensors, BadInputIsALocatedError) {
     const std::string light =
         "<emitter type=\"point\"><point name=\"position\" value=\"0,0,1\"/></emitter>";
-    const std::string one = film_1x1("hdrfilm");
+    const std::string one = film_1x1("hdrfilm", "<rfilter type=\"box\"/>");
     const std::string two =
         "<film type=\"hdrfilm\"><integer name=\"width\" value=\"2\"/><integer "
         "name=\"height\" value=\"1\"/></film>";
@@ -339,6 +338,11 @@ TEST(MeasurementSensors, BadInputIsALocatedError) {
              "</sensor></shape>",
          "takes its place from the shape"},
         {disk + "<sensor type=\"perspective\"/></shape>", "cannot be nested in a <shape>"},
+        {disk + meter + film_1x1("hdrfilm", "<rfilter type=\"gaussian\"/>") + "</sensor></shape>",
+         "irradiancemeter needs a box reconstruction filter"},
+        {"<sensor type=\"spherical\"><transform name=\"to_world\"><matrix value=\"1 0.5 0 0 0 "
+         "0.8660254 0 0 0 0 1 0 0 0 0 1\"/></transform></sensor>",
+         "must not scale"},
         {"<sensor type=\"perspective\"/>" + disk + meter + one + "</sensor></shape>",
          "more than one <sensor>"},
         {"<sensor type=\"spherical\"><transform name=\"to_world\"><scale value=\"2\"/>"

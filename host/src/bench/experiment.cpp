@@ -134,9 +134,9 @@ private:
 // Names go into CSV cells and cache file names: no separators, quotes or line breaks.
 std::string checked_name(const Reader& r, const pugi::xml_node& n, const std::string& name) {
     if (name.empty()) r.fail(n, fmt::format("<{}> has an empty name", n.name()));
-    if (name.find_first_of(",\"/\\\n\r") != std::string::npos)
-        r.fail(n, fmt::format("<{}> name \"{}\": a name may not hold , \" / \\ or a line break "
-                              "(it names CSV cells and files)",
+    if (name.find_first_of(",\"/\\\n\r&<>|") != std::string::npos)
+        r.fail(n, fmt::format("<{}> name \"{}\": a name may not hold , \" / \\ & < > | or a line "
+                              "break (it names CSV cells, files, report cells and plot labels)",
                               n.name(), name));
     return name;
 }
@@ -151,10 +151,16 @@ void read_budgets(const Reader& r, const pugi::xml_node& n, Experiment& e) {
             e.spp_budgets.push_back(uint32_t(r.whole(n, "spp", v, 1, kMaxSpp)));
     else
         for (double v : r.numbers(n, "seconds")) {
-            if (!(v > 0 && v <= 1e6))
-                r.fail(n, fmt::format("<budgets> seconds: {} is not in (0, 1e6]", v));
+            if (!(v >= 0.01 && v <= 1e6))
+                r.fail(n, fmt::format("<budgets> seconds: {} is not in [0.01, 1e6]", v));
             e.time_budgets.push_back(v);
         }
+    // A budget given twice would run twice and count twice in the fits.
+    const std::vector<std::string> labels = e.budget_labels();
+    if (std::set<std::string>(labels.begin(), labels.end()).size() != labels.size() ||
+        std::set<double>(e.time_budgets.begin(), e.time_budgets.end()).size() !=
+            e.time_budgets.size())
+        r.fail(n, "<budgets> lists a budget twice");
 }
 
 void read_reference(const Reader& r, const pugi::xml_node& n, Experiment& e) {
@@ -163,13 +169,16 @@ void read_reference(const Reader& r, const pugi::xml_node& n, Experiment& e) {
     ReferenceSpec& ref = e.reference;
     ref.location = r.at(n);
     if (n.attribute("file")) {
-        if (n.attribute("variant") || n.attribute("spp"))
-            r.fail(n, "<reference> takes either file=\"...\" or variant=\"...\" spp=\"...\"");
+        if (n.attribute("variant") || n.attribute("spp") || n.attribute("seed"))
+            r.fail(n,
+                   "<reference> takes either file=\"...\" or variant=\"...\" spp=\"...\" "
+                   "(seed=\"...\")");
         ref.file = r.resolve(n, n.attribute("file").value(), false);
         return;
     }
     ref.variant = r.required(n, "variant");
-    ref.spp = uint32_t(r.whole(n, "spp", r.number(n, "spp", r.required(n, "spp")), 1, kMaxSpp));
+    // Rendered in two halves of spp / 2 samples.
+    ref.spp = uint32_t(r.whole(n, "spp", r.number(n, "spp", r.required(n, "spp")), 2, kMaxSpp));
     if (n.attribute("seed"))
         ref.seed = r.whole(n, "seed", r.number(n, "seed", n.attribute("seed").value()), 0, 1e15);
     else
@@ -207,6 +216,7 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
         if (!e.spp_budgets.empty() || !e.time_budgets.empty()) r.fail(c, "a second <budgets>");
         read_budgets(r, c, e);
     } else if (tag == "seeds") {
+        if (!e.seeds.empty()) r.fail(c, "a second <seeds>");
         r.check_attributes(c, {"count", "values"});
         r.only_children(c, {});
         if (bool(c.attribute("count")) == bool(c.attribute("values")))
@@ -218,8 +228,11 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
         } else {
             for (double v : r.numbers(c, "values"))
                 e.seeds.push_back(r.whole(c, "values", v, 0, 1e15));
+            if (std::set<uint64_t>(e.seeds.begin(), e.seeds.end()).size() != e.seeds.size())
+                r.fail(c, "<seeds> lists a seed twice");
         }
     } else if (tag == "reference") {
+        if (!e.reference.location.file.empty()) r.fail(c, "a second <reference>");
         read_reference(r, c, e);
     } else if (tag == "window") {
         r.check_attributes(c, {"name", "start", "end"});
@@ -228,6 +241,8 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
                  r.number(c, "start", r.required(c, "start")),
                  r.number(c, "end", r.required(c, "end"))};
         if (!(w.end > w.start)) r.fail(c, "<window> needs start < end");
+        for (const Window& o : e.windows)
+            if (o.name == w.name) r.fail(c, fmt::format("two windows are named \"{}\"", w.name));
         e.windows.push_back(w);
     } else if (tag == "pixel") {
         r.check_attributes(c, {"name", "x", "y"});
@@ -235,8 +250,11 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
         PixelSpec p{checked_name(r, c, r.required(c, "name")),
                     int(r.whole(c, "x", r.number(c, "x", r.required(c, "x")), 0, 1e6)),
                     int(r.whole(c, "y", r.number(c, "y", r.required(c, "y")), 0, 1e6)), r.at(c)};
+        for (const PixelSpec& o : e.pixels)
+            if (o.name == p.name) r.fail(c, fmt::format("two pixels are named \"{}\"", p.name));
         e.pixels.push_back(p);
     } else if (tag == "threads") {
+        if (e.threads > 0) r.fail(c, "a second <threads>");
         r.check_attributes(c, {"value"});
         r.only_children(c, {});
         e.threads = int(r.whole(c, "value", r.number(c, "value", r.required(c, "value")), 1, 4096));
@@ -288,7 +306,17 @@ Experiment load_experiment(const std::string& path) {
     r.check_attributes(root, {"name"});
     Experiment e;
     e.file = path;
-    e.digest = digest_hex(text);
+    // What the rows depend on: everything but the seeds and budgets, so that adding seeds or
+    // budgets resumes (the rows already measured stay valid); whitespace and comments aside.
+    std::ostringstream canonical;
+    for (const pugi::xml_attribute& a : root.attributes())
+        canonical << a.name() << '=' << a.value();
+    for (const pugi::xml_node& c : root.children()) {
+        const std::string tag = c.name();
+        if (c.type() == pugi::node_element && tag != "seeds" && tag != "budgets")
+            c.print(canonical, "", pugi::format_raw);
+    }
+    e.digest = digest_hex(canonical.str());
     e.name =
         root.attribute("name") ? root.attribute("name").value() : fs::path(path).stem().string();
     for (const pugi::xml_node& c : root.children())
@@ -307,6 +335,14 @@ Experiment load_experiment(const std::string& path) {
         throw SceneError(e.reference.location,
                          fmt::format("<reference> names variant \"{}\", which is not declared",
                                      e.reference.variant));
+    if (!e.reference.variant.empty())
+        for (const uint64_t seed : e.seeds)
+            if (seed == e.reference.seed || seed == e.reference.seed + 1)
+                throw SceneError(e.reference.location,
+                                 fmt::format("run seed {} is one of the reference's two halves' "
+                                             "seeds ({} and {}): its runs would not be "
+                                             "independent of the reference",
+                                             seed, e.reference.seed, e.reference.seed + 1));
     if (!e.reference.file.empty() && e.scenes.size() > 1)
         throw SceneError(e.reference.location,
                          "a reference file fits one scene; with several scenes, give "

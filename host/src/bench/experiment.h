@@ -64,8 +64,10 @@ struct Experiment {
     ReferenceSpec reference;
     std::vector<Window> windows;
     std::vector<PixelSpec> pixels;
-    int threads = 0;     ///< 0: all cores
-    std::string digest;  ///< of the file's bytes: a changed experiment does not resume old rows
+    int threads = 0;  ///< 0: all cores
+    /// Of everything but <seeds> and <budgets> (whitespace and comments aside): rows measured
+    /// under another digest are not resumed.
+    std::string digest;
 
     const Variant* find_variant(const std::string& name) const;
     /// The budgets in the order they run, as text ("16" spp or "2.5" s).

@@ -48,7 +48,9 @@ void check_same_shape(const Cube& x, const Cube& ref);
 
 /// Least squares of log(error) = a + b log(seconds) over runs with positive error and time:
 /// `slope` b with the half-width of its 95 % confidence interval (Student t, n - 2 degrees of
-/// freedom), NaN when fewer than 3 runs.
+/// freedom). The slope is NaN with fewer than 2 runs, the interval with fewer than 3. `n`
+/// counts the runs fitted: runs whose error is not positive (possible once the reference's
+/// variance is taken out) are left out, which flattens the slope when they are many.
 struct Fit {
     double slope = 0, intercept = 0, slope_ci95 = 0;
     int n = 0;
@@ -58,14 +60,15 @@ Fit fit_log_log(const std::vector<double>& seconds, const std::vector<double>& e
 
 /// Equal-error time ratio of B over A: the fitted time B needs to reach the geometric mean of
 /// A's errors over the fitted time A needs for it (< 1: B is faster). The 95 % interval comes
-/// from 2000 bootstrap resamples of each variant's runs (a fixed seed: reports reproduce).
+/// from 2000 bootstrap resamples of each variant's runs (a fixed seed: reports reproduce); NaN
+/// bounds when more than 5 % of the resamples give no ratio.
 struct Ratio {
     double value = 0, lo = 0, hi = 0;
 };
 Ratio equal_error_ratio(const std::vector<double>& seconds_a, const std::vector<double>& errors_a,
                         const std::vector<double>& seconds_b, const std::vector<double>& errors_b);
 
-/// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
+/// The 97.5 % quantile of Student's t with `dof` degrees of freedom (a two-sided 95 % interval).
 double student_t975(int dof);
 
 }  // namespace femto::bench

@@ -96,10 +96,13 @@ std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
     md += "\n";
     const Series& base = series.front().second;
     for (const auto& [name, s] : series) {
-        const Fit f = fit_log_log(s.seconds, s.errors);
-        const Ratio r = equal_error_ratio(base.seconds, base.errors, s.seconds, s.errors);
-        md += fmt::format("| {} | {} | {} ± {} | {} [{}, {}] |", name, s.seconds.size(), g(f.slope),
-                          g(f.slope_ci95), g(r.value), g(r.lo), g(r.hi));
+        // One budget leaves only timing noise along the time axis: no slope, no ratio.
+        const bool fits = budgets.size() >= 2;
+        const Fit f = fits ? fit_log_log(s.seconds, s.errors) : Fit{NAN, NAN, NAN, 0};
+        const Ratio r = fits ? equal_error_ratio(base.seconds, base.errors, s.seconds, s.errors)
+                             : Ratio{NAN, NAN, NAN};
+        md += fmt::format("| {} | {} ({} fitted) | {} ± {} | {} [{}, {}] |", name, s.seconds.size(),
+                          f.n, g(f.slope), g(f.slope_ci95), g(r.value), g(r.lo), g(r.hi));
         for (const std::string& b : budgets) {
             auto it = s.by_budget.find(b);
             md += " " + (it == s.by_budget.end() ? std::string("–") : g(median(it->second))) + " |";
@@ -161,7 +164,8 @@ std::string svg_panel(const Experiment& e, const std::vector<RunRow>& rows, cons
             out += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"{}\"/>\n",
                                px(lx), py(std::log10(s.errors[i])), colour);
         }
-        const Fit f = fit_log_log(s.seconds, s.errors);
+        const Fit f = e.budget_labels().size() >= 2 ? fit_log_log(s.seconds, s.errors)
+                                                    : Fit{NAN, NAN, NAN, 0};
         if (std::isfinite(f.slope) && hi > lo) {
             auto fit_y = [&](double lx) {
                 return (f.intercept + f.slope * lx * std::log(10.0)) / std::log(10.0);

@@ -95,7 +95,7 @@ Cube read_reference_file(const std::string& path) {
     } catch (const SceneError&) {
     }
     int w = 0, h = 0;
-    c.data = io::read_image_rgb(path, w, h, false);
+    c.data = io::read_image_rgb(path, w, h, true);  // an 8-bit image is sRGB-encoded
     c.H = size_t(h), c.W = size_t(w), c.T = 1, c.C = 3;
     return c;
 }
@@ -119,17 +119,17 @@ std::string reference_key(const Experiment& e, const SceneSpec& scene,
     return digest_hex(text);
 }
 
-// Renders `lo`'s scene with `seed` for the budget: spp samples, or as many as fit in `seconds`
-// (the render is stopped then; its passes end within a few samples' work).
 struct Rendered {
     Cube cube;
     RenderStats stats;
     bool stopped = false;  // by the user: the run does not count
 };
 
+// Renders `lo`'s scene with `seed` at `spp` samples per pixel. Ctrl-C stops it at once (the
+// run is then discarded: a render stopped within a pass has pixels with fewer samples).
 Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t seed, uint32_t spp,
-                    double seconds, int threads, const RunnerOptions& options,
-                    const fs::path& scratch) {
+                    int threads, const RunnerOptions& options, const fs::path& scratch,
+                    bool measure = true) {
     auto scene = load_scene(file, lo);
     std::atomic<bool> stop{false};
     RenderOptions ro;
@@ -137,49 +137,51 @@ Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t see
     ro.threads = threads;
     ro.progress = false;
     ro.scene_file = file;
-    ro.spp = seconds > 0 ? (1u << 30) : spp;
+    ro.spp = spp;
     ro.stop = &stop;
     std::mutex m;
     std::condition_variable cv;
     bool done = false;
-    // Stops the render at the budget's time, or at once when the user asks.
-    std::thread watcher([&] {
-        using Clock = std::chrono::steady_clock;
-        const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                              std::chrono::duration<double>(seconds));
+    std::thread watcher([&] {  // forwards the user's Ctrl-C to this render
         std::unique_lock<std::mutex> lock(m);
-        while (!done) {
-            if (options.stop && options.stop->load()) break;
-            const auto now = Clock::now();
-            if (seconds > 0 && now >= until) break;
-            auto wait = std::chrono::duration_cast<Clock::duration>(std::chrono::milliseconds(20));
-            if (seconds > 0) wait = std::min(wait, until - now);
-            cv.wait_for(lock, wait);
-        }
-        stop.store(true);
+        while (!done && !(options.stop && options.stop->load()))
+            cv.wait_for(lock, std::chrono::milliseconds(20));
+        if (!done) stop.store(true);
     });
-    Rendered r;
-    try {
-        r.stats = render(*scene, ro);
-    } catch (...) {
+    auto finish_watcher = [&] {
         {
             std::lock_guard<std::mutex> lock(m);
             done = true;
         }
         cv.notify_all();
         watcher.join();
+    };
+    Rendered r;
+    try {
+        r.stats = render(*scene, ro);
+    } catch (...) {
+        finish_watcher();
         throw;
     }
-    {
-        std::lock_guard<std::mutex> lock(m);
-        done = true;
-    }
-    cv.notify_all();
-    watcher.join();
-    r.stopped = options.stop && options.stop->load();
-    if (seconds <= 0 && r.stats.interrupted) r.stopped = true;
-    if (!r.stopped) r.cube = film_cube(*scene, ro, r.stats, scratch);
+    finish_watcher();
+    r.stopped = r.stats.interrupted || (options.stop && options.stop->load());
+    if (!r.stopped && measure) r.cube = film_cube(*scene, ro, r.stats, scratch);
     return r;
+}
+
+// A time budget becomes the sample count that fills it: a calibration render of a few samples
+// (another seed; not recorded) gives the time per sample. Stopping a render at the budget's
+// time instead would leave the pixels after the stop with fewer samples than the rest.
+// Returns 0 when the user stopped it.
+uint32_t spp_for_seconds(const std::string& file, const LoadOptions& lo, uint64_t seed,
+                         double seconds, int threads, const RunnerOptions& options,
+                         const fs::path& scratch) {
+    constexpr uint32_t kCalibrationSpp = 4;
+    const Rendered c = render_run(file, lo, seed ^ 0x5bd1e995ull, kCalibrationSpp, threads, options,
+                                  scratch, false);
+    if (c.stopped) return 0;
+    const double per_sample = std::max(c.stats.seconds, 1e-9) / double(kCalibrationSpp);
+    return uint32_t(std::clamp(std::floor(seconds / per_sample), 1.0, double(1u << 30)));
 }
 
 constexpr size_t kFixedColumns = 11;  // the columns before the windows
@@ -194,17 +196,20 @@ std::string csv_header(const Experiment& e) {
 
 std::string number_text(double v) { return std::isfinite(v) ? fmt::format("{:.9g}", v) : "nan"; }
 
+// Appends a row with one write (a kill leaves at most a last line without its newline, which
+// read_results() drops).
 void append_row(const fs::path& csv, const Experiment& e, const RunRow& r) {
-    const bool fresh = !fs::exists(csv);
+    std::ostringstream line;
+    if (!fs::exists(csv) || fs::file_size(csv) == 0) line << csv_header(e) << "\n";
+    line << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << r.spp << ","
+         << number_text(r.seconds) << "," << r.rays << "," << number_text(r.rel_mse) << ","
+         << number_text(r.pixel_rel_mse) << "," << number_text(r.energy) << ","
+         << number_text(r.rel_mse_raw);
+    for (double w : r.windows) line << "," << number_text(w);
+    for (double p : r.pixels) line << "," << number_text(p);
+    line << "\n";
     std::ofstream out(csv, std::ios::app);
-    if (fresh) out << csv_header(e) << "\n";
-    out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << r.spp << ","
-        << number_text(r.seconds) << "," << r.rays << "," << number_text(r.rel_mse) << ","
-        << number_text(r.pixel_rel_mse) << "," << number_text(r.energy) << ","
-        << number_text(r.rel_mse_raw);
-    for (double w : r.windows) out << "," << number_text(w);
-    for (double p : r.pixels) out << "," << number_text(p);
-    out << "\n";
+    out << line.str();
     out.flush();
     if (!out) throw SceneError(fmt::format("cannot write \"{}\"", csv.string()));
 }
@@ -258,9 +263,23 @@ void write_reference_profiles(const Experiment& e, const SceneSpec& scene, const
     }
 }
 
-// The output folder, checked against the experiment that wrote it (a changed experiment file
-// must not mix its rows with the old ones).
-void prepare_out_dir(const Experiment& e, const fs::path& dir) {
+// What the rows of a results folder depend on besides the experiment: the threads, the
+// command line's plugin folders, each scene's file and its reference (the rendered reference's
+// cache key covers femto's version and the plugins' bytes).
+std::string setup_digest(const Experiment& e, const RunnerOptions& options, int threads) {
+    std::string text = e.digest + fmt::format("\nthreads {}", threads);
+    for (const std::string& d : options.plugin_dirs) text += "\nplugin_dir " + d;
+    for (const SceneSpec& scene : e.scenes) {
+        text += "\n" + digest_hex(read_bytes(scene.file));
+        text += "\n" + (e.reference.file.empty() ? reference_key(e, scene, options)
+                                                 : digest_hex(read_bytes(e.reference.file)));
+    }
+    return digest_hex(text);
+}
+
+// The output folder, checked against the setup that wrote its rows: rows measured with another
+// experiment (seeds and budgets aside), scene, reference, plugins or thread count must not mix.
+void prepare_out_dir(const std::string& setup, const fs::path& dir) {
     std::error_code ec;
     fs::create_directories(dir / "cache", ec);
     if (ec || access(dir.c_str(), W_OK) != 0)
@@ -269,13 +288,14 @@ void prepare_out_dir(const Experiment& e, const fs::path& dir) {
     if (fs::exists(dir / "results.csv") && fs::exists(digest)) {
         std::string old = read_bytes(digest);
         while (!old.empty() && (old.back() == '\n' || old.back() == ' ')) old.pop_back();
-        if (old != e.digest)
+        if (old != setup)
             throw SceneError(fmt::format(
-                "\"{}\" holds the results of another version of this experiment (the file "
+                "\"{}\" holds rows measured under another setup (the experiment apart from its "
+                "seeds and budgets, a scene file, the reference, the plugins or the thread count "
                 "changed since): give another -o folder, or delete its results.csv to start over",
                 dir.string()));
     }
-    std::ofstream(digest) << e.digest << "\n";
+    std::ofstream(digest) << setup << "\n";
 }
 
 // The scene's reference: the experiment's file, or its reference variant rendered in two
@@ -303,10 +323,10 @@ std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
     const LoadOptions lo = load_options(scene, *e.find_variant(e.reference.variant), options);
     const uint32_t half = std::max<uint32_t>(1, e.reference.spp / 2);
     Rendered a =
-        render_run(scene.file, lo, e.reference.seed, half, 0, threads, options, dir / "scratch");
+        render_run(scene.file, lo, e.reference.seed, half, threads, options, dir / "scratch");
     if (a.stopped) return std::nullopt;
-    Rendered b = render_run(scene.file, lo, e.reference.seed + 1, half, 0, threads, options,
-                            dir / "scratch");
+    Rendered b =
+        render_run(scene.file, lo, e.reference.seed + 1, half, threads, options, dir / "scratch");
     if (b.stopped) return std::nullopt;
     Cube r = std::move(a.cube);
     r.variance.resize(r.data.size());
@@ -327,8 +347,20 @@ std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
 
 std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& e) {
     std::vector<RunRow> rows;
-    std::ifstream in(csv_path);
-    if (!in) return rows;
+    std::string text;
+    {
+        std::ifstream file(csv_path, std::ios::binary);
+        if (!file) return rows;
+        text.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+    }
+    // A last line without its newline is a row cut short (femto was killed while appending):
+    // it is dropped, and its run renders again.
+    if (!text.empty() && text.back() != '\n') {
+        text.resize(text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1);
+        std::ofstream(csv_path, std::ios::binary | std::ios::trunc) << text;
+    }
+    if (text.empty()) return rows;
+    std::istringstream in(text);
     std::string line;
     std::getline(in, line);
     if (line != csv_header(e))
@@ -367,7 +399,8 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
 
 bool run_experiment(const Experiment& e, const RunnerOptions& options) {
     const fs::path dir(options.out_dir);
-    prepare_out_dir(e, dir);
+    const int threads = options.threads > 0 ? options.threads : e.threads;
+    prepare_out_dir(setup_digest(e, options, threads), dir);
     const fs::path csv = dir / "results.csv";
     std::vector<RunRow> rows = read_results(csv.string(), e);
     std::set<std::string> done;
@@ -375,7 +408,6 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
         return s + "\n" + v + "\n" + b + "\n" + std::to_string(seed);
     };
     for (const RunRow& r : rows) done.insert(key(r.scene, r.variant, r.budget, r.seed));
-    const int threads = options.threads > 0 ? options.threads : e.threads;
     const std::vector<std::string> labels = e.budget_labels();
     const size_t total = e.scenes.size() * labels.size() * e.seeds.size() * e.variants.size();
     const Machine machine = Machine::now(threads);
@@ -400,10 +432,17 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
                         stopped = true;
                         break;
                     }
-                    const uint32_t spp = e.timed() ? 0 : e.spp_budgets[b];
-                    const double seconds = e.timed() ? e.time_budgets[b] : 0;
-                    Rendered r = render_run(scene.file, load_options(scene, v, options), seed, spp,
-                                            seconds, threads, options, dir / "scratch");
+                    const LoadOptions lo = load_options(scene, v, options);
+                    const uint32_t spp =
+                        e.timed() ? spp_for_seconds(scene.file, lo, seed, e.time_budgets[b],
+                                                    threads, options, dir / "scratch")
+                                  : e.spp_budgets[b];
+                    if (spp == 0) {
+                        stopped = true;
+                        break;
+                    }
+                    Rendered r =
+                        render_run(scene.file, lo, seed, spp, threads, options, dir / "scratch");
                     if (r.stopped) {
                         stopped = true;
                         break;
@@ -426,12 +465,15 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
                     row.energy = energy_error(r.cube, reference);
                     for (const Window& w : e.windows)
                         row.windows.push_back(rel_mse(r.cube, reference, w.start, w.end));
-                    for (const PixelSpec& p : e.pixels) {
+                    for (const PixelSpec& p : e.pixels)
                         row.pixels.push_back(pixel_profile_rel_mse(r.cube, reference, p.x, p.y));
-                        append_profile(dir / "profiles.csv", row, p, r.cube);
-                    }
+                    // The row first: the run counts as done once it is there, and the per-frame
+                    // and per-pixel files follow it (a kill between leaves them short, never
+                    // doubled by the re-run).
                     append_row(csv, e, row);
                     append_frames(dir / "frames.csv", row, frame_rel_mse(r.cube, reference));
+                    for (const PixelSpec& p : e.pixels)
+                        append_profile(dir / "profiles.csv", row, p, r.cube);
                     if (options.progress)
                         fmt::print(stderr,
                                    "[{}/{}] {} {} budget {} seed {}: relMSE {:.4g} in {:.2f} s\n",

@@ -7,6 +7,11 @@
 // arriving there times cos / distance^2 estimates the same E, which makes the irradiance of
 // point and spot lights (never hit by camera rays) measurable with transient_light.
 //
+// The point on the shape is the film position of the camera sample (its one pixel is the unit
+// square), so the film's reconstruction filter must weigh every position alike: a box.
+// Another filter would weigh the shape's centre more than its rim (Mitsuba 3 warns and renders
+// that weighted average; femto refuses it).
+//
 // Time: camera paths start on the shape, so a transient film records when light reaches it.
 // The meter sits in the shape's exterior medium unless it names a medium of its own.
 #include <cmath>
@@ -34,7 +39,12 @@ public:
                        "pixels, not " +
                            std::to_string(film_->width()) + " x " +
                            std::to_string(film_->height()));
-        splat_scale_ = centre_splat_scale();
+        if (film_->rfilter().radius() > 0.5f + 1e-6f)
+            props.fail("film",
+                       "irradiancemeter needs a box reconstruction filter (<rfilter "
+                       "type=\"box\"/> in its film): the film position of each sample picks the "
+                       "point on the shape, and a wider filter would weigh the shape's centre "
+                       "more than its rim");
     }
 
     bool needs_shape() const override { return true; }
@@ -44,6 +54,7 @@ public:
     }
 
     Ray sample_ray(Vec2 pos, Vec2 aperture) const override {
+        if (!shape_) throw SceneError(location(), "irradiancemeter used without its shape");
         // The film has one pixel, so the film position is a uniform point of the unit square.
         const ShapeSample ss =
             shape_->sample_area({pos.x - std::floor(pos.x), pos.y - std::floor(pos.y)});
@@ -57,6 +68,7 @@ public:
 
     SensorSample sample_direct(const Vec3& ref, Vec2 u) const override {
         SensorSample s;
+        if (!shape_) throw SceneError(location(), "irradiancemeter used without its shape");
         const ShapeSample ss = shape_->sample_area(u);
         const double dist = distance_between(ref, ss.p);
         if (!(dist > 0)) return s;
@@ -66,28 +78,13 @@ public:
         s.p = ss.p;
         s.distance = dist;
         s.pos = Vec2{0.5f, 0.5f};
-        // W = 1 / A and the point's density 1 / A cancel.
-        s.weight = float(double(cos_sensor) / (dist * dist) * splat_scale_);
+        // W = 1 / A and the point's density 1 / A cancel; the box filter weighs the splat 1.
+        s.weight = float(double(cos_sensor) / (dist * dist));
         return s;
     }
 
 private:
-    // Splats land at the pixel's centre, where the reconstruction filter weighs them
-    // eval(0)^2, while Film::add_splat_weight() normalises by the filter's integral over the
-    // pixel (what jittered camera samples weigh). This factor makes the two agree for any
-    // filter (1 for a box).
-    double centre_splat_scale() const {
-        constexpr int kSteps = 1024;
-        double integral = 0;
-        for (int j = 0; j < kSteps; ++j)
-            integral += film_->rfilter().eval(float((j + 0.5) / kSteps - 0.5));
-        integral /= kSteps;
-        const double centre = film_->rfilter().eval(0.f);
-        return centre > 0 ? (integral * integral) / (centre * centre) : 0.0;
-    }
-
     const Shape* shape_ = nullptr;
-    double splat_scale_ = 1;
 };
 
 }  // namespace

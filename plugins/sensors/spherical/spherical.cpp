@@ -21,12 +21,17 @@ class Spherical final : public Sensor {
 public:
     explicit Spherical(const Properties& props) : Sensor(props) {
         // Mitsuba refuses scale too: the directions would not be unit and the film's solid
-        // angles would not be the sphere's.
-        for (const Vec3& axis : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)})
-            if (std::abs(length(to_world_.vector(axis)) - 1.f) > 1e-4f)
-                props.fail("to_world",
-                           "the spherical camera's to_world must not scale (use "
-                           "translate, rotate and lookat)");
+        // angles would not be the sphere's (nor with a shear).
+        const Vec3 ax = to_world_.vector({1, 0, 0}), ay = to_world_.vector({0, 1, 0}),
+                   az = to_world_.vector({0, 0, 1});
+        const bool rigid = std::abs(length(ax) - 1.f) < 1e-4f &&
+                           std::abs(length(ay) - 1.f) < 1e-4f &&
+                           std::abs(length(az) - 1.f) < 1e-4f && std::abs(dot(ax, ay)) < 1e-4f &&
+                           std::abs(dot(ay, az)) < 1e-4f && std::abs(dot(az, ax)) < 1e-4f;
+        if (!rigid)
+            props.fail("to_world",
+                       "the spherical camera's to_world must not scale or shear (use "
+                       "translate, rotate and lookat)");
         origin_ = to_world_.point(Vec3(0.f));
         if (!within_scene_range(origin_))
             props.fail("to_world", outside_scene_range("the spherical camera", origin_));
