@@ -219,6 +219,7 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     std::ifstream report_file(dir / "out" / "report.md");
     const std::string report((std::istreambuf_iterator<char>(report_file)),
                              std::istreambuf_iterator<char>());
+    EXPECT_NE(report.find("| median Mrays/s |"), std::string::npos) << report;
     for (const char* row : {"| path | 4 (4 fitted) | ", "| bdpt | 4 (4 fitted) | "})
         EXPECT_NE(report.find(row), std::string::npos) << row << "\n" << report;
     int cached = 0;  // the reference's two halves: their mean and its variance

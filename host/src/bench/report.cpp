@@ -50,6 +50,7 @@ void write_atomically(const fs::path& path, const std::string& text) {
 
 struct Series {
     std::vector<double> seconds, errors;
+    std::vector<double> ray_rates;  // rays per second of each run
     std::map<std::string, std::vector<double>> by_budget;
 };
 
@@ -64,6 +65,7 @@ std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
             if (r.scene == scene && r.variant == v.name) {
                 s.seconds.push_back(r.seconds);
                 s.errors.push_back(r.rel_mse);
+                if (r.seconds > 0) s.ray_rates.push_back(double(r.rays) / r.seconds);
                 s.by_budget[r.budget].push_back(r.rel_mse);
             }
         out.emplace_back(v.name, std::move(s));
@@ -87,11 +89,11 @@ std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
     std::string md = fmt::format("## {}\n\n`{}`\n\n", scene.name, scene.file);
     md += fmt::format(
         "| variant | runs | slope of relMSE vs time (95 %) | time to equal error vs "
-        "`{}` (95 %) |",
+        "`{}` (95 %) | median Mrays/s |",
         e.variants.front().name);
     for (const std::string& b : budgets)
         md += fmt::format(" median relMSE @ {}{} |", b, e.timed() ? " s" : " spp");
-    md += "\n|---|---|---|---|";
+    md += "\n|---|---|---|---|---|";
     for (size_t i = 0; i < budgets.size(); ++i) md += "---|";
     md += "\n";
     const Series& base = series.front().second;
@@ -101,8 +103,9 @@ std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
         const Fit f = fits ? fit_log_log(s.seconds, s.errors) : Fit{NAN, NAN, NAN, 0};
         const Ratio r = fits ? equal_error_ratio(base.seconds, base.errors, s.seconds, s.errors)
                              : Ratio{NAN, NAN, NAN};
-        md += fmt::format("| {} | {} ({} fitted) | {} ± {} | {} [{}, {}] |", name, s.seconds.size(),
-                          f.n, g(f.slope), g(f.slope_ci95), g(r.value), g(r.lo), g(r.hi));
+        md += fmt::format("| {} | {} ({} fitted) | {} ± {} | {} [{}, {}] | {} |", name,
+                          s.seconds.size(), f.n, g(f.slope), g(f.slope_ci95), g(r.value), g(r.lo),
+                          g(r.hi), g(median(s.ray_rates) * 1e-6));
         for (const std::string& b : budgets) {
             auto it = s.by_budget.find(b);
             md += " " + (it == s.by_budget.end() ? std::string("–") : g(median(it->second))) + " |";
