@@ -8,12 +8,12 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <pugixml.hpp>
 #include <set>
 #include <sstream>
 
 #include "femto/input_file.h"
+#include "util/line_table.h"
 #include "util/strings.h"
 
 namespace fs = std::filesystem;
@@ -27,18 +27,9 @@ constexpr uint32_t kMaxSpp = 1u << 30;
 
 class Reader {
 public:
-    Reader(std::string file, const std::string& text) : file_(std::move(file)) {
-        line_starts_.push_back(0);
-        for (size_t i = 0; i < text.size(); ++i)
-            if (text[i] == '\n') line_starts_.push_back(i + 1);
-    }
+    Reader(std::string file, const std::string& text) : file_(std::move(file)), lines_(text) {}
 
-    SourceLocation at(ptrdiff_t offset) const {
-        if (offset < 0) offset = 0;
-        auto it = std::upper_bound(line_starts_.begin(), line_starts_.end(), size_t(offset));
-        const size_t line = size_t(it - line_starts_.begin());
-        return {file_, int(line), int(size_t(offset) - line_starts_[line - 1] + 1)};
-    }
+    SourceLocation at(ptrdiff_t offset) const { return lines_.at(file_, offset); }
     SourceLocation at(const pugi::xml_node& n) const { return at(n.offset_debug() - 1); }
 
     [[noreturn]] void fail(const pugi::xml_node& n, const std::string& message) const {
@@ -128,7 +119,7 @@ public:
 
 private:
     std::string file_;
-    std::vector<size_t> line_starts_;
+    detail::LineTable lines_;
 };
 
 // Names go into CSV cells and cache file names: no separators, quotes or line breaks.
@@ -290,10 +281,10 @@ Experiment load_experiment(const std::string& path) {
     const std::string problem = input_file_problem(path);
     if (!problem.empty())
         throw SceneError(fmt::format("experiment file \"{}\" cannot be read ({})", path, problem));
-    std::ifstream in(path, std::ios::binary);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (text.size() > kMaxExperimentBytes)
+    InputFile file(path, SourceLocation{});
+    if (file.size() > kMaxExperimentBytes)
         throw SceneError(fmt::format("experiment file \"{}\" is larger than 16 MiB", path));
+    const std::string text = file.read_rest();
     const Reader r(path, text);
     pugi::xml_document doc;
     const pugi::xml_parse_result parsed = doc.load_buffer(text.data(), text.size());

@@ -15,6 +15,7 @@
 
 #include "bench/measures.h"
 #include "femto/host.h"
+#include "io/atomic_file.h"
 
 namespace fs = std::filesystem;
 
@@ -37,15 +38,20 @@ std::string load_average() {
     return a + " " + b + " " + c;
 }
 
-// Writes `text` to `path` through a temporary file, so a reader never sees half a report.
+// Writes `text` to `path` through femto's atomic-write helpers, so a reader never sees half a
+// report.
 void write_atomically(const fs::path& path, const std::string& text) {
-    const fs::path tmp = path.string() + ".tmp";
+    const std::string tmp = io::detail::temp_path_for(path.string());
     {
         std::ofstream out(tmp);
         out << text;
-        if (!out) throw SceneError(fmt::format("cannot write \"{}\"", tmp.string()));
+        out.close();
+        if (out.fail()) {
+            fs::remove(tmp);
+            throw SceneError(fmt::format("cannot write \"{}\"", path.string()));
+        }
     }
-    fs::rename(tmp, path);
+    io::detail::commit_file(tmp, path.string());
 }
 
 struct Series {

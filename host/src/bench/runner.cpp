@@ -263,17 +263,25 @@ void write_reference_profiles(const Experiment& e, const SceneSpec& scene, const
     }
 }
 
+// Each scene's reference key: reference_key() for a rendered reference, the digest of the
+// file's bytes for a reference file. Computed once per session (it reads every plugin's bytes).
+std::vector<std::string> reference_keys(const Experiment& e, const RunnerOptions& options) {
+    std::vector<std::string> keys;
+    for (const SceneSpec& scene : e.scenes)
+        keys.push_back(e.reference.file.empty() ? reference_key(e, scene, options)
+                                                : digest_hex(read_bytes(e.reference.file)));
+    return keys;
+}
+
 // What the rows of a results folder depend on besides the experiment: the threads, the
-// command line's plugin folders, each scene's file and its reference (the rendered reference's
-// cache key covers femto's version and the plugins' bytes).
-std::string setup_digest(const Experiment& e, const RunnerOptions& options, int threads) {
+// command line's plugin folders, each scene's file and its reference key (a rendered
+// reference's covers femto's version and the plugins' bytes).
+std::string setup_digest(const Experiment& e, const RunnerOptions& options, int threads,
+                         const std::vector<std::string>& reference_keys) {
     std::string text = e.digest + fmt::format("\nthreads {}", threads);
     for (const std::string& d : options.plugin_dirs) text += "\nplugin_dir " + d;
-    for (const SceneSpec& scene : e.scenes) {
-        text += "\n" + digest_hex(read_bytes(scene.file));
-        text += "\n" + (e.reference.file.empty() ? reference_key(e, scene, options)
-                                                 : digest_hex(read_bytes(e.reference.file)));
-    }
+    for (size_t i = 0; i < e.scenes.size(); ++i)
+        text += "\n" + digest_hex(read_bytes(e.scenes[i].file)) + "\n" + reference_keys[i];
     return digest_hex(text);
 }
 
@@ -301,14 +309,13 @@ void prepare_out_dir(const std::string& setup, const fs::path& dir) {
 // The scene's reference: the experiment's file, or its reference variant rendered in two
 // independent halves (seeds seed and seed + 1, spp / 2 each): their mean is the reference and
 // (a - b)^2 / 4 per voxel the variance of that mean (valid for any sampler), which the measures
-// take out. Both are kept in OUT/cache under the hash of what they depend on. Empty when the
-// user stopped it.
+// take out. Both are kept in OUT/cache under `key` (reference_keys()). Empty when the user
+// stopped it.
 std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
-                                   const RunnerOptions& options, int threads, const fs::path& dir) {
+                                   const std::string& key, const RunnerOptions& options,
+                                   int threads, const fs::path& dir) {
     if (!e.reference.file.empty()) return read_reference_file(e.reference.file);
-    const std::string stem =
-        (dir / "cache" / ("reference-" + scene.name + "-" + reference_key(e, scene, options)))
-            .string();
+    const std::string stem = (dir / "cache" / ("reference-" + scene.name + "-" + key)).string();
     const std::string mean_file = stem + "-mean.npy", variance_file = stem + "-variance.npy";
     if (fs::exists(mean_file) && fs::exists(variance_file)) {
         Cube c = read_reference_file(mean_file);
@@ -336,10 +343,9 @@ std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
         r.variance[i] = float(0.25 * (x - y) * (x - y));
     }
     const std::vector<size_t> shape{r.H, r.W, r.T, r.C};
-    io::write_npy(variance_file + ".tmp", shape, r.variance.data());
-    io::write_npy(mean_file + ".tmp", shape, r.data.data());
-    fs::rename(variance_file + ".tmp", variance_file);
-    fs::rename(mean_file + ".tmp", mean_file);
+    // write_npy writes atomically; the mean last, since the cache is read only when both exist.
+    io::write_npy(variance_file, shape, r.variance.data());
+    io::write_npy(mean_file, shape, r.data.data());
     return r;
 }
 
@@ -400,7 +406,8 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
 bool run_experiment(const Experiment& e, const RunnerOptions& options) {
     const fs::path dir(options.out_dir);
     const int threads = options.threads > 0 ? options.threads : e.threads;
-    prepare_out_dir(setup_digest(e, options, threads), dir);
+    const std::vector<std::string> keys = reference_keys(e, options);
+    prepare_out_dir(setup_digest(e, options, threads, keys), dir);
     const fs::path csv = dir / "results.csv";
     std::vector<RunRow> rows = read_results(csv.string(), e);
     std::set<std::string> done;
@@ -413,9 +420,9 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
     const Machine machine = Machine::now(threads);
     size_t index = 0;
     bool stopped = false;
-    for (const SceneSpec& scene : e.scenes) {
-        if (stopped) break;
-        const std::optional<Cube> found = reference_cube(e, scene, options, threads, dir);
+    for (size_t s = 0; s < e.scenes.size() && !stopped; ++s) {
+        const SceneSpec& scene = e.scenes[s];
+        const std::optional<Cube> found = reference_cube(e, scene, keys[s], options, threads, dir);
         if (!found) {
             stopped = true;
             break;

@@ -12,6 +12,7 @@
 
 #include "femto/input_file.h"
 #include "util/lenient.h"
+#include "util/line_table.h"
 #include "util/strings.h"
 
 namespace fs = std::filesystem;
@@ -51,20 +52,6 @@ struct TypeRename {
 };
 constexpr TypeRename kTypeRenames[] = {
     {"sampler", "sobol", "ldsampler"},
-};
-
-struct LineTable {
-    std::vector<size_t> starts{0};
-    explicit LineTable(const std::string& text) {
-        for (size_t i = 0; i < text.size(); ++i)
-            if (text[i] == '\n') starts.push_back(i + 1);
-    }
-    SourceLocation at(const std::string& file, ptrdiff_t offset) const {
-        if (offset < 0) offset = 0;
-        auto it = std::upper_bound(starts.begin(), starts.end(), size_t(offset));
-        const size_t line = size_t(it - starts.begin());
-        return {file, int(line), int(size_t(offset) - starts[line - 1] + 1)};
-    }
 };
 
 std::string read_file(const std::string& path, const SourceLocation& from) {
