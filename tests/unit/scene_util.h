@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -32,6 +33,30 @@ inline std::string scene_xml(const std::string& body, const std::string& version
 }
 
 inline const char* kRect = "<shape type=\"rectangle\"/>";
+
+/// `v` with every digit a double holds, for numbers written into scene XML.
+inline std::string xml_number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+/// An `independent` sampler of `spp` samples per pixel.
+inline std::string independent_sampler(int spp) {
+    return "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" +
+           std::to_string(spp) + "\"/></sampler>";
+}
+
+/// A `transient` film of w x h pixels and `bins` bins of `bin_width` from `start`, with a box
+/// reconstruction filter (each pixel's samples its own) and the histogram in time.
+inline std::string box_transient_film(int w, int h, double start, double bin_width, int bins) {
+    return "<film type=\"transient\"><integer name=\"width\" value=\"" + std::to_string(w) +
+           "\"/><integer name=\"height\" value=\"" + std::to_string(h) +
+           "\"/><float name=\"start\" value=\"" + xml_number(start) +
+           "\"/><float name=\"bin_width\" value=\"" + xml_number(bin_width) +
+           "\"/><integer name=\"bins\" value=\"" + std::to_string(bins) +
+           "\"/><rfilter type=\"box\"/><tfilter type=\"histogram\"/></film>";
+}
 
 /// Loads XML text and returns the SceneError's message (fails the test when none is thrown).
 inline std::string load_error(const std::string& xml, const LoadOptions& options = {},

@@ -24,11 +24,7 @@ using femto::testing::Cube;
 using femto::testing::MeanAndError;
 using femto::testing::render_cube;
 
-std::string num(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
+using femto::test::xml_number;
 
 // ---- rays leaving a surface -----------------------------------------------------------------
 
@@ -104,18 +100,20 @@ TEST(Scale, RaysLeavingASurfaceNeverHitItAgain) {
             const double s = std::pow(10.0, k);
             if (away * s > 1e8) continue;  // coordinates stay within +-1e9
             const Vec3 c(float(away * s), float(-0.5 * away * s), float(0.25 * away * s));
-            SCOPED_TRACE("size 1e" + std::to_string(k) + ", centre " + num(away) + " sizes away");
-            const std::string at =
-                "<translate x=\"" + num(c.x) + "\" y=\"" + num(c.y) + "\" z=\"" + num(c.z) + "\"/>";
-            const SpawnCounts sphere =
-                spawn_from("<shape type=\"sphere\"><point name=\"center\" x=\"" + num(c.x) +
-                               "\" y=\"" + num(c.y) + "\" z=\"" + num(c.z) +
-                               "\"/><float name=\"radius\" value=\"" + num(s) + "\"/></shape>",
-                           c, float(s), true, n);
-            const SpawnCounts cube = spawn_from(
-                "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"" + num(s) +
-                    "\"/><rotate x=\"1\" y=\"1\" angle=\"30\"/>" + at + "</transform></shape>",
-                c, float(s), false, n);
+            SCOPED_TRACE("size 1e" + std::to_string(k) + ", centre " + xml_number(away) +
+                         " sizes away");
+            const std::string at = "<translate x=\"" + xml_number(c.x) + "\" y=\"" +
+                                   xml_number(c.y) + "\" z=\"" + xml_number(c.z) + "\"/>";
+            const SpawnCounts sphere = spawn_from(
+                "<shape type=\"sphere\"><point name=\"center\" x=\"" + xml_number(c.x) + "\" y=\"" +
+                    xml_number(c.y) + "\" z=\"" + xml_number(c.z) +
+                    "\"/><float name=\"radius\" value=\"" + xml_number(s) + "\"/></shape>",
+                c, float(s), true, n);
+            const SpawnCounts cube =
+                spawn_from("<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"" +
+                               xml_number(s) + "\"/><rotate x=\"1\" y=\"1\" angle=\"30\"/>" + at +
+                               "</transform></shape>",
+                           c, float(s), false, n);
             for (const SpawnCounts& counts : {sphere, cube}) {
                 SCOPED_TRACE(&counts == &sphere ? "sphere" : "cube");
                 EXPECT_GT(counts.hits, n / 20);
@@ -186,15 +184,16 @@ void expect_scale_free(SceneAt scene_at, double start, double width) {
 std::string film(double s, double start, double width, int bins) {
     return "<film type=\"transient\"><integer name=\"width\" value=\"16\"/><integer "
            "name=\"height\" value=\"16\"/><float name=\"start\" value=\"" +
-           num(start * s) + "\"/><float name=\"bin_width\" value=\"" + num(width * s) +
-           "\"/><integer name=\"bins\" value=\"" + std::to_string(bins) +
+           xml_number(start * s) + "\"/><float name=\"bin_width\" value=\"" +
+           xml_number(width * s) + "\"/><integer name=\"bins\" value=\"" + std::to_string(bins) +
            "\"/><rfilter type=\"box\"/></film>";
 }
 
 std::string camera(double s, const std::string& lookat, double fov, const std::string& film_xml) {
     return "<integrator type=\"transient_path\"><integer name=\"max_depth\" value=\"8\"/>"
            "</integrator><sensor type=\"perspective\"><float name=\"fov\" value=\"" +
-           num(fov) + "\"/><transform name=\"to_world\">" + lookat + "<scale value=\"" + num(s) +
+           xml_number(fov) + "\"/><transform name=\"to_world\">" + lookat + "<scale value=\"" +
+           xml_number(s) +
            "\"/></transform><sampler type=\"independent\"><integer name=\"sample_count\" "
            "value=\"16\"/></sampler>" +
            film_xml + "</sensor>";
@@ -204,7 +203,7 @@ std::string camera(double s, const std::string& lookat, double fov, const std::s
 std::string shape(double s, const std::string& type, const std::string& ops,
                   const std::string& inner) {
     return "<shape type=\"" + type + "\"><transform name=\"to_world\">" + ops + "<scale value=\"" +
-           num(s) + "\"/></transform>" + inner + "</shape>";
+           xml_number(s) + "\"/></transform>" + inner + "</shape>";
 }
 
 TEST(Scale, CornellBoxIsTheSameAtEveryScale) {
@@ -249,9 +248,10 @@ TEST(Scale, GlassAndMirrorSpheresAreTheSameAtEveryScale) {
     // scenes/spheres: a mirror and a glass sphere on a floor before a wall, a spherical light.
     auto scene_at = [](double s) {
         auto sphere = [&](const std::string& centre, double r, const std::string& inner) {
-            return shape(s, "sphere",
-                         "<scale value=\"" + num(r) + "\"/><translate value=\"" + centre + "\"/>",
-                         inner);
+            return shape(
+                s, "sphere",
+                "<scale value=\"" + xml_number(r) + "\"/><translate value=\"" + centre + "\"/>",
+                inner);
         };
         return "<scene version=\"3.0.0\">" +
                camera(s, "<lookat origin=\"0, 1.3, 3.8\" target=\"0, 0.4, 0\" up=\"0, 1, 0\"/>", 45,
@@ -280,7 +280,7 @@ TEST(Scale, FogPointIsTheSameAtEveryScale) {
     auto scene_at = [](double s) {
         return "<scene version=\"3.0.0\"><medium type=\"homogeneous\" id=\"fog\"><float "
                "name=\"sigma_t\" value=\"" +
-               num(4.1 / s) + "\"/><float name=\"albedo\" value=\"0.98\"/></medium>" +
+               xml_number(4.1 / s) + "\"/><float name=\"albedo\" value=\"0.98\"/></medium>" +
                camera(s, "<lookat origin=\"0, 0, 10\" target=\"0, 0, 0\" up=\"0, 1, 0\"/>", 26,
                       film(s, 8, 0.5, 24)) +
                shape(s, "sphere", "<scale value=\"2\"/>",

@@ -42,21 +42,6 @@ std::string film_1x1(const std::string& type, const std::string& extra = "") {
            extra + "</film>";
 }
 
-std::string transient_film(int w, int h, double start, double bin_width, int bins,
-                           const std::string& rfilter = "<rfilter type=\"box\"/>") {
-    return "<film type=\"transient\"><integer name=\"width\" value=\"" + std::to_string(w) +
-           "\"/><integer name=\"height\" value=\"" + std::to_string(h) +
-           "\"/><float name=\"start\" value=\"" + std::to_string(start) +
-           "\"/><float name=\"bin_width\" value=\"" + std::to_string(bin_width) +
-           "\"/><integer name=\"bins\" value=\"" + std::to_string(bins) + "\"/>" + rfilter +
-           "<tfilter type=\"histogram\"/></film>";
-}
-
-std::string sampler(int spp) {
-    return "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" +
-           std::to_string(spp) + "\"/></sampler>";
-}
-
 // A black sphere of radius 2 around `centre`, its inside emitting radiance 0.7.
 std::string emitting_sphere(const std::string& centre, const std::string& inside = "") {
     return "<shape type=\"sphere\"><point name=\"center\" value=\"" + centre +
@@ -157,12 +142,12 @@ TEST(SphericalSensor, InsideAnEmittingSphereEveryPixelSeesItsRadianceAtItsRadius
     for (const char* integrator : {"path", "transient_bdpt"}) {
         SCOPED_TRACE(integrator);
         const bool exact = std::string(integrator) == "path";
-        auto sc = load_scene_string(
-            scene(integrator,
-                  "<sensor type=\"spherical\"><transform name=\"to_world\"><translate "
-                  "x=\"1\" y=\"2\" z=\"3\"/></transform>" +
-                      sampler(exact ? 2 : 64) + transient_film(16, 8, 1.905, 0.01, 20) +
-                      "</sensor>" + emitting_sphere("1,2,3")));
+        auto sc = load_scene_string(scene(
+            integrator,
+            "<sensor type=\"spherical\"><transform name=\"to_world\"><translate "
+            "x=\"1\" y=\"2\" z=\"3\"/></transform>" +
+                independent_sampler(exact ? 2 : 64) + box_transient_film(16, 8, 1.905, 0.01, 20) +
+                "</sensor>" + emitting_sphere("1,2,3")));
         const Cube cube = render_cube(*sc, 1, "spherical-inside");
         std::vector<double> pixels;
         for (int y = 0; y < 8; ++y)
@@ -191,8 +176,8 @@ TEST(SphericalSensor, BallisticTermOfAPointLightInAMediumIsExact) {
         "<medium type=\"homogeneous\" id=\"ink\"><float name=\"sigma_t\" value=\"0.4\"/><float "
         "name=\"albedo\" value=\"0\"/></medium>";
     const std::string body =
-        medium + "<sensor type=\"spherical\"><ref id=\"ink\"/>" + sampler(4) +
-        transient_film(32, 16, 2.955, 0.01, 10) +
+        medium + "<sensor type=\"spherical\"><ref id=\"ink\"/>" + independent_sampler(4) +
+        box_transient_film(32, 16, 2.955, 0.01, 10) +
         "</sensor><emitter type=\"point\"><point name=\"position\" value=\"1,2,-2\"/>"
         "<float name=\"intensity\" value=\"5\"/><ref id=\"ink\"/></emitter>"
         "<shape type=\"rectangle\"><transform name=\"to_world\"><translate z=\"-50\"/></transform>"
@@ -226,7 +211,8 @@ TEST(IrradianceMeter, InsideAnEmittingSphereReadsPiL) {
         "<shape type=\"disk\"><transform name=\"to_world\"><scale value=\"0.5\"/><translate "
         "x=\"1\" y=\"2\" z=\"3\"/></transform><bsdf type=\"diffuse\"><float name=\"reflectance\" "
         "value=\"0\"/></bsdf><sensor type=\"irradiancemeter\">" +
-        sampler(4096) + film_1x1("hdrfilm", "<rfilter type=\"box\"/>") + "</sensor></shape>";
+        independent_sampler(4096) + film_1x1("hdrfilm", "<rfilter type=\"box\"/>") +
+        "</sensor></shape>";
     for (const char* integrator : {"path", "transient_bdpt"}) {
         SCOPED_TRACE(integrator);
         auto sc = load_scene_string(scene(integrator, meter + emitting_sphere("1,2,3")));
@@ -252,8 +238,8 @@ TEST(IrradianceMeter, PointLightOverADiskMatchesTheClosedForm) {
     const double I = 5, h = 2, a = 1, start = 1.98, width = 0.02;
     const int bins = 14, spp = 20000;
     const std::string body =
-        "<shape type=\"disk\"><sensor type=\"irradiancemeter\">" + sampler(spp) +
-        transient_film(1, 1, start, width, bins) +
+        "<shape type=\"disk\"><sensor type=\"irradiancemeter\">" + independent_sampler(spp) +
+        box_transient_film(1, 1, start, width, bins) +
         "</sensor></shape><emitter type=\"point\"><point name=\"position\" value=\"0,0,2\"/>"
         "<float name=\"intensity\" value=\"5\"/></emitter>";
     auto sc = load_scene_string(scene("transient_light", body));
@@ -297,7 +283,7 @@ TEST(RadianceMeter, LambertianPlaneUnderAPointLight) {
     const std::string body =
         "<sensor type=\"radiancemeter\"><point name=\"origin\" value=\"0.5,0,3\"/><vector "
         "name=\"direction\" value=\"0,0,-1\"/>" +
-        sampler(16) + transient_film(1, 1, t - 0.25, 0.1, 5) +
+        independent_sampler(16) + box_transient_film(1, 1, t - 0.25, 0.1, 5) +
         "</sensor><shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"10\"/>"
         "</transform><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.6\"/></bsdf>"
         "</shape><emitter type=\"point\"><point name=\"position\" value=\"0,0,1.5\"/><float "

@@ -28,31 +28,11 @@ using namespace femto::test;
 
 namespace {
 
-std::string num(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
-
-std::string transient_film(int w, int h, double start, double bin_width, int bins) {
-    return "<film type=\"transient\"><integer name=\"width\" value=\"" + std::to_string(w) +
-           "\"/><integer name=\"height\" value=\"" + std::to_string(h) +
-           "\"/><float name=\"start\" value=\"" + num(start) +
-           "\"/><float name=\"bin_width\" value=\"" + num(bin_width) +
-           "\"/><integer name=\"bins\" value=\"" + std::to_string(bins) +
-           "\"/><rfilter type=\"box\"/></film>";
-}
-
-std::string sampler(int spp) {
-    return "<sampler type=\"independent\"><integer name=\"sample_count\" value=\"" +
-           std::to_string(spp) + "\"/></sampler>";
-}
-
 std::string radiancemeter(const std::string& origin, const std::string& direction, int spp,
                           const std::string& film) {
     return "<sensor type=\"radiancemeter\"><point name=\"origin\" value=\"" + origin +
-           "\"/><vector name=\"direction\" value=\"" + direction + "\"/>" + sampler(spp) + film +
-           "</sensor>";
+           "\"/><vector name=\"direction\" value=\"" + direction + "\"/>" +
+           independent_sampler(spp) + film + "</sensor>";
 }
 
 // Renders with `seed` and checks that the film refused nothing and holds only finite values.
@@ -86,7 +66,7 @@ TEST(Stress, MicroscopicBinsCatchTheArrivalInItsBin) {
     const int bins = 100000, bin = 81138;
     const std::string body =
         radiancemeter("0.5,0,3", "0,0,-1", 4,
-                      transient_film(1, 1, t - (bin + 0.5) * width, width, bins)) +
+                      box_transient_film(1, 1, t - (bin + 0.5) * width, width, bins)) +
         "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"10\"/></transform>"
         "<bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.6\"/></bsdf></shape>"
         "<emitter type=\"point\"><point name=\"position\" value=\"0,0,1.5\"/><float "
@@ -109,14 +89,14 @@ TEST(Stress, MicroscopicBinsCatchTheArrivalInItsBin) {
 TEST(Stress, AbsorbingBallTransmitsExpMinusTwoSigmaAtEveryExtinction) {
     for (const double sigma : {1e-6, 1e-3, 1.0, 1e3, 1e6}) {
         for (const char* integrator : {"transient_path", "transient_bdpt"}) {
-            SCOPED_TRACE(std::string(integrator) + " sigma_t " + num(sigma));
+            SCOPED_TRACE(std::string(integrator) + " sigma_t " + xml_number(sigma));
             const std::string xml =
                 "<scene version=\"3.0.0\"><medium type=\"homogeneous\" id=\"ink\"><float "
                 "name=\"sigma_t\" value=\"" +
-                num(sigma) +
+                xml_number(sigma) +
                 "\"/><float name=\"albedo\" value=\"0\"/></medium><integrator type=\"" +
                 integrator + "\"/>" +
-                radiancemeter("0,0,3", "0,0,-1", 256, transient_film(1, 1, 0, 0.5, 20)) +
+                radiancemeter("0,0,3", "0,0,-1", 256, box_transient_film(1, 1, 0, 0.5, 20)) +
                 "<shape type=\"sphere\"><bsdf type=\"null\"/><ref name=\"interior\" "
                 "id=\"ink\"/></shape>"
                 "<shape type=\"rectangle\"><transform name=\"to_world\"><scale "
@@ -141,17 +121,17 @@ TEST(Stress, DenseScatteringWithoutDepthLimitEndsAtTheWindow) {
     for (const double sigma : {1e3, 1e6})
         for (const char* albedo : {"0.9", "1"})
             for (const char* integrator : {"transient_path", "transient_bdpt", "transient_light"}) {
-                SCOPED_TRACE(std::string(integrator) + " sigma_t " + num(sigma) + " albedo " +
-                             albedo);
+                SCOPED_TRACE(std::string(integrator) + " sigma_t " + xml_number(sigma) +
+                             " albedo " + albedo);
                 auto scene = load_scene_string(
                     "<scene version=\"3.0.0\"><medium type=\"homogeneous\" id=\"fog\"><float "
                     "name=\"sigma_t\" value=\"" +
-                    num(sigma) + "\"/><float name=\"albedo\" value=\"" + albedo +
+                    xml_number(sigma) + "\"/><float name=\"albedo\" value=\"" + albedo +
                     "\"/></medium><integrator type=\"" + integrator +
                     "\"><integer name=\"max_depth\" value=\"-1\"/></integrator><sensor "
                     "type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,6\" "
                     "target=\"0,0,0\" up=\"0,1,0\"/></transform>" +
-                    sampler(2) + transient_film(8, 8, 3, 0.1, 100) +
+                    independent_sampler(2) + box_transient_film(8, 8, 3, 0.1, 100) +
                     "</sensor><shape type=\"sphere\"><bsdf type=\"null\"/><ref name=\"interior\" "
                     "id=\"fog\"/></shape><shape type=\"rectangle\"><transform "
                     "name=\"to_world\"><scale value=\"3\"/><translate z=\"-3\"/></transform>"
@@ -171,7 +151,7 @@ TEST(Stress, GrazingAnglesStayFinite) {
             "\"/><sensor type=\"perspective\"><float name=\"fov\" value=\"10\"/><transform "
             "name=\"to_world\"><lookat origin=\"0,0.001,5\" target=\"0,0,-5\" up=\"0,1,0\"/>"
             "</transform>" +
-            sampler(16) + transient_film(8, 8, 0, 0.5, 60) +
+            independent_sampler(16) + box_transient_film(8, 8, 0, 0.5, 60) +
             "</sensor><shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"10\"/>"
             "<rotate x=\"1\" angle=\"-90\"/></transform></shape><emitter type=\"point\"><point "
             "name=\"position\" value=\"0,0.001,-5\"/><float name=\"intensity\" value=\"100\"/>"
@@ -193,7 +173,7 @@ TEST(Stress, DegenerateTrianglesAndZeroAreaLights) {
         return "<scene version=\"3.0.0\"><integrator type=\"transient_path\"/><sensor "
                "type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0.3,0.3,3\" "
                "target=\"0.3,0.3,0\" up=\"0,1,0\"/></transform>" +
-               sampler(16) + transient_film(8, 8, 0, 0.5, 20) +
+               independent_sampler(16) + box_transient_film(8, 8, 0, 0.5, 20) +
                "</sensor><shape type=\"obj\"><string name=\"filename\" value=\"" +
                (dir / mesh).string() +
                "\"/><emitter type=\"area\"/></shape><shape type=\"rectangle\"><transform "
