@@ -99,6 +99,12 @@ TEST(CubeLayout, ManyBinsOfATinyFilmRoundTrip) {
     // of OpenEXR state to write it).
     const int w = 3, h = 2, bins = 1 << 16;
     const auto dir = temp_dir("cube-many-bins");
+    // An image read first (a texture of the scene) sets OpenEXR's size limits for the process;
+    // they must leave a cube's tall strip of frames alone.
+    const float pixel[3] = {1, 2, 3};
+    io::write_exr_rgb((dir / "texture.exr").string(), 1, 1, pixel, {});
+    int tw = 0, th = 0;
+    EXPECT_EQ(io::read_image_rgb((dir / "texture.exr").string(), tw, th, false).size(), 3u);
     const std::vector<float> data = numbered_cube(w, h, bins);
     const std::string path = (dir / "c.exr").string();
     io::write_exr_cube(path, w, h, bins, data.data(), nullptr,

@@ -190,12 +190,14 @@ constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
 
 // OpenEXR allocates scanline buffers for the width a header claims while opening the file,
 // before OpenImageIO hands femto the spec: a corrupt header could ask for gigabytes. Its own
-// limit makes such files fail at the header instead.
+// limit makes such files fail at the header instead. The limit is process-wide and OpenEXR
+// checks it on writing too, so it bounds widths only (0: no limit on heights): femto's cubes
+// stack their frames as rows, height x bins of them, far beyond any image's height.
 void limit_openexr_sizes() {
     static std::once_flag once;
     std::call_once(once, [] {
-        Imf::Header::setMaxImageSize(kMaxImageSide, kMaxImageSide);
-        Imf::Header::setMaxTileSize(kMaxImageSide, kMaxImageSide);
+        Imf::Header::setMaxImageSize(kMaxImageSide, 0);
+        Imf::Header::setMaxTileSize(kMaxImageSide, 0);
     });
 }
 
