@@ -23,6 +23,11 @@ struct BenchArgs {
     bool quiet = false;
 } g_args;
 
+struct BenchRunArgs {
+    bench::ChildRun run;
+    std::vector<std::string> defines;
+} g_child;
+
 }  // namespace
 
 CLI::App* add_bench_command(CLI::App& app) {
@@ -57,6 +62,8 @@ int run_bench_command(const std::atomic<bool>& stop) {
     options.plugin_dirs = g_args.plugin_dirs;
     options.progress = !g_args.quiet;
     options.stop = &stop;
+    std::error_code ec;
+    options.executable = fs::read_symlink("/proc/self/exe", ec).string();
     bool complete = false;
     try {
         complete = bench::run_experiment(e, options);
@@ -68,6 +75,30 @@ int run_bench_command(const std::atomic<bool>& stop) {
                    complete ? "done" : "stopped (the finished runs are kept; run again to resume)",
                    options.out_dir);
     return complete ? 0 : 130;
+}
+
+CLI::App* add_bench_run_command(CLI::App& app) {
+    CLI::App* run = app.add_subcommand("bench-run", "One render of a study, in a child process");
+    run->group("");  // hidden: `femto bench` starts it
+    bench::ChildRun& r = g_child.run;
+    run->add_option("--scene", r.scene_file)->required();
+    run->add_option("--out", r.out_stem)->required();
+    run->add_option("--seed", r.seed)->required();
+    run->add_option("--spp", r.spp)->required()->check(CLI::Range(1u, 1u << 30));
+    run->add_option("--threads", r.threads)->check(CLI::Range(0, 4096));
+    run->add_option("-D", g_child.defines);
+    run->add_option("--plugin-dir", r.plugin_dirs);
+    return run;
+}
+
+int run_bench_run_command(const std::atomic<bool>& stop) {
+    for (const std::string& d : g_child.defines) {
+        const size_t eq = d.find('=');
+        if (eq == std::string::npos)
+            throw SceneError(fmt::format("-D \"{}\": expected name=value", d));
+        g_child.run.defines.emplace_back(d.substr(0, eq), d.substr(eq + 1));
+    }
+    return bench::run_child(g_child.run, &stop) ? 0 : 130;
 }
 
 }  // namespace femto::cli

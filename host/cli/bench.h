@@ -15,4 +15,10 @@ CLI::App* add_bench_command(CLI::App& app);
 /// when stopped: the finished runs are kept and reported). Bad input throws SceneError.
 int run_bench_command(const std::atomic<bool>& stop);
 
+/// Adds the hidden `bench-run` subcommand: one render of a study in a child process
+/// (<isolation value="process"/>), started by `femto bench` itself.
+CLI::App* add_bench_run_command(CLI::App& app);
+/// Runs the parsed `bench-run` subcommand. Returns 0, or 130 when stopped.
+int run_bench_run_command(const std::atomic<bool>& stop);
+
 }  // namespace femto::cli

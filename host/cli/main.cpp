@@ -115,10 +115,11 @@ std::string did_you_mean_clause(const std::string& word,
     return closest.empty() ? std::string() : fmt::format("; did you mean \"{}\"?", closest);
 }
 
-std::vector<std::string> command_names(const CLI::App& app) {
+// The commands of `app`; hidden ones (`bench-run`, which `femto bench` starts) only when asked.
+std::vector<std::string> command_names(const CLI::App& app, bool hidden = false) {
     std::vector<std::string> names;
     for (const CLI::App* sub : app.get_subcommands(std::function<bool(const CLI::App*)>{}))
-        names.push_back(sub->get_name());
+        if (hidden || !sub->get_group().empty()) names.push_back(sub->get_name());
     return names;
 }
 
@@ -139,7 +140,8 @@ void check_command_words(const CLI::App& app, int argc, char** argv) {
         }
         const std::vector<std::string> names = command_names(*level);
         const std::string kind = words.empty() ? "" : words + " ";  // "viz command"
-        if (std::find(names.begin(), names.end(), word) == names.end())
+        const std::vector<std::string> all = command_names(*level, true);
+        if (std::find(all.begin(), all.end(), word) == all.end())
             throw femto::SceneError(fmt::format("unknown {0}command \"{1}\"{2} ({0}commands: {3})",
                                                 kind, word, did_you_mean_clause(word, names),
                                                 femto::detail::join(names)));
@@ -326,6 +328,7 @@ int main(int argc, char** argv) {
     plugins->add_flag("--markdown", markdown, "Print the reference in Markdown (docs/plugins.md)");
     CLI::App* viz = femto::cli::add_viz_command(app);
     CLI::App* bench = femto::cli::add_bench_command(app);
+    CLI::App* bench_run = femto::cli::add_bench_run_command(app);
 
     try {
         check_command_words(app, argc, argv);
@@ -346,6 +349,12 @@ int main(int argc, char** argv) {
         if (bench->parsed()) {
             handle_stop_signals(true);  // Ctrl-C: stop after the current run, keep the rows
             const int code = femto::cli::run_bench_command(g_stop);
+            if (const int sig = g_first_signal.load()) return kExitSignalBase + sig;
+            return code;
+        }
+        if (bench_run->parsed()) {
+            handle_stop_signals(true);  // Ctrl-C and the study's SIGTERM: stop, write nothing
+            const int code = femto::cli::run_bench_run_command(g_stop);
             if (const int sig = g_first_signal.load()) return kExitSignalBase + sig;
             return code;
         }

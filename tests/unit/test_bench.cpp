@@ -73,6 +73,30 @@ TEST(BenchMeasures, FormulasOnAHandComputedCube) {
     EXPECT_DOUBLE_EQ(rel_mse(x, noisy, 0, 1), 1.25 / 17.0);
     EXPECT_DOUBLE_EQ(frame_rel_mse(x, noisy)[0], 1.25 / 17.0);
     EXPECT_DOUBLE_EQ(rel_mse(x, without_variance(noisy)), 3.0 / 21.0);
+    // The mean over resolved frames: the lit frames 0 and 1 (frame 2 is black), each weighing
+    // the same: (2/17 + 0) / 2. A frame whose reference noise is 5 % or more of its energy is
+    // not resolved: Var r = 1 in frame 0 (sum r^2 = 17) leaves frame 1 alone.
+    EXPECT_DOUBLE_EQ(resolved_frame_rel_mse(x, ref), 1.0 / 17.0);
+    Cube unresolved = ref;
+    unresolved.variance = {1, 0, 0, 0, 0, 0};
+    EXPECT_DOUBLE_EQ(resolved_frame_rel_mse(x, unresolved), 0.0);
+    unresolved.variance = {1, 1, 0, 0, 0, 0};  // frame 1: noise 1 of 4: none resolved
+    EXPECT_TRUE(std::isnan(resolved_frame_rel_mse(x, unresolved)));
+}
+
+TEST(BenchMeasures, MedianRatioOfAConstantRateIsExact) {
+    // b runs at exactly twice a's rate in every run: every resample gives 2.
+    const Ratio r = median_ratio({3, 3, 3, 3}, {6, 6, 6});
+    EXPECT_DOUBLE_EQ(r.value, 2.0);
+    EXPECT_DOUBLE_EQ(r.lo, 2.0);
+    EXPECT_DOUBLE_EQ(r.hi, 2.0);
+    // Spread rates: the interval holds the ratio of medians, and too few runs give none.
+    const Ratio spread = median_ratio({1, 2, 3, 4, 5}, {2, 4, 6, 8, 10});
+    EXPECT_DOUBLE_EQ(spread.value, 2.0);
+    EXPECT_LE(spread.lo, 2.0);
+    EXPECT_GE(spread.hi, 2.0);
+    EXPECT_TRUE(std::isnan(median_ratio({1, 2}, {1, 2, 3}).lo));
+    EXPECT_DOUBLE_EQ(median({4, 1, 3, 2}), 2.5);
 }
 
 TEST(BenchMeasures, LogLogFitRecoversAKnownSlope) {
@@ -134,7 +158,16 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
          ":4:1: <budgets> spp: 0 is not a whole number from 1"},
         {head + "<variant name=\"a\"/>\n<budgets spp=\"1\" seconds=\"2\"/>\n</experiment>",
          "needs either spp=\"...\" or seconds=\"...\""},
-        {head + "<variant name=\"a\"/>\n<budgets spp=\"1\"/>\n</experiment>", "has no <reference>"},
+        {head + "<variant name=\"a\"/>\n<budgets spp=\"1\"/>\n<metric name=\"relmse\"/>\n"
+                "</experiment>",
+         ":5:1: <metric> needs a <reference>"},
+        {head + "<variant name=\"a\"/>\n<budgets spp=\"1\"/>\n<window name=\"w\" start=\"0\" "
+                "end=\"1\"/>\n</experiment>",
+         ":5:1: <window> and <pixel> measure errors: they need a <reference>"},
+        {head + rest + "<metric name=\"window:late\"/>\n</experiment>",
+         ":6:1: <metric> name \"window:late\": valid: relmse, pixel_relmse, frame_relmse"},
+        {head + rest + "<isolation value=\"fork\"/>\n</experiment>",
+         ":6:1: <isolation> value \"fork\": valid: none"},
         {head + "<variant name=\"a\"/>\n<budgets spp=\"1\"/>\n<reference variant=\"b\" "
                 "spp=\"4\"/>\n</experiment>",
          ":5:1: <reference> names variant \"b\", which is not declared"},
@@ -187,7 +220,7 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
         "<variant name=\"path\"/><variant name=\"bdpt\"><define name=\"integrator\" "
         "value=\"transient_bdpt\"/></variant><budgets spp=\"2 8\"/><seeds count=\"2\"/>"
         "<reference variant=\"path\" spp=\"64\"/><window name=\"early\" start=\"3\" end=\"5\"/>"
-        "<pixel name=\"centre\" x=\"4\" y=\"4\"/>"
+        "<pixel name=\"centre\" x=\"4\" y=\"4\"/><metric name=\"pixel:centre\"/>"
         "<threads value=\"1\"/></experiment>";
     write(dir / "e.xml", experiment);
     const Experiment e = load_experiment((dir / "e.xml").string());
@@ -210,6 +243,8 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
         ASSERT_EQ(r.windows.size(), 1u);
         ASSERT_EQ(r.pixels.size(), 1u);
         EXPECT_GT(r.pixels[0], 0);  // the centre pixel sees the lit plane
+        EXPECT_GT(r.frame_rel_mse, 0);
+        EXPECT_EQ(r.samples, uint64_t(r.spp) * 64);
     }
     EXPECT_EQ(rows[0].variant, "path");  // interleaved: path, bdpt, path, bdpt, ...
     EXPECT_EQ(rows[1].variant, "bdpt");
@@ -220,6 +255,8 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     const std::string report((std::istreambuf_iterator<char>(report_file)),
                              std::istreambuf_iterator<char>());
     EXPECT_NE(report.find("| median Mrays/s |"), std::string::npos) << report;
+    // The <metric> is what the slopes, ratios and medians use.
+    EXPECT_NE(report.find("| slope of pixel:centre vs time (95 %) |"), std::string::npos) << report;
     for (const char* row : {"| path | 4 (4 fitted) | ", "| bdpt | 4 (4 fitted) | "})
         EXPECT_NE(report.find(row), std::string::npos) << row << "\n" << report;
     int cached = 0;  // the reference's two halves: their mean and its variance
@@ -295,5 +332,74 @@ TEST(BenchRunner, TimeBudgetsBecomeSampleCounts) {
     // A directly seen emitter: every pixel is exact whatever its samples, so no pixel was left
     // without samples (a stopped render would leave some black).
     EXPECT_LT(rows[0].rel_mse_raw, 1e-10);
+    fs::remove_all(dir);
+}
+
+// <isolation value="process"/>: each run renders in a `femto bench-run` child process, whose
+// peak memory is measured: a film with a cube of 32 x 32 x 1536 bins x RGB (its float32 copy
+// alone is 18.9 MB) peaks well above a 1-bin film.
+// Without a <reference> the study measures throughput: no errors, no plot.
+TEST(BenchRunner, ChildProcessesMeasurePeakMemoryWithoutAReference) {
+    const fs::path dir = femto::testing::temp_dir("bench-child");
+    write(dir / "scene.xml",
+          "<scene version=\"3.0.0\"><default name=\"bins\" value=\"1\"/>"
+          "<integrator type=\"transient_path\"><integer name=\"max_depth\" value=\"2\"/>"
+          "</integrator><sensor type=\"perspective\"><film type=\"transient\"><integer "
+          "name=\"width\" value=\"32\"/><integer name=\"height\" value=\"32\"/><float "
+          "name=\"start\" value=\"0\"/><float name=\"bin_width\" value=\"0.01\"/><integer "
+          "name=\"bins\" value=\"$bins\"/></film></sensor><shape type=\"rectangle\"><transform "
+          "name=\"to_world\"><rotate x=\"1\" angle=\"180\"/><translate z=\"2\"/></transform>"
+          "<emitter type=\"area\"/></shape></scene>");
+    write(dir / "e.xml",
+          "<experiment><scene file=\"scene.xml\" name=\"s\"/><variant name=\"one-bin\"/>"
+          "<variant name=\"cube\"><define name=\"bins\" value=\"1536\"/></variant><budgets "
+          "spp=\"1 2\"/><seeds count=\"2\"/><isolation value=\"process\"/><threads value=\"1\"/>"
+          "</experiment>");
+    const Experiment e = load_experiment((dir / "e.xml").string());
+    EXPECT_TRUE(e.child_processes);
+    EXPECT_FALSE(e.has_reference());
+    RunnerOptions o;
+    o.out_dir = (dir / "out").string();
+    o.progress = false;
+    o.executable = FEMTO_CLI_PATH;
+    ASSERT_TRUE(run_experiment(e, o));
+    const std::vector<RunRow> rows = read_results((dir / "out" / "results.csv").string(), e);
+    ASSERT_EQ(rows.size(), 8u);
+    double one_bin = 0, cube = INFINITY;
+    for (const RunRow& r : rows) {
+        EXPECT_EQ(r.samples, uint64_t(r.spp) * 32 * 32);
+        EXPECT_GT(r.rays, 0u);
+        EXPECT_TRUE(std::isnan(r.rel_mse));
+        // CPU time over wall clock; these renders last a few clock ticks, too short to bound it.
+        EXPECT_TRUE(std::isfinite(r.cores_used) && r.cores_used >= 0) << r.cores_used;
+        ASSERT_TRUE(std::isfinite(r.peak_mb));
+        if (r.variant == "one-bin") one_bin = std::max(one_bin, r.peak_mb);
+        if (r.variant == "cube") cube = std::min(cube, r.peak_mb);
+    }
+    // At least half the cube's float32 copy: the rest of each peak overlaps what the 1-bin run
+    // peaks at elsewhere (loading), and pages of the film no sample reached are never resident.
+    EXPECT_GT(cube - one_bin, 0.5 * 32 * 32 * 1536 * 3 * 4 / (1 << 20)) << cube << " " << one_bin;
+    std::ifstream report_file(dir / "out" / "report.md");
+    const std::string report((std::istreambuf_iterator<char>(report_file)),
+                             std::istreambuf_iterator<char>());
+    EXPECT_NE(report.find("| variant | runs | median samples/s | samples/s vs `one-bin`"),
+              std::string::npos)
+        << report;
+    EXPECT_NE(report.find("median peak MB"), std::string::npos);
+    EXPECT_FALSE(fs::exists(dir / "out" / "plot.svg"));
+    EXPECT_FALSE(fs::exists(dir / "out" / "frames.csv"));
+    // A failing child (a scene value the loader refuses) is an error naming the run.
+    write(dir / "e.xml",
+          "<experiment><scene file=\"scene.xml\" name=\"s\"/><variant name=\"bad\"><define "
+          "name=\"bins\" value=\"-3\"/></variant><budgets spp=\"1\"/><isolation "
+          "value=\"process\"/></experiment>");
+    o.out_dir = (dir / "bad").string();
+    try {
+        run_experiment(load_experiment((dir / "e.xml").string()), o);
+        ADD_FAILURE() << "no error";
+    } catch (const femto::SceneError& err) {
+        EXPECT_NE(std::string(err.what()).find("failed with exit code 2"), std::string::npos)
+            << err.what();
+    }
     fs::remove_all(dir);
 }

@@ -244,16 +244,54 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
         for (const PixelSpec& o : e.pixels)
             if (o.name == p.name) r.fail(c, fmt::format("two pixels are named \"{}\"", p.name));
         e.pixels.push_back(p);
+    } else if (tag == "metric") {
+        if (c.previous_sibling("metric")) r.fail(c, "a second <metric>");
+        r.check_attributes(c, {"name"});
+        r.only_children(c, {});
+        e.metric = r.required(c, "name");
+    } else if (tag == "isolation") {
+        if (c.previous_sibling("isolation")) r.fail(c, "a second <isolation>");
+        r.check_attributes(c, {"value"});
+        r.only_children(c, {});
+        const std::string v = r.required(c, "value");
+        if (v != "process" && v != "none")
+            r.fail(c, fmt::format("<isolation> value \"{}\": valid: none (every run in this "
+                                  "process), process (each run in a child process)",
+                                  v));
+        e.child_processes = v == "process";
     } else if (tag == "threads") {
         if (e.threads > 0) r.fail(c, "a second <threads>");
         r.check_attributes(c, {"value"});
         r.only_children(c, {});
         e.threads = int(r.whole(c, "value", r.number(c, "value", r.required(c, "value")), 1, 4096));
     } else {
-        r.fail(c, fmt::format("unknown element <{}> in <experiment>; valid: scene, variant, "
-                              "budgets, seeds, reference, window, pixel, threads",
-                              tag));
+        r.fail(c,
+               fmt::format("unknown element <{}> in <experiment>; valid: scene, variant, "
+                           "budgets, seeds, reference, window, pixel, metric, isolation, threads",
+                           tag));
     }
+}
+
+// The <metric> names a measure a run has: without a reference there is none (the study then
+// measures throughput and memory), and a window or pixel must be declared.
+void check_metric(const Reader& r, const pugi::xml_node& root, const Experiment& e) {
+    const pugi::xml_node n = root.child("metric") ? root.child("metric") : root;
+    if (!e.has_reference()) {
+        if (root.child("metric"))
+            r.fail(n, "<metric> needs a <reference> to measure the error against");
+        if (!e.windows.empty() || !e.pixels.empty())
+            r.fail(root.child("window") ? root.child("window") : root.child("pixel"),
+                   "<window> and <pixel> measure errors: they need a <reference>");
+        return;
+    }
+    const std::string& m = e.metric;
+    bool known = m == "relmse" || m == "pixel_relmse" || m == "frame_relmse";
+    for (const Window& w : e.windows) known = known || m == "window:" + w.name;
+    for (const PixelSpec& p : e.pixels) known = known || m == "pixel:" + p.name;
+    if (!known)
+        r.fail(n, fmt::format("<metric> name \"{}\": valid: relmse, pixel_relmse, frame_relmse, "
+                              "window:NAME or pixel:NAME of a declared <window> or <pixel>",
+                              m));
 }
 
 }  // namespace
@@ -318,10 +356,7 @@ Experiment load_experiment(const std::string& path) {
     if (e.spp_budgets.empty() && e.time_budgets.empty())
         throw SceneError(top, "the experiment has no <budgets>");
     if (e.seeds.empty()) e.seeds = {1};
-    if (e.reference.file.empty() && e.reference.variant.empty())
-        throw SceneError(top,
-                         "the experiment has no <reference> (a file, or a variant rendered "
-                         "at many samples)");
+    check_metric(r, root, e);
     if (!e.reference.variant.empty() && !e.find_variant(e.reference.variant))
         throw SceneError(e.reference.location,
                          fmt::format("<reference> names variant \"{}\", which is not declared",

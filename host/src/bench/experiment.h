@@ -64,6 +64,11 @@ struct Experiment {
     ReferenceSpec reference;
     std::vector<Window> windows;
     std::vector<PixelSpec> pixels;
+    /// The error the slopes, ratios, plot and medians use: "relmse" (default), "pixel_relmse",
+    /// "frame_relmse", "window:NAME" or "pixel:NAME" (a results.csv column).
+    std::string metric = "relmse";
+    /// Each run in a child process (its peak memory is then measured), not in this one.
+    bool child_processes = false;
     int threads = 0;  ///< 0: all cores
     /// Of everything but <seeds> and <budgets> (whitespace and comments aside): rows measured
     /// under another digest are not resumed.
@@ -73,6 +78,8 @@ struct Experiment {
     /// The budgets in the order they run, as text ("16" spp or "2.5" s).
     std::vector<std::string> budget_labels() const;
     bool timed() const { return !time_budgets.empty(); }
+    /// Without a reference, a study measures throughput (and memory) only.
+    bool has_reference() const { return !reference.file.empty() || !reference.variant.empty(); }
 };
 
 /// Reads an experiment file; bad input is a SceneError at its file:line:col.

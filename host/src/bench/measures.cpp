@@ -120,6 +120,25 @@ std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref) {
     return out;
 }
 
+double resolved_frame_rel_mse(const Cube& x, const Cube& ref) {
+    check_same_shape(x, ref);
+    std::vector<Sums> frames(x.T);
+    std::vector<double> noise(x.T, 0.0);  // sum of Var r per frame
+    for (size_t p = 0; p < x.H * x.W; ++p)
+        for (size_t t = 0; t < x.T; ++t) {
+            const size_t i = (p * x.T + t) * x.C;
+            for (size_t c = 0; c < x.C; ++c) {
+                frames[t].add(x, ref, i + c);
+                if (!ref.variance.empty()) noise[t] += ref.variance[i + c];
+            }
+        }
+    double sum = 0;
+    size_t resolved = 0;
+    for (size_t t = 0; t < x.T; ++t)
+        if (frames[t].rr > 0 && noise[t] < 0.05 * frames[t].rr) sum += frames[t].rel(), ++resolved;
+    return resolved ? sum / double(resolved) : kNaN;
+}
+
 double energy_error(const Cube& x, const Cube& ref) {
     check_same_shape(x, ref);
     double sx = 0, sr = 0;
@@ -225,6 +244,31 @@ Ratio equal_error_ratio(const std::vector<double>& seconds_a, const std::vector<
     std::sort(samples.begin(), samples.end());
     r.lo = samples[size_t(0.025 * double(samples.size()))];
     r.hi = samples[std::min(samples.size() - 1, size_t(0.975 * double(samples.size())))];
+    return r;
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return kNaN;
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+Ratio median_ratio(const std::vector<double>& a, const std::vector<double>& b) {
+    Ratio r{median(b) / median(a), kNaN, kNaN};
+    if (a.size() < 3 || b.size() < 3) return r;
+    std::mt19937_64 rng(20141201);
+    auto resampled_median = [&](const std::vector<double>& v) {
+        std::uniform_int_distribution<size_t> pick(0, v.size() - 1);
+        std::vector<double> s(v.size());
+        for (double& x : s) x = v[pick(rng)];
+        return median(std::move(s));
+    };
+    std::vector<double> samples;
+    for (int k = 0; k < 2000; ++k) samples.push_back(resampled_median(b) / resampled_median(a));
+    std::sort(samples.begin(), samples.end());
+    r.lo = samples[size_t(0.025 * double(samples.size()))];
+    r.hi = samples[size_t(0.975 * double(samples.size()))];
     return r;
 }
 

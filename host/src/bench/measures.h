@@ -39,6 +39,12 @@ double pixel_profile_rel_mse(const Cube& x, const Cube& ref, int px, int py);
 std::vector<double> pixel_profile(const Cube& x, int px, int py);
 /// relMSE of each frame (bin) t, NaN where the reference frame is black.
 std::vector<double> frame_rel_mse(const Cube& x, const Cube& ref);
+/// The mean of frame_rel_mse over the frames the reference resolves: lit, and (when its
+/// variance is known) with its own noise sum_v Var r_v / sum_v r_v^2 below 5 %. Every resolved
+/// frame weighs the same, the late dim ones as much as the first light (the thesis' error over
+/// frames); the whole cube's relMSE is dominated by the brightest frames instead. NaN when no
+/// frame is resolved.
+double resolved_frame_rel_mse(const Cube& x, const Cube& ref);
 /// (sum x - sum r) / sum r: the relative error of the total energy.
 double energy_error(const Cube& x, const Cube& ref);
 /// `c` with its variance dropped (the measures then compare against r as it is).
@@ -58,7 +64,8 @@ struct Fit {
 };
 Fit fit_log_log(const std::vector<double>& seconds, const std::vector<double>& errors);
 
-/// Equal-error time ratio of B over A: the fitted time B needs to reach the geometric mean of
+/// Equal-error time ratio of B over A (or of any other cost, e.g. samples, in place of
+/// seconds): the fitted time B needs to reach the geometric mean of
 /// A's errors over the fitted time A needs for it (< 1: B is faster). The 95 % interval comes
 /// from 2000 bootstrap resamples of each variant's runs (a fixed seed: reports reproduce); NaN
 /// bounds when more than 5 % of the resamples give no ratio.
@@ -67,6 +74,13 @@ struct Ratio {
 };
 Ratio equal_error_ratio(const std::vector<double>& seconds_a, const std::vector<double>& errors_a,
                         const std::vector<double>& seconds_b, const std::vector<double>& errors_b);
+
+/// median(b) / median(a), with a 95 % interval from 2000 bootstrap resamples of both (fixed
+/// seed): a throughput ratio (samples per second of B against A). NaN bounds with fewer than 3
+/// values on either side.
+Ratio median_ratio(const std::vector<double>& a, const std::vector<double>& b);
+/// The median (NaN when empty).
+double median(std::vector<double> v);
 
 /// The 97.5 % quantile of Student's t with `dof` degrees of freedom (a two-sided 95 % interval).
 double student_t975(int dof);

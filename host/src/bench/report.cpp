@@ -54,9 +54,20 @@ void write_atomically(const fs::path& path, const std::string& text) {
     io::detail::commit_file(tmp, path.string());
 }
 
+// The experiment's <metric> of a run (a results.csv column).
+double metric_of(const Experiment& e, const RunRow& r) {
+    if (e.metric == "pixel_relmse") return r.pixel_rel_mse;
+    if (e.metric == "frame_relmse") return r.frame_rel_mse;
+    for (size_t i = 0; i < e.windows.size(); ++i)
+        if (e.metric == "window:" + e.windows[i].name) return r.windows[i];
+    for (size_t i = 0; i < e.pixels.size(); ++i)
+        if (e.metric == "pixel:" + e.pixels[i].name) return r.pixels[i];
+    return r.rel_mse;
+}
+
 struct Series {
-    std::vector<double> seconds, errors;
-    std::vector<double> ray_rates;  // rays per second of each run
+    std::vector<double> seconds, samples, errors;
+    std::vector<double> ray_rates, sample_rates, cores_used, peak_mb;
     std::map<std::string, std::vector<double>> by_budget;
 };
 
@@ -67,51 +78,82 @@ std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
     std::vector<std::pair<std::string, Series>> out;
     for (const Variant& v : e.variants) {
         Series s;
-        for (const RunRow& r : rows)
-            if (r.scene == scene && r.variant == v.name) {
-                s.seconds.push_back(r.seconds);
-                s.errors.push_back(r.rel_mse);
-                if (r.seconds > 0) s.ray_rates.push_back(double(r.rays) / r.seconds);
-                s.by_budget[r.budget].push_back(r.rel_mse);
-            }
+        for (const RunRow& r : rows) {
+            if (r.scene != scene || r.variant != v.name) continue;
+            s.seconds.push_back(r.seconds);
+            s.samples.push_back(double(r.samples));
+            s.errors.push_back(metric_of(e, r));
+            if (r.seconds > 0) s.ray_rates.push_back(double(r.rays) / r.seconds);
+            if (r.seconds > 0) s.sample_rates.push_back(double(r.samples) / r.seconds);
+            if (std::isfinite(r.cores_used)) s.cores_used.push_back(r.cores_used);
+            if (std::isfinite(r.peak_mb)) s.peak_mb.push_back(r.peak_mb);
+            s.by_budget[r.budget].push_back(metric_of(e, r));
+        }
         out.emplace_back(v.name, std::move(s));
     }
     return out;
 }
 
-double median(std::vector<double> v) {
-    if (v.empty()) return NAN;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.3g}", v) : "–"; }
+
+std::string ratio_text(const Ratio& r) {
+    return fmt::format("{} [{}, {}]", g(r.value), g(r.lo), g(r.hi));
 }
 
-std::string g(double v) { return std::isfinite(v) ? fmt::format("{:.3g}", v) : "–"; }
+// The columns every table has: throughput against the first variant, rays, cores and memory.
+std::string throughput_header(const Experiment& e) {
+    return fmt::format(" samples/s vs `{}` (95 %) | median Mrays/s | median cores used |{}",
+                       e.variants.front().name, e.child_processes ? " median peak MB |" : "");
+}
+
+std::string throughput_cells(const Experiment& e, const Series& base, const Series& s) {
+    return fmt::format(" {} | {} | {} |{}",
+                       ratio_text(median_ratio(base.sample_rates, s.sample_rates)),
+                       g(median(s.ray_rates) * 1e-6), g(median(s.cores_used)),
+                       e.child_processes ? " " + g(median(s.peak_mb)) + " |" : "");
+}
+
+// A study without a reference: throughput and memory only.
+std::string throughput_section(const Experiment& e,
+                               const std::vector<std::pair<std::string, Series>>& series) {
+    std::string md = "| variant | runs | median samples/s |" + throughput_header(e) +
+                     "\n|---|---|---|---|---|---|";
+    md += e.child_processes ? "---|\n" : "\n";
+    for (const auto& [name, s] : series)
+        md += fmt::format("| {} | {} | {} |", name, s.seconds.size(), g(median(s.sample_rates))) +
+              throughput_cells(e, series.front().second, s) + "\n";
+    return md + "\n";
+}
 
 std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
                           const SceneSpec& scene) {
     const auto series = series_of(e, rows, scene.name);
-    const std::vector<std::string> budgets = e.budget_labels();
     std::string md = fmt::format("## {}\n\n`{}`\n\n", scene.name, scene.file);
+    if (!e.has_reference()) return md + throughput_section(e, series);
+    const std::vector<std::string> budgets = e.budget_labels();
+    const std::string& base_name = e.variants.front().name;
     md += fmt::format(
-        "| variant | runs | slope of relMSE vs time (95 %) | time to equal error vs "
-        "`{}` (95 %) | median Mrays/s |",
-        e.variants.front().name);
+        "| variant | runs | slope of {0} vs time (95 %) | time to equal {0} vs `{1}` (95 %) | "
+        "samples to equal {0} vs `{1}` (95 %) |{2}",
+        e.metric, base_name, throughput_header(e));
     for (const std::string& b : budgets)
-        md += fmt::format(" median relMSE @ {}{} |", b, e.timed() ? " s" : " spp");
-    md += "\n|---|---|---|---|---|";
-    for (size_t i = 0; i < budgets.size(); ++i) md += "---|";
+        md += fmt::format(" median {} @ {}{} |", e.metric, b, e.timed() ? " s" : " spp");
+    md += "\n|---|---|---|---|---|---|---|---|";
+    for (size_t i = 0; i < budgets.size() + (e.child_processes ? 1 : 0); ++i) md += "---|";
     md += "\n";
     const Series& base = series.front().second;
     for (const auto& [name, s] : series) {
         // One budget leaves only timing noise along the time axis: no slope, no ratio.
         const bool fits = budgets.size() >= 2;
         const Fit f = fits ? fit_log_log(s.seconds, s.errors) : Fit{NAN, NAN, NAN, 0};
-        const Ratio r = fits ? equal_error_ratio(base.seconds, base.errors, s.seconds, s.errors)
-                             : Ratio{NAN, NAN, NAN};
-        md += fmt::format("| {} | {} ({} fitted) | {} ± {} | {} [{}, {}] | {} |", name,
-                          s.seconds.size(), f.n, g(f.slope), g(f.slope_ci95), g(r.value), g(r.lo),
-                          g(r.hi), g(median(s.ray_rates) * 1e-6));
+        const Ratio none{NAN, NAN, NAN};
+        const Ratio time =
+            fits ? equal_error_ratio(base.seconds, base.errors, s.seconds, s.errors) : none;
+        const Ratio samples =
+            fits ? equal_error_ratio(base.samples, base.errors, s.samples, s.errors) : none;
+        md += fmt::format("| {} | {} ({} fitted) | {} ± {} | {} | {} |", name, s.seconds.size(),
+                          f.n, g(f.slope), g(f.slope_ci95), ratio_text(time), ratio_text(samples)) +
+              throughput_cells(e, base, s);
         for (const std::string& b : budgets) {
             auto it = s.by_budget.find(b);
             md += " " + (it == s.by_budget.end() ? std::string("–") : g(median(it->second))) + " |";
@@ -139,8 +181,8 @@ std::string svg_panel(const Experiment& e, const std::vector<RunRow>& rows, cons
                 y_hi = std::max(y_hi, std::log10(s.errors[i]));
             }
     std::string out = fmt::format(
-        "<text x=\"70\" y=\"{}\" font-size=\"14\">{}: relMSE against render seconds</text>\n",
-        y0 + 20, scene.name);
+        "<text x=\"70\" y=\"{}\" font-size=\"14\">{}: {} against render seconds</text>\n", y0 + 20,
+        scene.name, e.metric);
     if (!(x_hi >= x_lo))
         return out + fmt::format("<text x=\"70\" y=\"{}\">no runs</text>\n", y0 + 60);
     x_lo = std::floor(x_lo), x_hi = std::max(x_lo + 1, std::ceil(x_hi));
@@ -219,16 +261,23 @@ void write_report(const Experiment& e, const std::vector<RunRow>& rows, const Ma
     std::string md = fmt::format("# {}\n\n", e.name);
     md += fmt::format(
         "Experiment `{}` (digest {}), femto {}. Machine: {}, {} cores, {} threads; {}; load "
-        "average {} before, {} after the last session's runs. Error: relMSE of the whole cube "
-        "(docs/bench.md); time: the render alone, wall clock.\n\n",
+        "average {} before, {} after the last session's runs. {}; time: the render alone, wall "
+        "clock; samples: camera samples (spp x pixels); cores used: the render's CPU time over "
+        "its wall clock{}.\n\n",
         e.file, e.digest, machine.femto_version, machine.cpu, machine.cores,
         machine.threads > 0 ? std::to_string(machine.threads) : std::string("all"), machine.date,
-        machine.load_before, machine.load_after);
+        machine.load_before, machine.load_after,
+        e.has_reference() ? fmt::format("Error: `{}` (docs/bench.md)", e.metric)
+                          : std::string("No reference: throughput only"),
+        e.child_processes ? "; peak MB: each run's child process's peak resident memory "
+                            "(loading, rendering and writing the film's outputs)"
+                          : "");
     for (const SceneSpec& scene : e.scenes) md += scene_section(e, rows, scene);
-    md +=
-        "Rows: `results.csv` (one per run), per-frame errors: `frames.csv`, plot: "
-        "`plot.svg`.\n";
+    md += e.has_reference() ? "Rows: `results.csv` (one per run), per-frame errors: `frames.csv`, "
+                              "plot: `plot.svg`.\n"
+                            : "Rows: `results.csv` (one per run).\n";
     write_atomically(dir / "report.md", md);
+    if (!e.has_reference()) return;  // no errors to plot
 
     const double panel = 330;
     std::string svg = fmt::format(

@@ -3,11 +3,15 @@
 #include "bench/runner.h"
 
 #include <fmt/format.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -122,8 +126,25 @@ std::string reference_key(const Experiment& e, const SceneSpec& scene,
 struct Rendered {
     Cube cube;
     RenderStats stats;
-    bool stopped = false;  // by the user: the run does not count
+    double cpu_seconds = NAN;  // process CPU time during the render
+    double peak_mb = NAN;      // a child process's peak resident memory
+    bool stopped = false;      // by the user: the run does not count
 };
+
+// This process's peak resident memory so far (VmHWM), in MB; NaN where /proc does not say.
+double peak_resident_mb() {
+    std::ifstream status("/proc/self/status");
+    for (std::string line; std::getline(status, line);)
+        if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
+    return NAN;
+}
+
+double cpu_seconds_now() {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+           1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
 
 // Renders `lo`'s scene with `seed` at `spp` samples per pixel. Ctrl-C stops it at once (the
 // run is then discarded: a render stopped within a pass has pixels with fewer samples).
@@ -157,12 +178,14 @@ Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t see
         watcher.join();
     };
     Rendered r;
+    const double cpu_before = cpu_seconds_now();
     try {
         r.stats = render(*scene, ro);
     } catch (...) {
         finish_watcher();
         throw;
     }
+    r.cpu_seconds = cpu_seconds_now() - cpu_before;
     finish_watcher();
     r.stopped = r.stats.interrupted || (options.stop && options.stop->load());
     if (!r.stopped && measure) r.cube = film_cube(*scene, ro, r.stats, scratch);
@@ -184,11 +207,77 @@ uint32_t spp_for_seconds(const std::string& file, const LoadOptions& lo, uint64_
     return uint32_t(std::clamp(std::floor(seconds / per_sample), 1.0, double(1u << 30)));
 }
 
-constexpr size_t kFixedColumns = 11;  // the columns before the windows
+// ---- runs in child processes ------------------------------------------------------------------
+
+// Renders one run as `femto bench-run` in a child process: its peak memory is then its own,
+// not this process's history. The child reads it itself (VmHWM): wait4's ru_maxrss would not
+// do, since Linux carries the spawning process's peak over into the child's at exec. The child
+// writes the cube and its stats into `scratch`; Ctrl-C reaches it directly (same process group),
+// SIGTERM is forwarded.
+Rendered render_in_child(const std::string& file, const LoadOptions& lo, uint64_t seed,
+                         uint32_t spp, int threads, const RunnerOptions& options,
+                         const fs::path& scratch) {
+    if (options.executable.empty())
+        throw SceneError("<isolation value=\"process\"/>: the femto program to run is not known");
+    fs::create_directories(scratch);
+    const std::string stem = (scratch / "child").string();
+    std::vector<std::string> args{options.executable,
+                                  "bench-run",
+                                  "--scene",
+                                  file,
+                                  "--out",
+                                  stem,
+                                  "--seed",
+                                  std::to_string(seed),
+                                  "--spp",
+                                  std::to_string(spp),
+                                  "--threads",
+                                  std::to_string(threads)};
+    for (const auto& [k, v] : lo.defines) args.insert(args.end(), {"-D", k + "=" + v});
+    for (const std::string& d : lo.plugin_dirs) args.insert(args.end(), {"--plugin-dir", d});
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    if (posix_spawn(&pid, options.executable.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
+        throw SceneError(
+            fmt::format("cannot run \"{}\" for a run in a child process", options.executable));
+    int status = 0;
+    bool forwarded = false;
+    while (waitpid(pid, &status, WNOHANG) != pid) {
+        if (options.stop && options.stop->load() && !forwarded)
+            kill(pid, SIGTERM), forwarded = true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    Rendered r;
+    r.stopped =
+        (options.stop && options.stop->load()) || (WIFEXITED(status) && WEXITSTATUS(status) == 130);
+    if (r.stopped) return fs::remove_all(scratch), r;
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        throw SceneError(fmt::format(
+            "a run in a child process ({} bench-run --scene {} --seed {} --spp {}) failed with {} "
+            "{}; its message is above",
+            options.executable, file, seed, spp, WIFEXITED(status) ? "exit code" : "signal",
+            WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status)));
+    std::ifstream stats(stem + ".stats");
+    stats >> r.stats.seconds >> r.stats.rays >> r.stats.spp_done >> r.stats.camera_samples >>
+        r.cpu_seconds >> r.cube.start >> r.cube.bin_width >> r.peak_mb;
+    std::vector<size_t> shape;
+    r.cube.data = io::read_npy(stem + ".npy", shape);
+    if (!stats || shape.size() != 4)
+        throw SceneError(fmt::format("a run in a child process left no readable result in {}",
+                                     scratch.string()));
+    r.cube.H = shape[0], r.cube.W = shape[1], r.cube.T = shape[2], r.cube.C = shape[3];
+    fs::remove_all(scratch);
+    return r;
+}
+
+constexpr size_t kFixedColumns = 15;  // the columns before the windows
 
 std::string csv_header(const Experiment& e) {
     std::string h =
-        "scene,variant,budget,seed,spp,seconds,rays,relmse,pixel_relmse,energy,relmse_raw";
+        "scene,variant,budget,seed,spp,samples,seconds,cores_used,rays,peak_mb,relmse,pixel_"
+        "relmse,frame_relmse,energy,relmse_raw";
     for (const Window& w : e.windows) h += ",window:" + w.name;
     for (const PixelSpec& p : e.pixels) h += ",pixel:" + p.name;
     return h;
@@ -202,9 +291,10 @@ void append_row(const fs::path& csv, const Experiment& e, const RunRow& r) {
     std::ostringstream line;
     if (!fs::exists(csv) || fs::file_size(csv) == 0) line << csv_header(e) << "\n";
     line << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << r.spp << ","
-         << number_text(r.seconds) << "," << r.rays << "," << number_text(r.rel_mse) << ","
-         << number_text(r.pixel_rel_mse) << "," << number_text(r.energy) << ","
-         << number_text(r.rel_mse_raw);
+         << r.samples << "," << number_text(r.seconds) << "," << number_text(r.cores_used) << ","
+         << r.rays << "," << number_text(r.peak_mb) << "," << number_text(r.rel_mse) << ","
+         << number_text(r.pixel_rel_mse) << "," << number_text(r.frame_rel_mse) << ","
+         << number_text(r.energy) << "," << number_text(r.rel_mse_raw);
     for (double w : r.windows) line << "," << number_text(w);
     for (double p : r.pixels) line << "," << number_text(p);
     line << "\n";
@@ -268,8 +358,9 @@ void write_reference_profiles(const Experiment& e, const SceneSpec& scene, const
 std::vector<std::string> reference_keys(const Experiment& e, const RunnerOptions& options) {
     std::vector<std::string> keys;
     for (const SceneSpec& scene : e.scenes)
-        keys.push_back(e.reference.file.empty() ? reference_key(e, scene, options)
-                                                : digest_hex(read_bytes(e.reference.file)));
+        keys.push_back(!e.has_reference()         ? std::string("none")
+                       : e.reference.file.empty() ? reference_key(e, scene, options)
+                                                  : digest_hex(read_bytes(e.reference.file)));
     return keys;
 }
 
@@ -349,6 +440,67 @@ std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
     return r;
 }
 
+// A finished run's row: what it measured, and its errors against `reference` (none without
+// one).
+RunRow measured_row(const Experiment& e, const SceneSpec& scene, const Variant& v,
+                    const std::string& budget, uint64_t seed, const Rendered& r,
+                    const Cube* reference) {
+    RunRow row;
+    row.scene = scene.name, row.variant = v.name, row.budget = budget, row.seed = seed;
+    row.spp = r.stats.spp_done, row.samples = r.stats.camera_samples;
+    row.seconds = r.stats.seconds, row.rays = r.stats.rays, row.peak_mb = r.peak_mb;
+    row.cores_used = r.stats.seconds > 0 ? r.cpu_seconds / r.stats.seconds : NAN;
+    row.rel_mse = row.pixel_rel_mse = row.frame_rel_mse = row.energy = row.rel_mse_raw = NAN;
+    if (!reference) return row;
+    try {
+        check_same_shape(r.cube, *reference);
+    } catch (const std::runtime_error& err) {
+        throw SceneError(v.location, fmt::format("variant \"{}\" on scene \"{}\": {}; a variant "
+                                                 "must keep the film's size and bins",
+                                                 v.name, scene.name, err.what()));
+    }
+    const Cube& ref = *reference;
+    row.rel_mse = rel_mse(r.cube, ref);
+    row.rel_mse_raw = rel_mse(r.cube, without_variance(ref));
+    row.pixel_rel_mse = pixel_rel_mse(r.cube, ref, -INFINITY, INFINITY);
+    row.frame_rel_mse = resolved_frame_rel_mse(r.cube, ref);
+    row.energy = energy_error(r.cube, ref);
+    for (const Window& w : e.windows) row.windows.push_back(rel_mse(r.cube, ref, w.start, w.end));
+    for (const PixelSpec& p : e.pixels)
+        row.pixels.push_back(pixel_profile_rel_mse(r.cube, ref, p.x, p.y));
+    return row;
+}
+
+// Renders one run of a study (in this process or a child) at its budget; stopped when the
+// user stopped it.
+Rendered render_budget(const Experiment& e, const SceneSpec& scene, const Variant& v, size_t budget,
+                       uint64_t seed, int threads, const RunnerOptions& options,
+                       const fs::path& dir) {
+    const LoadOptions lo = load_options(scene, v, options);
+    const uint32_t spp = e.timed() ? spp_for_seconds(scene.file, lo, seed, e.time_budgets[budget],
+                                                     threads, options, dir / "scratch")
+                                   : e.spp_budgets[budget];
+    if (spp == 0) {
+        Rendered stopped;
+        stopped.stopped = true;
+        return stopped;
+    }
+    if (e.child_processes)
+        return render_in_child(scene.file, lo, seed, spp, threads, options, dir / "scratch");
+    return render_run(scene.file, lo, seed, spp, threads, options, dir / "scratch",
+                      e.has_reference());
+}
+
+void print_progress(size_t index, size_t total, const RunRow& row) {
+    const std::string measured =
+        std::isfinite(row.rel_mse)
+            ? fmt::format("relMSE {:.4g}", row.rel_mse)
+            : fmt::format("{:.4g} samples/s", double(row.samples) / std::max(row.seconds, 1e-9));
+    fmt::print(stderr, "[{}/{}] {} {} budget {} seed {}: {} in {:.2f} s{}\n", index, total,
+               row.scene, row.variant, row.budget, row.seed, measured, row.seconds,
+               std::isfinite(row.peak_mb) ? fmt::format(", peak {:.0f} MB", row.peak_mb) : "");
+}
+
 }  // namespace
 
 std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& e) {
@@ -389,9 +541,11 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
         try {
             r.scene = f[0], r.variant = f[1], r.budget = f[2];
             r.seed = std::stoull(f[3]), r.spp = uint32_t(std::stoul(f[4]));
-            r.seconds = std::stod(f[5]), r.rays = std::stoull(f[6]);
-            r.rel_mse = std::stod(f[7]), r.pixel_rel_mse = std::stod(f[8]),
-            r.energy = std::stod(f[9]), r.rel_mse_raw = std::stod(f[10]);
+            r.samples = std::stoull(f[5]), r.seconds = std::stod(f[6]);
+            r.cores_used = std::stod(f[7]), r.rays = std::stoull(f[8]);
+            r.peak_mb = std::stod(f[9]), r.rel_mse = std::stod(f[10]);
+            r.pixel_rel_mse = std::stod(f[11]), r.frame_rel_mse = std::stod(f[12]);
+            r.energy = std::stod(f[13]), r.rel_mse_raw = std::stod(f[14]);
             for (size_t k = kFixedColumns; k < f.size(); ++k)
                 (k < kFixedColumns + e.windows.size() ? r.windows : r.pixels)
                     .push_back(std::stod(f[k]));
@@ -422,76 +576,63 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
     bool stopped = false;
     for (size_t s = 0; s < e.scenes.size() && !stopped; ++s) {
         const SceneSpec& scene = e.scenes[s];
-        const std::optional<Cube> found = reference_cube(e, scene, keys[s], options, threads, dir);
-        if (!found) {
-            stopped = true;
-            break;
+        std::optional<Cube> reference;
+        if (e.has_reference()) {
+            reference = reference_cube(e, scene, keys[s], options, threads, dir);
+            stopped = !reference;
+            if (stopped) break;
+            write_reference_profiles(e, scene, *reference, dir);
         }
-        const Cube& reference = *found;
-        write_reference_profiles(e, scene, reference, dir);
         for (size_t b = 0; b < labels.size() && !stopped; ++b)
-            for (uint64_t seed : e.seeds) {
+            for (size_t k = 0; k < e.seeds.size() * e.variants.size() && !stopped; ++k) {
+                // interleaved: for each seed, A B A B ...
+                const uint64_t seed = e.seeds[k / e.variants.size()];
+                const Variant& v = e.variants[k % e.variants.size()];
+                ++index;
+                if (done.count(key(scene.name, v.name, labels[b], seed))) continue;
+                stopped = options.stop && options.stop->load();
                 if (stopped) break;
-                for (const Variant& v : e.variants) {  // interleaved: A B A B ...
-                    ++index;
-                    if (done.count(key(scene.name, v.name, labels[b], seed))) continue;
-                    if (options.stop && options.stop->load()) {
-                        stopped = true;
-                        break;
-                    }
-                    const LoadOptions lo = load_options(scene, v, options);
-                    const uint32_t spp =
-                        e.timed() ? spp_for_seconds(scene.file, lo, seed, e.time_budgets[b],
-                                                    threads, options, dir / "scratch")
-                                  : e.spp_budgets[b];
-                    if (spp == 0) {
-                        stopped = true;
-                        break;
-                    }
-                    Rendered r =
-                        render_run(scene.file, lo, seed, spp, threads, options, dir / "scratch");
-                    if (r.stopped) {
-                        stopped = true;
-                        break;
-                    }
-                    RunRow row;
-                    row.scene = scene.name, row.variant = v.name, row.budget = labels[b];
-                    row.seed = seed, row.spp = r.stats.spp_done;
-                    row.seconds = r.stats.seconds, row.rays = r.stats.rays;
-                    try {
-                        check_same_shape(r.cube, reference);
-                    } catch (const std::runtime_error& err) {
-                        throw SceneError(v.location,
-                                         fmt::format("variant \"{}\" on scene \"{}\": {}; a "
-                                                     "variant must keep the film's size and bins",
-                                                     v.name, scene.name, err.what()));
-                    }
-                    row.rel_mse = rel_mse(r.cube, reference);
-                    row.rel_mse_raw = rel_mse(r.cube, without_variance(reference));
-                    row.pixel_rel_mse = pixel_rel_mse(r.cube, reference, -INFINITY, INFINITY);
-                    row.energy = energy_error(r.cube, reference);
-                    for (const Window& w : e.windows)
-                        row.windows.push_back(rel_mse(r.cube, reference, w.start, w.end));
-                    for (const PixelSpec& p : e.pixels)
-                        row.pixels.push_back(pixel_profile_rel_mse(r.cube, reference, p.x, p.y));
-                    // The row first: the run counts as done once it is there, and the per-frame
-                    // and per-pixel files follow it (a kill between leaves them short, never
-                    // doubled by the re-run).
-                    append_row(csv, e, row);
-                    append_frames(dir / "frames.csv", row, frame_rel_mse(r.cube, reference));
+                const Rendered r = render_budget(e, scene, v, b, seed, threads, options, dir);
+                stopped = r.stopped;
+                if (stopped) break;
+                RunRow row = measured_row(e, scene, v, labels[b], seed, r,
+                                          reference ? &*reference : nullptr);
+                // The row first: the run counts as done once it is there, and the per-frame and
+                // per-pixel files follow it (a kill between leaves them short, never doubled by
+                // the re-run).
+                append_row(csv, e, row);
+                if (reference) {
+                    append_frames(dir / "frames.csv", row, frame_rel_mse(r.cube, *reference));
                     for (const PixelSpec& p : e.pixels)
                         append_profile(dir / "profiles.csv", row, p, r.cube);
-                    if (options.progress)
-                        fmt::print(stderr,
-                                   "[{}/{}] {} {} budget {} seed {}: relMSE {:.4g} in {:.2f} s\n",
-                                   index, total, scene.name, v.name, labels[b], seed, row.rel_mse,
-                                   row.seconds);
-                    rows.push_back(std::move(row));
                 }
+                if (options.progress) print_progress(index, total, row);
+                rows.push_back(std::move(row));
             }
     }
     write_report(e, rows, machine.finish(), dir);
     return !stopped;
+}
+
+bool run_child(const ChildRun& run, const std::atomic<bool>* stop) {
+    LoadOptions lo;
+    lo.defines = run.defines;
+    lo.plugin_dirs = run.plugin_dirs;
+    RunnerOptions options;
+    options.stop = stop;
+    const fs::path stem(run.out_stem);
+    const Rendered r = render_run(run.scene_file, lo, run.seed, run.spp, run.threads, options,
+                                  stem.string() + "-film");
+    if (r.stopped) return false;
+    io::write_npy(stem.string() + ".npy", {r.cube.H, r.cube.W, r.cube.T, r.cube.C},
+                  r.cube.data.data());
+    std::ofstream out(stem.string() + ".stats");
+    out << fmt::format("{:.17g} {} {} {} {:.17g} {:.17g} {:.17g} {:.17g}\n", r.stats.seconds,
+                       r.stats.rays, r.stats.spp_done, r.stats.camera_samples, r.cpu_seconds,
+                       r.cube.start, r.cube.bin_width, peak_resident_mb());
+    out.close();
+    if (!out) throw SceneError(fmt::format("cannot write \"{}.stats\"", stem.string()));
+    return true;
 }
 
 }  // namespace femto::bench
