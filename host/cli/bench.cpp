@@ -71,9 +71,9 @@ int run_bench_command(const std::atomic<bool>& stop) {
         throw SceneError(err.what());
     }
     if (!g_args.quiet)
-        fmt::print(stderr, "{}: {}/report.md, results.csv, frames.csv, plot.svg\n",
+        fmt::print(stderr, "{}: {}/report.md, results.csv{}\n",
                    complete ? "done" : "stopped (the finished runs are kept; run again to resume)",
-                   options.out_dir);
+                   options.out_dir, e.has_reference() ? ", frames.csv, plot.svg" : "");
     return complete ? 0 : 130;
 }
 

@@ -143,7 +143,8 @@ bad_output_folder)
   true;;
 bad_far_scene)
   # A camera at 2e18 made Embree abort (exit 134); beyond 1e9 scene units femto refuses.
-  sed 's|<lookat origin="0, 0, 3.9"|<translate x="2e18"/><lookat origin="0, 0, 3.9"|' "$scene" > far.xml
+  sed -e 's|<lookat origin="0, 0, 3.9"|<translate x="2e18"/><lookat origin="0, 0, 3.9"|' \
+      -e "s|filename=\"room.xml\"|filename=\"$(dirname "$scene")/room.xml\"|" "$scene" > far.xml
   expect_exit 2 'far\.xml:[0-9]+:[0-9]+: "perspective": to_world.s origin lies at \(-?2e\+18, 0, 3\.9\), beyond femto.s limit' -- "$femto" render far.xml -o out/far -q
   [ ! -e out/far.exr ] || fail "output written";;
 bad_texture)

@@ -27,6 +27,22 @@ inline std::string read_text(const std::string& path) {
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
+// The text of a shipped scene, to be changed and loaded from a string, with each file it
+// includes written in place (the children of its <scene>), as one self-contained text.
+inline std::string shipped_scene_text(const std::string& scene) {
+    std::string xml = read_text(kScenes + scene + "/scene.xml");
+    const std::string open = "<include filename=\"";
+    for (size_t at = xml.find(open); at != std::string::npos; at = xml.find(open, at)) {
+        const size_t name_end = xml.find('"', at + open.size());
+        const size_t end = xml.find("/>", name_end) + 2;
+        const std::string file = xml.substr(at + open.size(), name_end - at - open.size());
+        const std::string text = read_text(kScenes + scene + "/" + file);
+        const size_t body = text.find('>', text.find("<scene")) + 1;
+        xml.replace(at, end - at, text.substr(body, text.rfind("</scene>") - body));
+    }
+    return xml;
+}
+
 // Replaces the first element from `open` up to and including `close`.
 inline std::string replace_element(const std::string& xml, const std::string& open,
                                    const std::string& close, const std::string& with) {
@@ -45,7 +61,7 @@ inline std::string with_integrator(const std::string& scene, const std::string& 
         integrator += "<integer name=\"max_depth\" value=\"" + std::to_string(max_depth) + "\"/>";
     if (hide_emitters) integrator += "<boolean name=\"hide_emitters\" value=\"true\"/>";
     integrator += "</integrator>";
-    std::string xml = read_text(kScenes + scene + "/scene.xml");
+    std::string xml = shipped_scene_text(scene);
     xml = replace_element(xml, "<integrator", "</integrator>", integrator);
     if (scene == "tof-plane")  // the same view through a pinhole: [-2, 2]^2 at distance 5
         xml = replace_element(xml, "<sensor type=\"orthographic\">", "</transform>",

@@ -22,7 +22,7 @@ namespace {
 
 // The Cornell box with strategy images; `steady`: into a 16x16 hdrfilm with a box filter.
 std::string cornell_with_images(int max_depth, bool steady = true) {
-    std::string xml = read_text(kScenes + "cornell-box/scene.xml");
+    std::string xml = shipped_scene_text("cornell-box");
     xml = replace_element(xml, "<integrator", "</integrator>",
                           "<integrator type=\"transient_bdpt\"><integer name=\"max_depth\" "
                           "value=\"" +

@@ -84,18 +84,20 @@ TEST(BenchMeasures, FormulasOnAHandComputedCube) {
     EXPECT_TRUE(std::isnan(resolved_frame_rel_mse(x, unresolved)));
 }
 
-TEST(BenchMeasures, MedianRatioOfAConstantRateIsExact) {
-    // b runs at exactly twice a's rate in every run: every resample gives 2.
-    const Ratio r = median_ratio({3, 3, 3, 3}, {6, 6, 6});
+TEST(BenchMeasures, PairedThroughputRatio) {
+    // b runs at exactly twice a's rate in every pair, whatever the machine's drift: every
+    // resample gives 2.
+    const Ratio r = paired_median_ratio({1, 2, 3, 4, 5}, {2, 4, 6, 8, 10});
     EXPECT_DOUBLE_EQ(r.value, 2.0);
     EXPECT_DOUBLE_EQ(r.lo, 2.0);
     EXPECT_DOUBLE_EQ(r.hi, 2.0);
-    // Spread rates: the interval holds the ratio of medians, and too few runs give none.
-    const Ratio spread = median_ratio({1, 2, 3, 4, 5}, {2, 4, 6, 8, 10});
+    // Ratios 1, 2, 3: their median, inside an interval within the ratios' range.
+    const Ratio spread = paired_median_ratio({1, 1, 1}, {3, 1, 2});
     EXPECT_DOUBLE_EQ(spread.value, 2.0);
-    EXPECT_LE(spread.lo, 2.0);
-    EXPECT_GE(spread.hi, 2.0);
-    EXPECT_TRUE(std::isnan(median_ratio({1, 2}, {1, 2, 3}).lo));
+    EXPECT_GE(spread.lo, 1.0);
+    EXPECT_LE(spread.hi, 3.0);
+    EXPECT_LT(spread.lo, spread.hi);
+    EXPECT_TRUE(std::isnan(paired_median_ratio({1, 2}, {1, 2}).lo));  // too few pairs
     EXPECT_DOUBLE_EQ(median({4, 1, 3, 2}), 2.5);
 }
 
@@ -166,6 +168,8 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
          ":5:1: <window> and <pixel> measure errors: they need a <reference>"},
         {head + rest + "<metric name=\"window:late\"/>\n</experiment>",
          ":6:1: <metric> name \"window:late\": valid: relmse, pixel_relmse, frame_relmse"},
+        {head + rest + "<metric name=\"relmse\"/>\n<metric name=\"relmse\"/>\n</experiment>",
+         ":7:1: <metric> \"relmse\" is named twice"},
         {head + rest + "<isolation value=\"fork\"/>\n</experiment>",
          ":6:1: <isolation> value \"fork\": valid: none"},
         {head + "<variant name=\"a\"/>\n<budgets spp=\"1\"/>\n<reference variant=\"b\" "
@@ -220,7 +224,8 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
         "<variant name=\"path\"/><variant name=\"bdpt\"><define name=\"integrator\" "
         "value=\"transient_bdpt\"/></variant><budgets spp=\"2 8\"/><seeds count=\"2\"/>"
         "<reference variant=\"path\" spp=\"64\"/><window name=\"early\" start=\"3\" end=\"5\"/>"
-        "<pixel name=\"centre\" x=\"4\" y=\"4\"/><metric name=\"pixel:centre\"/>"
+        "<pixel name=\"centre\" x=\"4\" y=\"4\"/><metric name=\"pixel:centre\"/><metric "
+        "name=\"frame_relmse\"/>"
         "<threads value=\"1\"/></experiment>";
     write(dir / "e.xml", experiment);
     const Experiment e = load_experiment((dir / "e.xml").string());
@@ -255,8 +260,11 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     const std::string report((std::istreambuf_iterator<char>(report_file)),
                              std::istreambuf_iterator<char>());
     EXPECT_NE(report.find("| median Mrays/s |"), std::string::npos) << report;
-    // The <metric> is what the slopes, ratios and medians use.
-    EXPECT_NE(report.find("| slope of pixel:centre vs time (95 %) |"), std::string::npos) << report;
+    // Each <metric> is fitted in its own table.
+    for (const char* table :
+         {"### pixel:centre\n\n| variant | runs | slope of pixel:centre vs time",
+          "### frame_relmse\n\n| variant | runs | slope of frame_relmse vs time"})
+        EXPECT_NE(report.find(table), std::string::npos) << table << "\n" << report;
     for (const char* row : {"| path | 4 (4 fitted) | ", "| bdpt | 4 (4 fitted) | "})
         EXPECT_NE(report.find(row), std::string::npos) << row << "\n" << report;
     int cached = 0;  // the reference's two halves: their mean and its variance

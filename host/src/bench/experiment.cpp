@@ -245,10 +245,12 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
             if (o.name == p.name) r.fail(c, fmt::format("two pixels are named \"{}\"", p.name));
         e.pixels.push_back(p);
     } else if (tag == "metric") {
-        if (c.previous_sibling("metric")) r.fail(c, "a second <metric>");
         r.check_attributes(c, {"name"});
         r.only_children(c, {});
-        e.metric = r.required(c, "name");
+        const std::string name = r.required(c, "name");
+        if (std::find(e.metrics.begin(), e.metrics.end(), name) != e.metrics.end())
+            r.fail(c, fmt::format("<metric> \"{}\" is named twice", name));
+        e.metrics.push_back(name);
     } else if (tag == "isolation") {
         if (c.previous_sibling("isolation")) r.fail(c, "a second <isolation>");
         r.check_attributes(c, {"value"});
@@ -272,26 +274,30 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
     }
 }
 
-// The <metric> names a measure a run has: without a reference there is none (the study then
+// Each <metric> names a measure a run has: without a reference there is none (the study then
 // measures throughput and memory), and a window or pixel must be declared.
-void check_metric(const Reader& r, const pugi::xml_node& root, const Experiment& e) {
-    const pugi::xml_node n = root.child("metric") ? root.child("metric") : root;
+void check_metrics(const Reader& r, const pugi::xml_node& root, Experiment& e) {
     if (!e.has_reference()) {
         if (root.child("metric"))
-            r.fail(n, "<metric> needs a <reference> to measure the error against");
+            r.fail(root.child("metric"),
+                   "<metric> needs a <reference> to measure the error against");
         if (!e.windows.empty() || !e.pixels.empty())
             r.fail(root.child("window") ? root.child("window") : root.child("pixel"),
                    "<window> and <pixel> measure errors: they need a <reference>");
         return;
     }
-    const std::string& m = e.metric;
-    bool known = m == "relmse" || m == "pixel_relmse" || m == "frame_relmse";
-    for (const Window& w : e.windows) known = known || m == "window:" + w.name;
-    for (const PixelSpec& p : e.pixels) known = known || m == "pixel:" + p.name;
-    if (!known)
-        r.fail(n, fmt::format("<metric> name \"{}\": valid: relmse, pixel_relmse, frame_relmse, "
-                              "window:NAME or pixel:NAME of a declared <window> or <pixel>",
-                              m));
+    if (e.metrics.empty()) e.metrics = {"relmse"};
+    for (const pugi::xml_node& n : root.children("metric")) {
+        const std::string m = n.attribute("name").value();
+        bool known = m == "relmse" || m == "pixel_relmse" || m == "frame_relmse";
+        for (const Window& w : e.windows) known = known || m == "window:" + w.name;
+        for (const PixelSpec& p : e.pixels) known = known || m == "pixel:" + p.name;
+        if (!known)
+            r.fail(n, fmt::format("<metric> name \"{}\": valid: relmse, pixel_relmse, "
+                                  "frame_relmse, window:NAME or pixel:NAME of a declared <window> "
+                                  "or <pixel>",
+                                  m));
+    }
 }
 
 }  // namespace
@@ -356,7 +362,7 @@ Experiment load_experiment(const std::string& path) {
     if (e.spp_budgets.empty() && e.time_budgets.empty())
         throw SceneError(top, "the experiment has no <budgets>");
     if (e.seeds.empty()) e.seeds = {1};
-    check_metric(r, root, e);
+    check_metrics(r, root, e);
     if (!e.reference.variant.empty() && !e.find_variant(e.reference.variant))
         throw SceneError(e.reference.location,
                          fmt::format("<reference> names variant \"{}\", which is not declared",

@@ -64,9 +64,10 @@ struct Experiment {
     ReferenceSpec reference;
     std::vector<Window> windows;
     std::vector<PixelSpec> pixels;
-    /// The error the slopes, ratios, plot and medians use: "relmse" (default), "pixel_relmse",
-    /// "frame_relmse", "window:NAME" or "pixel:NAME" (a results.csv column).
-    std::string metric = "relmse";
+    /// The errors the report fits, each in its own table: "relmse" (the default when none is
+    /// given), "pixel_relmse", "frame_relmse", "window:NAME" or "pixel:NAME" (results.csv
+    /// columns). The plot shows the first.
+    std::vector<std::string> metrics;
     /// Each run in a child process (its peak memory is then measured), not in this one.
     bool child_processes = false;
     int threads = 0;  ///< 0: all cores

@@ -254,18 +254,18 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-Ratio median_ratio(const std::vector<double>& a, const std::vector<double>& b) {
-    Ratio r{median(b) / median(a), kNaN, kNaN};
-    if (a.size() < 3 || b.size() < 3) return r;
+Ratio paired_median_ratio(const std::vector<double>& a, const std::vector<double>& b) {
+    std::vector<double> ratios;
+    for (size_t i = 0; i < a.size() && i < b.size(); ++i) ratios.push_back(b[i] / a[i]);
+    Ratio r{median(ratios), kNaN, kNaN};
+    if (ratios.size() < 3) return r;
     std::mt19937_64 rng(20141201);
-    auto resampled_median = [&](const std::vector<double>& v) {
-        std::uniform_int_distribution<size_t> pick(0, v.size() - 1);
-        std::vector<double> s(v.size());
-        for (double& x : s) x = v[pick(rng)];
-        return median(std::move(s));
-    };
-    std::vector<double> samples;
-    for (int k = 0; k < 2000; ++k) samples.push_back(resampled_median(b) / resampled_median(a));
+    std::uniform_int_distribution<size_t> pick(0, ratios.size() - 1);
+    std::vector<double> samples, s(ratios.size());
+    for (int k = 0; k < 2000; ++k) {
+        for (double& x : s) x = ratios[pick(rng)];
+        samples.push_back(median(s));
+    }
     std::sort(samples.begin(), samples.end());
     r.lo = samples[size_t(0.025 * double(samples.size()))];
     r.hi = samples[size_t(0.975 * double(samples.size()))];

@@ -75,10 +75,10 @@ struct Ratio {
 Ratio equal_error_ratio(const std::vector<double>& seconds_a, const std::vector<double>& errors_a,
                         const std::vector<double>& seconds_b, const std::vector<double>& errors_b);
 
-/// median(b) / median(a), with a 95 % interval from 2000 bootstrap resamples of both (fixed
-/// seed): a throughput ratio (samples per second of B against A). NaN bounds with fewer than 3
-/// values on either side.
-Ratio median_ratio(const std::vector<double>& a, const std::vector<double>& b);
+/// The median of b_i / a_i over pairs run side by side (the same budget and seed, one after the
+/// other: a drift of the machine's speed cancels), with a 95 % interval from 2000 bootstrap
+/// resamples of the pairs (fixed seed). NaN bounds with fewer than 3 pairs.
+Ratio paired_median_ratio(const std::vector<double>& a, const std::vector<double>& b);
 /// The median (NaN when empty).
 double median(std::vector<double> v);
 

@@ -16,6 +16,7 @@
 #include "bench/measures.h"
 #include "femto/host.h"
 #include "io/atomic_file.h"
+#include "util/strings.h"
 
 namespace fs = std::filesystem;
 
@@ -54,27 +55,29 @@ void write_atomically(const fs::path& path, const std::string& text) {
     io::detail::commit_file(tmp, path.string());
 }
 
-// The experiment's <metric> of a run (a results.csv column).
-double metric_of(const Experiment& e, const RunRow& r) {
-    if (e.metric == "pixel_relmse") return r.pixel_rel_mse;
-    if (e.metric == "frame_relmse") return r.frame_rel_mse;
+// A run's error `metric` (a results.csv column named by a <metric>).
+double metric_of(const Experiment& e, const std::string& metric, const RunRow& r) {
+    if (metric == "pixel_relmse") return r.pixel_rel_mse;
+    if (metric == "frame_relmse") return r.frame_rel_mse;
     for (size_t i = 0; i < e.windows.size(); ++i)
-        if (e.metric == "window:" + e.windows[i].name) return r.windows[i];
+        if (metric == "window:" + e.windows[i].name) return r.windows[i];
     for (size_t i = 0; i < e.pixels.size(); ++i)
-        if (e.metric == "pixel:" + e.pixels[i].name) return r.pixels[i];
+        if (metric == "pixel:" + e.pixels[i].name) return r.pixels[i];
     return r.rel_mse;
 }
 
 struct Series {
     std::vector<double> seconds, samples, errors;
     std::vector<double> ray_rates, sample_rates, cores_used, peak_mb;
+    std::map<std::string, double> rate_of_run;  // samples/s by "budget seed": pairs runs
     std::map<std::string, std::vector<double>> by_budget;
 };
 
-// The runs of one scene, by variant (in the experiment's order).
+// The runs of one scene, by variant (in the experiment's order), with their error `metric`.
 std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
                                                       const std::vector<RunRow>& rows,
-                                                      const std::string& scene) {
+                                                      const std::string& scene,
+                                                      const std::string& metric) {
     std::vector<std::pair<std::string, Series>> out;
     for (const Variant& v : e.variants) {
         Series s;
@@ -82,12 +85,15 @@ std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
             if (r.scene != scene || r.variant != v.name) continue;
             s.seconds.push_back(r.seconds);
             s.samples.push_back(double(r.samples));
-            s.errors.push_back(metric_of(e, r));
+            s.errors.push_back(metric_of(e, metric, r));
             if (r.seconds > 0) s.ray_rates.push_back(double(r.rays) / r.seconds);
             if (r.seconds > 0) s.sample_rates.push_back(double(r.samples) / r.seconds);
+            if (r.seconds > 0)
+                s.rate_of_run[r.budget + " " + std::to_string(r.seed)] =
+                    double(r.samples) / r.seconds;
             if (std::isfinite(r.cores_used)) s.cores_used.push_back(r.cores_used);
             if (std::isfinite(r.peak_mb)) s.peak_mb.push_back(r.peak_mb);
-            s.by_budget[r.budget].push_back(metric_of(e, r));
+            s.by_budget[r.budget].push_back(metric_of(e, metric, r));
         }
         out.emplace_back(v.name, std::move(s));
     }
@@ -102,13 +108,23 @@ std::string ratio_text(const Ratio& r) {
 
 // The columns every table has: throughput against the first variant, rays, cores and memory.
 std::string throughput_header(const Experiment& e) {
-    return fmt::format(" samples/s vs `{}` (95 %) | median Mrays/s | median cores used |{}",
-                       e.variants.front().name, e.child_processes ? " median peak MB |" : "");
+    return fmt::format(
+        " samples/s vs `{}`, run by run (95 %) | median Mrays/s | median cores used |{}",
+        e.variants.front().name, e.child_processes ? " median peak MB |" : "");
+}
+
+// Samples per second against the first variant's, pair by pair: the runs of one budget and
+// seed ran one after the other.
+Ratio throughput_ratio(const Series& base, const Series& s) {
+    std::vector<double> a, b;
+    for (const auto& [run, rate] : s.rate_of_run)
+        if (auto it = base.rate_of_run.find(run); it != base.rate_of_run.end())
+            a.push_back(it->second), b.push_back(rate);
+    return paired_median_ratio(a, b);
 }
 
 std::string throughput_cells(const Experiment& e, const Series& base, const Series& s) {
-    return fmt::format(" {} | {} | {} |{}",
-                       ratio_text(median_ratio(base.sample_rates, s.sample_rates)),
+    return fmt::format(" {} | {} | {} |{}", ratio_text(throughput_ratio(base, s)),
                        g(median(s.ray_rates) * 1e-6), g(median(s.cores_used)),
                        e.child_processes ? " " + g(median(s.peak_mb)) + " |" : "");
 }
@@ -125,19 +141,18 @@ std::string throughput_section(const Experiment& e,
     return md + "\n";
 }
 
-std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
-                          const SceneSpec& scene) {
-    const auto series = series_of(e, rows, scene.name);
-    std::string md = fmt::format("## {}\n\n`{}`\n\n", scene.name, scene.file);
-    if (!e.has_reference()) return md + throughput_section(e, series);
+// One scene's table for one error metric.
+std::string metric_table(const Experiment& e, const std::vector<RunRow>& rows,
+                         const SceneSpec& scene, const std::string& metric) {
+    const auto series = series_of(e, rows, scene.name, metric);
     const std::vector<std::string> budgets = e.budget_labels();
     const std::string& base_name = e.variants.front().name;
-    md += fmt::format(
+    std::string md = fmt::format(
         "| variant | runs | slope of {0} vs time (95 %) | time to equal {0} vs `{1}` (95 %) | "
         "samples to equal {0} vs `{1}` (95 %) |{2}",
-        e.metric, base_name, throughput_header(e));
+        metric, base_name, throughput_header(e));
     for (const std::string& b : budgets)
-        md += fmt::format(" median {} @ {}{} |", e.metric, b, e.timed() ? " s" : " spp");
+        md += fmt::format(" median {} @ {}{} |", metric, b, e.timed() ? " s" : " spp");
     md += "\n|---|---|---|---|---|---|---|---|";
     for (size_t i = 0; i < budgets.size() + (e.child_processes ? 1 : 0); ++i) md += "---|";
     md += "\n";
@@ -163,6 +178,17 @@ std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
     return md + "\n";
 }
 
+std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
+                          const SceneSpec& scene) {
+    std::string md = fmt::format("## {}\n\n`{}`\n\n", scene.name, scene.file);
+    if (!e.has_reference())
+        return md + throughput_section(e, series_of(e, rows, scene.name, "relmse"));
+    for (const std::string& metric : e.metrics)
+        md += (e.metrics.size() > 1 ? fmt::format("### {}\n\n", metric) : std::string()) +
+              metric_table(e, rows, scene, metric);
+    return md;
+}
+
 // ---- plot.svg --------------------------------------------------------------------------------
 
 constexpr const char* kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
@@ -170,7 +196,7 @@ constexpr const char* kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
 
 std::string svg_panel(const Experiment& e, const std::vector<RunRow>& rows, const SceneSpec& scene,
                       double y0) {
-    const auto series = series_of(e, rows, scene.name);
+    const auto series = series_of(e, rows, scene.name, e.metrics.front());
     double x_lo = INFINITY, x_hi = -INFINITY, y_lo = INFINITY, y_hi = -INFINITY;
     for (const auto& [name, s] : series)
         for (size_t i = 0; i < s.seconds.size(); ++i)
@@ -182,7 +208,7 @@ std::string svg_panel(const Experiment& e, const std::vector<RunRow>& rows, cons
             }
     std::string out = fmt::format(
         "<text x=\"70\" y=\"{}\" font-size=\"14\">{}: {} against render seconds</text>\n", y0 + 20,
-        scene.name, e.metric);
+        scene.name, e.metrics.front());
     if (!(x_hi >= x_lo))
         return out + fmt::format("<text x=\"70\" y=\"{}\">no runs</text>\n", y0 + 60);
     x_lo = std::floor(x_lo), x_hi = std::max(x_lo + 1, std::ceil(x_hi));
@@ -267,7 +293,7 @@ void write_report(const Experiment& e, const std::vector<RunRow>& rows, const Ma
         e.file, e.digest, machine.femto_version, machine.cpu, machine.cores,
         machine.threads > 0 ? std::to_string(machine.threads) : std::string("all"), machine.date,
         machine.load_before, machine.load_after,
-        e.has_reference() ? fmt::format("Error: `{}` (docs/bench.md)", e.metric)
+        e.has_reference() ? fmt::format("Errors: `{}` (docs/bench.md)", detail::join(e.metrics))
                           : std::string("No reference: throughput only"),
         e.child_processes ? "; peak MB: each run's child process's peak resident memory "
                             "(loading, rendering and writing the film's outputs)"

@@ -52,31 +52,41 @@ LoadOptions load_options(const SceneSpec& scene, const Variant& variant,
     return lo;
 }
 
-// The film's cube [H, W, T, 3] through its own writer (OUTBASE.npy) for a time-resolved film
-// with a cube; the steady image otherwise (T = 1).
-Cube film_cube(Scene& scene, const RenderOptions& ro, const RenderStats& stats,
-               const fs::path& scratch) {
+// Writes the film's result as STEM.npy and returns the cube's shape and time grid (no data): a
+// time-resolved film's cube through its own writer, with its other outputs (as `femto render
+// --npy` writes them), else the steady image as [H, W, 1, 3].
+Cube write_film_npy(Scene& scene, const RenderOptions& ro, const RenderStats& stats,
+                    const std::string& stem) {
     const Film& film = scene.sensor().film();
     Cube out;
-    out.H = size_t(film.height()), out.W = size_t(film.width()), out.C = 3;
+    out.H = size_t(film.height()), out.W = size_t(film.width()), out.T = 1, out.C = 3;
+    fs::create_directories(fs::path(stem).parent_path());
     if (const auto* trf = dynamic_cast<const TimeResolvedFilm*>(&film)) {
         out.start = trf->grid().start, out.bin_width = trf->grid().bin_width;
         RenderInfo info = make_render_info(scene, ro, stats);
         info.write_npy = true;
-        fs::create_directories(scratch);
-        film.write((scratch / "run").string(), info);
-        if (fs::exists(scratch / "run.npy")) {
-            std::vector<size_t> shape;
-            out.data = io::read_npy((scratch / "run.npy").string(), shape);
-            fs::remove_all(scratch);
-            if (shape.size() != 4) throw std::runtime_error("the film's .npy is not [H, W, T, C]");
-            out.H = shape[0], out.W = shape[1], out.T = shape[2], out.C = shape[3];
-            return out;
-        }
-        fs::remove_all(scratch);
+        film.write(stem, info);
+        if (fs::exists(stem + ".npy")) return out;
     }
-    out.data = film.steady_image();
-    out.T = 1;
+    const std::vector<float> image = film.steady_image();
+    io::write_npy(stem + ".npy", {out.H, out.W, 1, 3}, image.data());
+    return out;
+}
+
+// Reads STEM.npy as written by write_film_npy() into `c` (whose time grid it keeps).
+void read_film_npy(const std::string& stem, Cube& c) {
+    std::vector<size_t> shape;
+    c.data = io::read_npy(stem + ".npy", shape);
+    if (shape.size() != 4) throw std::runtime_error("the film's .npy is not [H, W, T, C]");
+    c.H = shape[0], c.W = shape[1], c.T = shape[2], c.C = shape[3];
+}
+
+// The film's cube [H, W, T, 3] (T = 1 for a steady film), through its own writer.
+Cube film_cube(Scene& scene, const RenderOptions& ro, const RenderStats& stats,
+               const fs::path& scratch) {
+    Cube out = write_film_npy(scene, ro, stats, (scratch / "run").string());
+    read_film_npy((scratch / "run").string(), out);
+    fs::remove_all(scratch);
     return out;
 }
 
@@ -147,10 +157,12 @@ double cpu_seconds_now() {
 }
 
 // Renders `lo`'s scene with `seed` at `spp` samples per pixel. Ctrl-C stops it at once (the
-// run is then discarded: a render stopped within a pass has pixels with fewer samples).
+// run is then discarded: a render stopped within a pass has pixels with fewer samples). With
+// `measure`, the film's cube is read back (through `scratch`); with a `child_stem` instead, the
+// film's outputs are written there and only the cube's shape is kept.
 Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t seed, uint32_t spp,
                     int threads, const RunnerOptions& options, const fs::path& scratch,
-                    bool measure = true) {
+                    bool measure = true, const std::string& child_stem = {}) {
     auto scene = load_scene(file, lo);
     std::atomic<bool> stop{false};
     RenderOptions ro;
@@ -188,7 +200,10 @@ Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t see
     r.cpu_seconds = cpu_seconds_now() - cpu_before;
     finish_watcher();
     r.stopped = r.stats.interrupted || (options.stop && options.stop->load());
-    if (!r.stopped && measure) r.cube = film_cube(*scene, ro, r.stats, scratch);
+    if (!r.stopped && !child_stem.empty())
+        r.cube = write_film_npy(*scene, ro, r.stats, child_stem);
+    else if (!r.stopped && measure)
+        r.cube = film_cube(*scene, ro, r.stats, scratch);
     return r;
 }
 
@@ -262,12 +277,10 @@ Rendered render_in_child(const std::string& file, const LoadOptions& lo, uint64_
     std::ifstream stats(stem + ".stats");
     stats >> r.stats.seconds >> r.stats.rays >> r.stats.spp_done >> r.stats.camera_samples >>
         r.cpu_seconds >> r.cube.start >> r.cube.bin_width >> r.peak_mb;
-    std::vector<size_t> shape;
-    r.cube.data = io::read_npy(stem + ".npy", shape);
-    if (!stats || shape.size() != 4)
+    if (!stats)
         throw SceneError(fmt::format("a run in a child process left no readable result in {}",
                                      scratch.string()));
-    r.cube.H = shape[0], r.cube.W = shape[1], r.cube.T = shape[2], r.cube.C = shape[3];
+    read_film_npy(stem, r.cube);
     fs::remove_all(scratch);
     return r;
 }
@@ -621,11 +634,11 @@ bool run_child(const ChildRun& run, const std::atomic<bool>* stop) {
     RunnerOptions options;
     options.stop = stop;
     const fs::path stem(run.out_stem);
+    // The film writes its outputs (the .npy the study reads among them) from the child: the
+    // peak memory is the render's and its outputs', as `femto render --npy` would need.
     const Rendered r = render_run(run.scene_file, lo, run.seed, run.spp, run.threads, options,
-                                  stem.string() + "-film");
+                                  stem.string() + "-scratch", false, stem.string());
     if (r.stopped) return false;
-    io::write_npy(stem.string() + ".npy", {r.cube.H, r.cube.W, r.cube.T, r.cube.C},
-                  r.cube.data.data());
     std::ofstream out(stem.string() + ".stats");
     out << fmt::format("{:.17g} {} {} {} {:.17g} {:.17g} {:.17g} {:.17g}\n", r.stats.seconds,
                        r.stats.rays, r.stats.spp_done, r.stats.camera_samples, r.cpu_seconds,
