@@ -35,7 +35,15 @@ inline std::string shipped_scene_text(const std::string& scene) {
     for (size_t at = xml.find(open); at != std::string::npos; at = xml.find(open, at)) {
         const size_t name_end = xml.find('"', at + open.size());
         const size_t end = xml.find("/>", name_end) + 2;
-        const std::string file = xml.substr(at + open.size(), name_end - at - open.size());
+        std::string file = xml.substr(at + open.size(), name_end - at - open.size());
+        // A $name in the file name takes the scene's <default> (-D values do not reach here).
+        for (size_t d = file.find('$'); d != std::string::npos; d = file.find('$')) {
+            const size_t e = file.find_first_of(".-/", d);
+            const std::string key =
+                "<default name=\"" + file.substr(d + 1, e - d - 1) + "\" value=\"";
+            const size_t v = xml.find(key) + key.size();
+            file.replace(d, e - d, xml.substr(v, xml.find('"', v) - v));
+        }
         const std::string text = read_text(kScenes + scene + "/" + file);
         const size_t body = text.find('>', text.find("<scene")) + 1;
         xml.replace(at, end - at, text.substr(body, text.rfind("</scene>") - body));

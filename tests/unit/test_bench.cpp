@@ -170,6 +170,8 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
          ":6:1: <metric> name \"window:late\": valid: relmse, pixel_relmse, frame_relmse"},
         {head + rest + "<metric name=\"relmse\"/>\n<metric name=\"relmse\"/>\n</experiment>",
          ":7:1: <metric> \"relmse\" is named twice"},
+        {head + rest + "<raw_rays seconds=\"0\"/>\n</experiment>",
+         ":6:1: <raw_rays> seconds: 0 is not in [0.01, 3600]"},
         {head + rest + "<isolation value=\"fork\"/>\n</experiment>",
          ":6:1: <isolation> value \"fork\": valid: none"},
         {head + "<variant name=\"a\"/>\n<budgets spp=\"1\"/>\n<reference variant=\"b\" "
@@ -409,5 +411,57 @@ TEST(BenchRunner, ChildProcessesMeasurePeakMemoryWithoutAReference) {
         EXPECT_NE(std::string(err.what()).find("failed with exit code 2"), std::string::npos)
             << err.what();
     }
+    fs::remove_all(dir);
+}
+
+// <raw_rays>: Embree's own rate in the scene's geometry, each kind of ray measured before each
+// (budget, seed) group (none when resuming has nothing to run), and every run's ray rate
+// against it in the report.
+TEST(BenchRunner, RawRaysMeasureEmbreeBeforeEachGroup) {
+    const fs::path dir = femto::testing::temp_dir("bench-raw");
+    write(dir / "scene.xml",
+          "<scene version=\"3.0.0\"><integrator type=\"path\"/><sensor type=\"perspective\">"
+          "<transform name=\"to_world\"><lookat origin=\"0,0,4\" target=\"0,0,0\" "
+          "up=\"0,1,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
+          "value=\"16\"/><integer name=\"height\" value=\"16\"/></film></sensor><shape "
+          "type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/></transform>"
+          "</shape><shape type=\"rectangle\"><transform name=\"to_world\"><scale "
+          "value=\"0.3\"/><rotate x=\"1\" angle=\"180\"/><translate z=\"1\"/></transform>"
+          "<emitter type=\"area\"/></shape></scene>");
+    write(dir / "e.xml",
+          "<experiment><scene file=\"scene.xml\" name=\"s\"/><variant name=\"v\"/><budgets "
+          "spp=\"1 2\"/><seeds count=\"2\"/><raw_rays seconds=\"0.05\"/><threads "
+          "value=\"1\"/></experiment>");
+    const Experiment e = load_experiment((dir / "e.xml").string());
+    RunnerOptions o;
+    o.out_dir = (dir / "out").string();
+    o.progress = false;
+    ASSERT_TRUE(run_experiment(e, o));
+    std::ifstream csv(dir / "out" / "raw_rays.csv");
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line, "scene,budget,seed,kind,rays,seconds,cores_used");
+    int rows = 0;
+    while (std::getline(csv, line)) {
+        ++rows;
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+        ASSERT_EQ(f.size(), 7u) << line;
+        EXPECT_GE(std::stod(f[5]), 0.05) << line;        // at least the asked time
+        EXPECT_GE(std::stoull(f[4]), 1u << 20) << line;  // at least one pass over the rays
+    }
+    EXPECT_EQ(rows, 2 * 2 * 3);  // (budget, seed) groups x kinds
+    std::ifstream report_file(dir / "out" / "report.md");
+    const std::string report((std::istreambuf_iterator<char>(report_file)),
+                             std::istreambuf_iterator<char>());
+    EXPECT_NE(report.find("Embree's raw rate"), std::string::npos) << report;
+    EXPECT_NE(report.find("rays/s vs Embree's raw incoherent"), std::string::npos) << report;
+    // Resuming with nothing left to run measures nothing more.
+    ASSERT_TRUE(run_experiment(e, o));
+    std::ifstream again(dir / "out" / "raw_rays.csv");
+    EXPECT_EQ(
+        std::count(std::istreambuf_iterator<char>(again), std::istreambuf_iterator<char>(), '\n'),
+        1 + rows);
     fs::remove_all(dir);
 }

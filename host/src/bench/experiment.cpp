@@ -261,6 +261,17 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
                                   "process), process (each run in a child process)",
                                   v));
         e.child_processes = v == "process";
+    } else if (tag == "raw_rays") {
+        if (e.raw_rays_seconds > 0) r.fail(c, "a second <raw_rays>");
+        r.check_attributes(c, {"seconds"});
+        r.only_children(c, {});
+        e.raw_rays_seconds = 1;
+        if (c.attribute("seconds")) {
+            e.raw_rays_seconds = r.number(c, "seconds", c.attribute("seconds").value());
+            if (!(e.raw_rays_seconds >= 0.01 && e.raw_rays_seconds <= 3600))
+                r.fail(c, fmt::format("<raw_rays> seconds: {} is not in [0.01, 3600]",
+                                      e.raw_rays_seconds));
+        }
     } else if (tag == "threads") {
         if (e.threads > 0) r.fail(c, "a second <threads>");
         r.check_attributes(c, {"value"});
@@ -268,9 +279,10 @@ void read_child(const Reader& r, const pugi::xml_node& c, Experiment& e) {
         e.threads = int(r.whole(c, "value", r.number(c, "value", r.required(c, "value")), 1, 4096));
     } else {
         r.fail(c,
-               fmt::format("unknown element <{}> in <experiment>; valid: scene, variant, "
-                           "budgets, seeds, reference, window, pixel, metric, isolation, threads",
-                           tag));
+               fmt::format(
+                   "unknown element <{}> in <experiment>; valid: scene, variant, "
+                   "budgets, seeds, reference, window, pixel, metric, isolation, raw_rays, threads",
+                   tag));
     }
 }
 

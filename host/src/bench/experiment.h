@@ -70,6 +70,9 @@ struct Experiment {
     std::vector<std::string> metrics;
     /// Each run in a child process (its peak memory is then measured), not in this one.
     bool child_processes = false;
+    /// <raw_rays seconds="..."/>: Embree's raw ray rate measured before each (budget, seed)
+    /// group of runs, each kind of ray for at least this long; 0: not measured.
+    double raw_rays_seconds = 0;
     int threads = 0;  ///< 0: all cores
     /// Of everything but <seeds> and <budgets> (whitespace and comments aside): rows measured
     /// under another digest are not resumed.

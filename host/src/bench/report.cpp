@@ -69,7 +69,8 @@ double metric_of(const Experiment& e, const std::string& metric, const RunRow& r
 struct Series {
     std::vector<double> seconds, samples, errors;
     std::vector<double> ray_rates, sample_rates, cores_used, peak_mb;
-    std::map<std::string, double> rate_of_run;  // samples/s by "budget seed": pairs runs
+    std::map<std::string, double> rate_of_run;      // samples/s by "budget seed": pairs runs
+    std::map<std::string, double> ray_rate_of_run;  // rays/s, the same
     std::map<std::string, std::vector<double>> by_budget;
 };
 
@@ -89,8 +90,10 @@ std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
             if (r.seconds > 0) s.ray_rates.push_back(double(r.rays) / r.seconds);
             if (r.seconds > 0) s.sample_rates.push_back(double(r.samples) / r.seconds);
             if (r.seconds > 0)
-                s.rate_of_run[r.budget + " " + std::to_string(r.seed)] =
-                    double(r.samples) / r.seconds;
+                s.rate_of_run[r.budget + " " +
+                              std::to_string(r.seed)] = double(r.samples) / r.seconds,
+                              s.ray_rate_of_run[r.budget + " " + std::to_string(r.seed)] =
+                                  double(r.rays) / r.seconds;
             if (std::isfinite(r.cores_used)) s.cores_used.push_back(r.cores_used);
             if (std::isfinite(r.peak_mb)) s.peak_mb.push_back(r.peak_mb);
             s.by_budget[r.budget].push_back(metric_of(e, metric, r));
@@ -106,11 +109,49 @@ std::string ratio_text(const Ratio& r) {
     return fmt::format("{} [{}, {}]", g(r.value), g(r.lo), g(r.hi));
 }
 
-// The columns every table has: throughput against the first variant, rays, cores and memory.
-std::string throughput_header(const Experiment& e) {
+// Embree's raw rate in one scene (raw_rays.csv, <raw_rays>): rays per second of each kind of
+// ray, and of the incoherent ones by (budget, seed) group, to pair with the runs.
+struct RawRates {
+    std::map<std::string, std::vector<double>> by_kind;
+    std::map<std::string, double> incoherent_of_run;
+    bool empty() const { return by_kind.empty(); }
+};
+
+RawRates read_raw_rates(const fs::path& csv, const std::string& scene) {
+    RawRates raw;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);  // the header
+    while (std::getline(in, line)) {
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+        if (f.size() != 7 || f[0] != scene) continue;  // another scene's, or cut short
+        const double seconds = std::atof(f[5].c_str());
+        if (!(seconds > 0)) continue;
+        const double rate = std::atof(f[4].c_str()) / seconds;
+        raw.by_kind[f[3]].push_back(rate);
+        if (f[3] == "incoherent") raw.incoherent_of_run[f[1] + " " + f[2]] = rate;
+    }
+    return raw;
+}
+
+// The columns every table has: throughput against the first variant, rays (against Embree's
+// raw rate, when measured), cores and memory.
+std::string throughput_header(const Experiment& e, const RawRates& raw) {
     return fmt::format(
-        " samples/s vs `{}`, run by run (95 %) | median Mrays/s | median cores used |{}",
-        e.variants.front().name, e.child_processes ? " median peak MB |" : "");
+        " samples/s vs `{}`, run by run (95 %) | median Mrays/s |{} median cores used |{}",
+        e.variants.front().name,
+        raw.empty() ? "" : " rays/s vs Embree's raw incoherent, run by run (95 %) |",
+        e.child_processes ? " median peak MB |" : "");
+}
+
+// The separator row under a table's `header`: one cell per column.
+std::string separator_row(const std::string& header) {
+    std::string row = "|";
+    for (size_t i = 1; i < size_t(std::count(header.begin(), header.end(), '|')); ++i)
+        row += "---|";
+    return row + "\n";
 }
 
 // Samples per second against the first variant's, pair by pair: the runs of one budget and
@@ -123,39 +164,60 @@ Ratio throughput_ratio(const Series& base, const Series& s) {
     return paired_median_ratio(a, b);
 }
 
-std::string throughput_cells(const Experiment& e, const Series& base, const Series& s) {
-    return fmt::format(" {} | {} | {} |{}", ratio_text(throughput_ratio(base, s)),
-                       g(median(s.ray_rates) * 1e-6), g(median(s.cores_used)),
-                       e.child_processes ? " " + g(median(s.peak_mb)) + " |" : "");
+// Each run's ray rate over Embree's raw rate measured just before its (budget, seed) group.
+Ratio raw_ray_ratio(const RawRates& raw, const Series& s) {
+    std::vector<double> a, b;
+    for (const auto& [run, rate] : s.ray_rate_of_run)
+        if (auto it = raw.incoherent_of_run.find(run); it != raw.incoherent_of_run.end())
+            a.push_back(it->second), b.push_back(rate);
+    return paired_median_ratio(a, b);
+}
+
+std::string throughput_cells(const Experiment& e, const RawRates& raw, const Series& base,
+                             const Series& s) {
+    return fmt::format(
+        " {} | {} |{} {} |{}", ratio_text(throughput_ratio(base, s)), g(median(s.ray_rates) * 1e-6),
+        raw.empty() ? "" : " " + ratio_text(raw_ray_ratio(raw, s)) + " |", g(median(s.cores_used)),
+        e.child_processes ? " " + g(median(s.peak_mb)) + " |" : "");
 }
 
 // A study without a reference: throughput and memory only.
-std::string throughput_section(const Experiment& e,
+std::string throughput_section(const Experiment& e, const RawRates& raw,
                                const std::vector<std::pair<std::string, Series>>& series) {
-    std::string md = "| variant | runs | median samples/s |" + throughput_header(e) +
-                     "\n|---|---|---|---|---|---|";
-    md += e.child_processes ? "---|\n" : "\n";
+    const std::string header = "| variant | runs | median samples/s |" + throughput_header(e, raw);
+    std::string md = header + "\n" + separator_row(header);
     for (const auto& [name, s] : series)
         md += fmt::format("| {} | {} | {} |", name, s.seconds.size(), g(median(s.sample_rates))) +
-              throughput_cells(e, series.front().second, s) + "\n";
+              throughput_cells(e, raw, series.front().second, s) + "\n";
     return md + "\n";
+}
+
+// Embree's raw rates of a scene, medians of each kind of ray.
+std::string raw_rates_line(const RawRates& raw) {
+    std::string md =
+        "Embree's raw rate (`<raw_rays>`, random rays in the scene's geometry, Embree "
+        "alone), median Mrays/s:";
+    for (const char* kind : {"incoherent", "sorted", "shadow"})
+        if (auto it = raw.by_kind.find(kind); it != raw.by_kind.end())
+            md += fmt::format(" {} {} ({} measurements);", kind, g(median(it->second) * 1e-6),
+                              it->second.size());
+    md.back() = '.';
+    return md + "\n\n";
 }
 
 // One scene's table for one error metric.
 std::string metric_table(const Experiment& e, const std::vector<RunRow>& rows,
-                         const SceneSpec& scene, const std::string& metric) {
+                         const SceneSpec& scene, const RawRates& raw, const std::string& metric) {
     const auto series = series_of(e, rows, scene.name, metric);
     const std::vector<std::string> budgets = e.budget_labels();
     const std::string& base_name = e.variants.front().name;
-    std::string md = fmt::format(
+    std::string header = fmt::format(
         "| variant | runs | slope of {0} vs time (95 %) | time to equal {0} vs `{1}` (95 %) | "
         "samples to equal {0} vs `{1}` (95 %) |{2}",
-        metric, base_name, throughput_header(e));
+        metric, base_name, throughput_header(e, raw));
     for (const std::string& b : budgets)
-        md += fmt::format(" median {} @ {}{} |", metric, b, e.timed() ? " s" : " spp");
-    md += "\n|---|---|---|---|---|---|---|---|";
-    for (size_t i = 0; i < budgets.size() + (e.child_processes ? 1 : 0); ++i) md += "---|";
-    md += "\n";
+        header += fmt::format(" median {} @ {}{} |", metric, b, e.timed() ? " s" : " spp");
+    std::string md = header + "\n" + separator_row(header);
     const Series& base = series.front().second;
     for (const auto& [name, s] : series) {
         // One budget leaves only timing noise along the time axis: no slope, no ratio.
@@ -168,7 +230,7 @@ std::string metric_table(const Experiment& e, const std::vector<RunRow>& rows,
             fits ? equal_error_ratio(base.samples, base.errors, s.samples, s.errors) : none;
         md += fmt::format("| {} | {} ({} fitted) | {} ± {} | {} | {} |", name, s.seconds.size(),
                           f.n, g(f.slope), g(f.slope_ci95), ratio_text(time), ratio_text(samples)) +
-              throughput_cells(e, base, s);
+              throughput_cells(e, raw, base, s);
         for (const std::string& b : budgets) {
             auto it = s.by_budget.find(b);
             md += " " + (it == s.by_budget.end() ? std::string("–") : g(median(it->second))) + " |";
@@ -179,13 +241,15 @@ std::string metric_table(const Experiment& e, const std::vector<RunRow>& rows,
 }
 
 std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
-                          const SceneSpec& scene) {
+                          const SceneSpec& scene, const fs::path& dir) {
     std::string md = fmt::format("## {}\n\n`{}`\n\n", scene.name, scene.file);
+    const RawRates raw = read_raw_rates(dir / "raw_rays.csv", scene.name);
+    if (!raw.empty()) md += raw_rates_line(raw);
     if (!e.has_reference())
-        return md + throughput_section(e, series_of(e, rows, scene.name, "relmse"));
+        return md + throughput_section(e, raw, series_of(e, rows, scene.name, "relmse"));
     for (const std::string& metric : e.metrics)
         md += (e.metrics.size() > 1 ? fmt::format("### {}\n\n", metric) : std::string()) +
-              metric_table(e, rows, scene, metric);
+              metric_table(e, rows, scene, raw, metric);
     return md;
 }
 
@@ -298,7 +362,7 @@ void write_report(const Experiment& e, const std::vector<RunRow>& rows, const Ma
         e.child_processes ? "; peak MB: each run's child process's peak resident memory "
                             "(loading, rendering and writing the film's outputs)"
                           : "");
-    for (const SceneSpec& scene : e.scenes) md += scene_section(e, rows, scene);
+    for (const SceneSpec& scene : e.scenes) md += scene_section(e, rows, scene, dir);
     md += e.has_reference() ? "Rows: `results.csv` (one per run), per-frame errors: `frames.csv`, "
                               "plot: `plot.svg`.\n"
                             : "Rows: `results.csv` (one per run).\n";

@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "bench/measures.h"
+#include "bench/raw_rays.h"
 #include "bench/report.h"
 #include "femto/host.h"
 #include "femto/image_io.h"
@@ -504,6 +505,47 @@ Rendered render_budget(const Experiment& e, const SceneSpec& scene, const Varian
                       e.has_reference());
 }
 
+// Embree's raw rate in one scene's geometry: the scene (loaded with the first variant's values)
+// and its rays, built once per scene; each measurement appends a row per kind of ray to
+// raw_rays.csv.
+class RawRayMeter {
+public:
+    RawRayMeter(const Experiment& e, const SceneSpec& scene, const RunnerOptions& options,
+                int threads)
+        : seconds_(e.raw_rays_seconds),
+          threads_(threads),
+          scene_name_(scene.name),
+          scene_(load_scene(scene.file, load_options(scene, e.variants.front(), options))) {
+        try {
+            rays_ = std::make_unique<RawRays>(*scene_, size_t(1) << 20, 1);
+        } catch (const std::runtime_error& err) {
+            throw SceneError(scene.location,
+                             fmt::format("<raw_rays> in scene \"{}\": {}", scene.name, err.what()));
+        }
+    }
+    void measure(const std::string& budget, uint64_t seed, const fs::path& csv) const {
+        const bool fresh = !fs::exists(csv);
+        std::ostringstream rows;
+        if (fresh) rows << "scene,budget,seed,kind,rays,seconds,cores_used\n";
+        for (RawRays::Kind kind :
+             {RawRays::Kind::incoherent, RawRays::Kind::sorted, RawRays::Kind::shadow}) {
+            if (kind == RawRays::Kind::shadow && !rays_->has_shadow_rays()) continue;
+            const RawRays::Rate r = rays_->trace(kind, threads_, seconds_);
+            rows << scene_name_ << "," << budget << "," << seed << "," << kind_name(kind) << ","
+                 << r.rays << "," << number_text(r.seconds) << ","
+                 << number_text(r.cpu_seconds / r.seconds) << "\n";
+        }
+        std::ofstream(csv, std::ios::app) << rows.str();
+    }
+
+private:
+    double seconds_;
+    int threads_;
+    std::string scene_name_;
+    std::unique_ptr<Scene> scene_;
+    std::unique_ptr<RawRays> rays_;
+};
+
 void print_progress(size_t index, size_t total, const RunRow& row) {
     const std::string measured =
         std::isfinite(row.rel_mse)
@@ -596,11 +638,19 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
             if (stopped) break;
             write_reference_profiles(e, scene, *reference, dir);
         }
+        std::unique_ptr<RawRayMeter> raw;
+        if (e.raw_rays_seconds > 0) raw = std::make_unique<RawRayMeter>(e, scene, options, threads);
         for (size_t b = 0; b < labels.size() && !stopped; ++b)
             for (size_t k = 0; k < e.seeds.size() * e.variants.size() && !stopped; ++k) {
                 // interleaved: for each seed, A B A B ...
                 const uint64_t seed = e.seeds[k / e.variants.size()];
                 const Variant& v = e.variants[k % e.variants.size()];
+                // Embree's raw rate first in each (budget, seed) group with a run to do.
+                if (raw && k % e.variants.size() == 0 &&
+                    std::any_of(e.variants.begin(), e.variants.end(), [&](const Variant& w) {
+                        return !done.count(key(scene.name, w.name, labels[b], seed));
+                    }))
+                    raw->measure(labels[b], seed, dir / "raw_rays.csv");
                 ++index;
                 if (done.count(key(scene.name, v.name, labels[b], seed))) continue;
                 stopped = options.stop && options.stop->load();
