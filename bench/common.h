@@ -1,7 +1,6 @@
-// Shared by the benchmarks in bench/ (header-only, every function inline): machine and load
-// capture, medians, option splitting, scene text helpers, and the error measures of the
-// error-against-time harnesses (relative MSE of a cube against a reference, with or without
-// the reference's own variance taken out).
+// Shared by the benchmark programs in bench/ (header-only, every function inline): machine and
+// load capture, medians, option splitting, and reading a film's cube back through its writer.
+// (`femto bench` has its own, in host/src/bench/.)
 #pragma once
 
 #include <sys/resource.h>
@@ -33,14 +32,6 @@ inline std::string read_loadavg() {
     std::string a, b, c;
     if (!(f >> a >> b >> c)) return "unknown";
     return a + " " + b + " " + c;
-}
-
-/// The 1-minute load average, or -1.
-inline double load1() {
-    std::ifstream f("/proc/loadavg");
-    double a = -1;
-    f >> a;
-    return a;
 }
 
 /// "model name" of the first CPU in /proc/cpuinfo.
@@ -104,85 +95,12 @@ inline std::string option_value(int argc, char** argv, int& i) {
     return argv[++i];
 }
 
-/// The integers of a comma-separated list ("16,64,256").
-inline std::vector<int> int_list(const std::string& s) {
-    std::vector<int> v;
-    for (const auto& x : split(s, ',')) v.push_back(std::stoi(x));
-    return v;
-}
-
-inline std::string read_text(const std::string& path) {
-    std::ifstream f(path);
-    if (!f) throw std::runtime_error("cannot read " + path);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-/// Replaces the single occurrence of `from` (throws when it is missing, so a changed scene
-/// file fails loudly instead of silently benchmarking something else).
-inline std::string replace_once(std::string text, const std::string& from, const std::string& to) {
-    const size_t pos = text.find(from);
-    if (pos == std::string::npos) throw std::runtime_error("scene text lacks: " + from);
-    return text.replace(pos, from.size(), to);
-}
-
-/// Replaces from `begin` up to and including the next `end`.
-inline std::string replace_block(std::string text, const std::string& begin, const std::string& end,
-                                 const std::string& to) {
-    const size_t a = text.find(begin);
-    if (a == std::string::npos) throw std::runtime_error("scene text lacks: " + begin);
-    const size_t b = text.find(end, a);
-    if (b == std::string::npos) throw std::runtime_error("scene text lacks: " + end);
-    return text.replace(a, b + end.size() - a, to);
-}
-
-// -- error measures ----------------------------------------------------------------------------
-
-/// Sum of squared differences and of the reference's squares over a cube (any layout).
-struct SquaredError {
-    double se = 0;  ///< sum_v (x_v - r_v)^2
-    double rr = 0;  ///< sum_v r_v^2
-};
-
-inline SquaredError squared_error(const std::vector<float>& x, const std::vector<float>& ref) {
-    if (x.size() != ref.size()) throw std::runtime_error("cube sizes differ");
-    SquaredError e;
-    for (size_t i = 0; i < x.size(); ++i) {
-        const double d = double(x[i]) - double(ref[i]);
-        e.se += d * d;
-        e.rr += double(ref[i]) * double(ref[i]);
-    }
-    return e;
-}
-
-/// relMSE = sum_v (x_v - r_v)^2 / sum_v r_v^2 over all voxels and channels v: the squared
-/// relative L2 error of the whole cube (scale-free, no epsilon, dominated by bright voxels).
-inline double rel_mse(const std::vector<float>& x, const std::vector<float>& ref) {
-    const SquaredError e = squared_error(x, ref);
-    return e.se / e.rr;
-}
-
-/// The same with the reference's own noise taken out: for x and r independent,
-/// E[sum (x - r)^2] = sum (bias_x^2 + Var x) + sum Var r, so subtracting sum Var r (the
-/// reference's variance estimate, `ref_var` summed) leaves the error of x against the truth.
-inline double rel_mse_corrected(const std::vector<float>& x, const std::vector<float>& ref,
-                                double ref_var_sum) {
-    const SquaredError e = squared_error(x, ref);
-    return (e.se - ref_var_sum) / e.rr;
-}
-
 // -- reading a film back ----------------------------------------------------------------------
 
 /// The film's normalised cube [H][W][T][3], through its own writer (OUTBASE.npy, written to a
-/// temporary folder). With `variance`, the film must have aovs="variance": OUTBASE_variance.npy
-/// (the variance of each pixel-bin estimate) is read into it. With `count`, the film must have
-/// aovs="count": OUTBASE_count.npy (contributions per pixel and bin, [H][W][T]) is read into
-/// it. Needs libfemto_io.
+/// temporary folder). Needs libfemto_io.
 inline std::vector<float> film_cube(femto::Scene& scene, const femto::RenderOptions& ro,
-                                    const femto::RenderStats& st, std::vector<size_t>& shape,
-                                    std::vector<float>* variance = nullptr,
-                                    std::vector<float>* count = nullptr) {
+                                    const femto::RenderStats& st, std::vector<size_t>& shape) {
     namespace fs = std::filesystem;
     static int counter = 0;
     const fs::path tmp =
@@ -193,17 +111,6 @@ inline std::vector<float> film_cube(femto::Scene& scene, const femto::RenderOpti
     info.write_npy = true;
     scene.sensor().film().write((tmp / "cube").string(), info);
     std::vector<float> cube = femto::io::read_npy((tmp / "cube.npy").string(), shape);
-    if (variance) {
-        std::vector<size_t> vshape;
-        *variance = femto::io::read_npy((tmp / "cube_variance.npy").string(), vshape);
-        if (vshape != shape) throw std::runtime_error("variance and cube shapes differ");
-    }
-    if (count) {
-        std::vector<size_t> cshape;
-        *count = femto::io::read_npy((tmp / "cube_count.npy").string(), cshape);
-        if (cshape.size() != 3 || !std::equal(cshape.begin(), cshape.end(), shape.begin()))
-            throw std::runtime_error("count and cube shapes differ");
-    }
     fs::remove_all(tmp);
     return cube;
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Summarises and plots bench/run_compare.sh: compare_rays.csv and compare_transient.csv (one
-row per build, round and configuration) -> compare_summary.csv (medians over rounds per build,
-after / before of the medians, and the median of the per-round after / before) and compare.png (every round's figures per build)."""
+"""Summarises and plots bench/run_compare.sh: compare_runs.csv (`femto bench` rows of both
+builds, every round) -> compare_summary.csv (per scene and variant: median samples/s and rays/s
+of each build, after / before of the medians, and the median of the per-round after / before)
+and compare.png (every run's samples/s per build)."""
 import csv
 import os
 import statistics
@@ -13,66 +14,52 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def read_csv(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
-# (file, row filter, column, label) of every figure compared.
-MEASURES = [
-    ("rays", lambda r: r["scene"] == "cornell-box", "femto_median_mrays_per_s",
-     "femto Mrays/s (Cornell box)"),
-    ("rays", lambda r: r["scene"] == "cornell-box", "ratio", "femto / raw Embree ray rate"),
-    ("transient", lambda r: r["variant"] == "steady", "median_samples_per_s",
-     "steady samples/s"),
-    ("transient", lambda r: r["variant"] == "transient", "samples_ratio_vs_steady",
-     "transient / steady sample rate"),
-]
-
-
 def main():
     results = sys.argv[1] if len(sys.argv) > 1 else "bench/results"
-    tables = {k: read_csv(os.path.join(results, f"compare_{k}.csv")) for k in ("rays", "transient")}
-    rows, series = [], []
-    for kind, keep, column, label in MEASURES:
-        per_build, by_round = {}, {}
-        for r in tables[kind]:
-            if keep(r):
-                per_build.setdefault(r["build"], []).append(float(r[column]))
-                by_round.setdefault(r["round"], {})[r["build"]] = float(r[column])
-        # after / before within each round (both ran back to back), robust to slow drift
-        paired = [v["after"] / v["before"] for v in by_round.values()
-                  if "after" in v and "before" in v and v["before"] > 0]
-        before, after = per_build.get("before", []), per_build.get("after", [])
-        if not before or not after:
-            sys.exit(f"plot_compare.py: no rows for {label}")
-        mb, ma = statistics.median(before), statistics.median(after)
-        rows.append({"measure": label, "rounds": len(before), "before_median": f"{mb:.4g}",
-                     "after_median": f"{ma:.4g}", "after_over_before": f"{ma / mb:.4f}",
-                     "paired_median": f"{statistics.median(paired):.4f}",
-                     "paired_min": f"{min(paired):.4f}", "paired_max": f"{max(paired):.4f}",
-                     "before_min": f"{min(before):.4g}", "before_max": f"{max(before):.4g}",
-                     "after_min": f"{min(after):.4g}", "after_max": f"{max(after):.4g}"})
-        series.append((label, before, after))
-    with open(os.path.join(results, "compare_summary.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    with open(os.path.join(results, "compare_runs.csv"), newline="") as f:
+        rows = list(csv.DictReader(f))
+    # (scene, variant) -> build -> round -> [samples/s], [rays/s]
+    data = {}
     for r in rows:
-        print(f"{r['measure']:<34} before {r['before_median']:>9}  after {r['after_median']:>9}"
-              f"  after/before {r['after_over_before']}  paired {r['paired_median']}"
-              f" [{r['paired_min']}, {r['paired_max']}]")
-
-    fig, axes = plt.subplots(1, len(series), figsize=(4 * len(series), 3.4))
-    for ax, (label, before, after) in zip(axes, series):
-        ax.plot(range(len(before)), before, "o-", label="before")
-        ax.plot(range(len(after)), after, "s-", label="after")
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("round")
-        ax.set_ylim(bottom=0)
-    axes[0].legend()
+        seconds = float(r["seconds"])
+        if seconds <= 0:
+            continue
+        cell = data.setdefault((r["scene"], r["variant"]), {}).setdefault(r["build"], {})
+        rates = cell.setdefault(r["round"], ([], []))
+        rates[0].append(float(r["samples"]) / seconds)
+        rates[1].append(float(r["rays"]) / seconds)
+    out = [["scene", "variant", "measure", "before_median", "after_median", "after_over_before",
+            "per_round_median", "per_round_min", "per_round_max"]]
+    print(f"{'scene':<14} {'variant':<26} {'measure':<10} {'before':>10} {'after':>10} "
+          f"{'after/before':>12} {'per round: median [min, max]':>30}")
+    for (scene, variant), builds in sorted(data.items()):
+        for k, measure in enumerate(("samples/s", "rays/s")):
+            med = {b: statistics.median(x for rnd in builds.get(b, {}).values() for x in rnd[k])
+                   for b in ("before", "after")}
+            per_round = [statistics.median(builds["after"][rnd][k]) /
+                         statistics.median(builds["before"][rnd][k])
+                         for rnd in builds["after"] if rnd in builds.get("before", {})]
+            ratio = med["after"] / med["before"]
+            pr = (statistics.median(per_round), min(per_round), max(per_round))
+            out.append([scene, variant, measure, f"{med['before']:.6g}", f"{med['after']:.6g}",
+                        f"{ratio:.4f}"] + [f"{v:.4f}" for v in pr])
+            print(f"{scene:<14} {variant:<26} {measure:<10} {med['before']:>10.4g} "
+                  f"{med['after']:>10.4g} {ratio:>12.3f}   {pr[0]:.3f} [{pr[1]:.3f}, {pr[2]:.3f}]")
+    with open(os.path.join(results, "compare_summary.csv"), "w", newline="") as f:
+        csv.writer(f).writerows(out)
+    fig, ax = plt.subplots(figsize=(8, 4))
+    labels = []
+    for i, ((scene, variant), builds) in enumerate(sorted(data.items())):
+        labels.append(f"{scene}\n{variant}")
+        for j, (b, colour) in enumerate((("before", "tab:blue"), ("after", "tab:red"))):
+            values = [x for rnd in builds.get(b, {}).values() for x in rnd[0]]
+            ax.scatter([i + (j - 0.5) * 0.2] * len(values), values, color=colour, s=12,
+                       label=b if i == 0 else None)
+    ax.set_xticks(range(len(labels)), labels, fontsize=8)
+    ax.set_ylabel("camera samples per second")
+    ax.legend()
     fig.tight_layout()
-    fig.savefig(os.path.join(results, "compare.png"), dpi=110)
+    fig.savefig(os.path.join(results, "compare.png"), dpi=120)
 
 
 if __name__ == "__main__":

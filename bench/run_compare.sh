@@ -1,64 +1,58 @@
 #!/usr/bin/env bash
-# Before/after throughput of two revisions, measured side by side in one run: builds REV (a
-# detached worktree) and the working tree with the benchmarks, then alternates their
-# femto_bench_rays (Cornell box, ray rate and its ratio to Embree's raw rate) and
-# femto_bench_transient (throughput mode: transient/steady sample-rate ratio) ROUNDS times,
-# swapping which goes first every round so that drift in the machine's load hits both. When
-# valgrind is installed it also counts the instructions of femto::render() for both builds
-# (callgrind; deterministic, unlike seconds on a shared machine).
-#   bench/run_compare.sh REV [ROUNDS]        e.g. bench/run_compare.sh 4a3e41b 5
-# Results: bench/results/compare_{rays,transient,summary,instructions}.csv, compare.png,
-# compare_run.log.
+# Before/after throughput of two revisions, measured side by side: builds REV (a detached
+# worktree) and the working tree, then runs both builds' `femto bench EXPERIMENT` (the working
+# tree's file and scenes, for both) in ROUNDS rounds, swapping which build goes first every
+# round so that drift in the machine's load hits both. When valgrind is installed it also counts
+# the instructions of femto::render() for both builds (callgrind; deterministic, unlike seconds
+# on a shared machine). REV needs `femto bench` and every element EXPERIMENT uses.
+#   bench/run_compare.sh REV [ROUNDS] [EXPERIMENT]
+#       e.g. bench/run_compare.sh 4a3e41b 5      (EXPERIMENT: bench/experiments/compare.xml)
+# Results: bench/results/compare_runs.csv (every run of both builds), compare_summary.csv,
+# compare.png, compare_instructions.csv, compare_run.log.
 set -euo pipefail
 
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-rev=${1:?usage: run_compare.sh REV [ROUNDS]}
+rev=${1:?usage: run_compare.sh REV [ROUNDS] [EXPERIMENT]}
 rounds=${2:-5}
+experiment=$(realpath "${3:-$root/bench/experiments/compare.xml}")
 base="$root/build-bench-compare"
 before_src="$base/src-$rev"
 before_build="$base/build-$rev"
 
-bench_build femto_bench_rays femto_bench_transient femto_cli
+bench_build femto_cli
 if [[ ! -d "$before_src" ]]; then
     mkdir -p "$base"
     git -C "$root" worktree add --detach "$before_src" "$rev" >/dev/null
 fi
 if [[ ! -f "$before_build/build.ninja" ]]; then
     cmake -S "$before_src" -B "$before_build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-        -DFEMTO_BENCH=ON -DFEMTO_TESTS=OFF >/dev/null
+        -DFEMTO_TESTS=OFF >/dev/null
 fi
-ninja -C "$before_build" femto_bench_rays femto_bench_transient femto_cli
+ninja -C "$before_build" femto_cli
 
 log="$results/compare_run.log"
 bench_log_header "$log"
-echo "before: $rev, after: working tree; $rounds rounds" | tee -a "$log"
-rays_csv="$results/compare_rays.csv"
-transient_csv="$results/compare_transient.csv"
+echo "before: $rev, after: working tree; $rounds rounds of $experiment" | tee -a "$log"
+runs_csv="$results/compare_runs.csv"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-rm -f "$rays_csv" "$transient_csv"
+rm -f "$runs_csv"
 
-# One round of one build: its rays and transient summaries, prefixed with build and round.
+# One round of one build: its study in a fresh folder, its rows prefixed with build and round.
 run_one() {
-    local label=$1 dir=$2 src=$3 round=$4
-    "$dir/bin/femto_bench_rays" --source-dir "$src" --out "$tmp/$label" --scenes cornell-box \
-        --threads 1 --runs 3 >>"$log" 2>&1
-    "$dir/bin/femto_bench_transient" --mode throughput --out "$tmp/$label" --threads 1 \
-        --runs 3 --res 64 --spp 16 >>"$log" 2>&1
-    for kind in rays transient; do
-        local csv="$results/compare_$kind.csv"
-        [[ -f "$csv" ]] || sed -n '1s/^/build,round,/p' "$tmp/$label/${kind}_summary.csv" >"$csv"
-        sed -n "2,\$s/^/$label,$round,/p" "$tmp/$label/${kind}_summary.csv" >>"$csv"
-    done
+    local label=$1 dir=$2 round=$3
+    "$dir/bin/femto" bench "$experiment" -o "$tmp/$label-$round" -q >>"$log" 2>&1
+    [[ -f "$runs_csv" ]] || sed -n '1s/^/build,round,/p' "$tmp/$label-$round/results.csv" >"$runs_csv"
+    sed -n "2,\$s/^/$label,$round,/p" "$tmp/$label-$round/results.csv" >>"$runs_csv"
 }
 
 for ((r = 0; r < rounds; r++)); do
     if ((r % 2 == 0)); then
-        run_one before "$before_build" "$before_src" "$r"
-        run_one after "$build" "$root" "$r"
+        run_one before "$before_build" "$r"
+        run_one after "$build" "$r"
     else
-        run_one after "$build" "$root" "$r"
-        run_one before "$before_build" "$before_src" "$r"
+        run_one after "$build" "$r"
+        run_one before "$before_build" "$r"
     fi
     echo "round $r done (load $(cut -d' ' -f1-3 /proc/loadavg))" | tee -a "$log"
 done
@@ -71,15 +65,21 @@ if command -v valgrind >/dev/null; then
     echo "scene,before_render_instructions,after_render_instructions,after_over_before" >"$ins"
     for scene in cornell-box fog-object; do
         counts=()
-        for pair in "$before_build:$before_src" "$build:$root"; do
-            dir=${pair%%:*} src=${pair#*:}
+        for dir in "$before_build" "$build"; do
+            rm -f "$tmp/cg.out"
+            # valgrind cannot decode every instruction of every library femto loads (libhwy's
+            # rdtscp, through OpenImageIO, on some systems): no count then, not a failed script.
             valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" "$dir/bin/femto" render \
-                "$src/scenes/$scene/scene.xml" -D res=32 -D spp=16 --threads 1 --quiet \
-                -o "$tmp/cg" >/dev/null 2>&1
+                "$root/scenes/$scene/scene.xml" -D res=32 -D spp=16 --threads 1 --quiet \
+                -o "$tmp/cg" >/dev/null 2>&1 || true
             counts+=("$(callgrind_annotate --inclusive=yes "$tmp/cg.out" 2>/dev/null |
                 grep -F 'femto::render(femto::Scene&, femto::RenderOptions const&) [' |
-                awk '{gsub(",", "", $1); print $1}')")
+                awk '{gsub(",", "", $1); print $1}' || true)")
         done
+        if [[ -z "${counts[0]}" || -z "${counts[1]}" ]]; then
+            echo "$scene: valgrind could not run femto here; no instruction count" | tee -a "$log"
+            continue
+        fi
         awk -v s="$scene" -v a="${counts[0]}" -v b="${counts[1]}" \
             'BEGIN { printf "%s,%s,%s,%.4f\n", s, a, b, b / a }' >>"$ins"
     done

@@ -31,6 +31,27 @@ Cube cube_of(std::vector<float> data) {
 
 void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
+std::string read(const fs::path& p) {
+    std::ifstream in(p);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// A plane at z = 0 lit by a small rectangular lamp above it, seen from z = 4 by `film` (max_depth
+// 3 for `integrator`, which may be "$integrator" of a <default> in `head`).
+std::string lit_plane(const std::string& integrator, const std::string& film,
+                      const std::string& head = "") {
+    return "<scene version=\"3.0.0\">" + head + "<integrator type=\"" + integrator +
+           "\"><integer name=\"max_depth\" value=\"3\"/></integrator><sensor "
+           "type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,4\" "
+           "target=\"0,0,0\" up=\"0,1,0\"/></transform>" +
+           film +
+           "</sensor><shape type=\"rectangle\"><transform name=\"to_world\"><scale "
+           "value=\"3\"/></transform></shape><shape type=\"rectangle\"><transform "
+           "name=\"to_world\"><scale value=\"0.3\"/><rotate x=\"1\" angle=\"180\"/><translate "
+           "z=\"1\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" "
+           "value=\"10\"/></emitter></shape></scene>";
+}
+
 std::string load_error(const fs::path& p) {
     try {
         load_experiment(p.string());
@@ -170,6 +191,9 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
          ":6:1: <metric> name \"window:late\": valid: relmse, pixel_relmse, frame_relmse"},
         {head + rest + "<metric name=\"relmse\"/>\n<metric name=\"relmse\"/>\n</experiment>",
          ":7:1: <metric> \"relmse\" is named twice"},
+        {head + "<variant name=\"a\"/>\n<budgets spp=\"1\"/>\n<reference variant=\"a\" "
+                "spp=\"4\" scene=\"nope\"/>\n</experiment>",
+         ":5:1: <reference> names scene \"nope\", which is not declared"},
         {head + rest + "<raw_rays seconds=\"0\"/>\n</experiment>",
          ":6:1: <raw_rays> seconds: 0 is not in [0.01, 3600]"},
         {head + rest + "<isolation value=\"fork\"/>\n</experiment>",
@@ -210,17 +234,12 @@ TEST(BenchExperiment, BadInputIsALocatedError) {
 TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     const fs::path dir = femto::testing::temp_dir("bench-runner");
     write(dir / "scene.xml",
-          "<scene version=\"3.0.0\"><default name=\"integrator\" value=\"transient_path\"/>"
-          "<integrator type=\"$integrator\"><integer name=\"max_depth\" value=\"3\"/></integrator>"
-          "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,4\" "
-          "target=\"0,0,0\" up=\"0,1,0\"/></transform><film type=\"transient\"><integer "
-          "name=\"width\" value=\"8\"/><integer name=\"height\" value=\"8\"/><float name=\"start\" "
-          "value=\"3\"/><float name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" "
-          "value=\"10\"/></film></sensor><shape type=\"rectangle\"><transform "
-          "name=\"to_world\"><scale value=\"3\"/></transform></shape><shape type=\"rectangle\">"
-          "<transform name=\"to_world\"><scale value=\"0.3\"/><rotate x=\"1\" angle=\"180\"/>"
-          "<translate z=\"1\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" "
-          "value=\"10\"/></emitter></shape></scene>");
+          lit_plane("$integrator",
+                    "<film type=\"transient\"><integer name=\"width\" value=\"8\"/><integer "
+                    "name=\"height\" value=\"8\"/><float name=\"start\" value=\"3\"/><float "
+                    "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" "
+                    "value=\"10\"/></film>",
+                    "<default name=\"integrator\" value=\"transient_path\"/>"));
     const std::string experiment =
         "<experiment name=\"t\"><scene file=\"scene.xml\" name=\"plane\"/>"
         "<variant name=\"path\"/><variant name=\"bdpt\"><define name=\"integrator\" "
@@ -258,9 +277,7 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
     for (const char* f :
          {"report.md", "plot.svg", "frames.csv", "profiles.csv", "reference_profiles_plane.csv"})
         EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
-    std::ifstream report_file(dir / "out" / "report.md");
-    const std::string report((std::istreambuf_iterator<char>(report_file)),
-                             std::istreambuf_iterator<char>());
+    const std::string report = read(dir / "out" / "report.md");
     EXPECT_NE(report.find("| median Mrays/s |"), std::string::npos) << report;
     // Each <metric> is fitted in its own table.
     for (const char* table :
@@ -389,9 +406,7 @@ TEST(BenchRunner, ChildProcessesMeasurePeakMemoryWithoutAReference) {
     // At least half the cube's float32 copy: the rest of each peak overlaps what the 1-bin run
     // peaks at elsewhere (loading), and pages of the film no sample reached are never resident.
     EXPECT_GT(cube - one_bin, 0.5 * 32 * 32 * 1536 * 3 * 4 / (1 << 20)) << cube << " " << one_bin;
-    std::ifstream report_file(dir / "out" / "report.md");
-    const std::string report((std::istreambuf_iterator<char>(report_file)),
-                             std::istreambuf_iterator<char>());
+    const std::string report = read(dir / "out" / "report.md");
     EXPECT_NE(report.find("| variant | runs | median samples/s | samples/s vs `one-bin`"),
               std::string::npos)
         << report;
@@ -420,14 +435,9 @@ TEST(BenchRunner, ChildProcessesMeasurePeakMemoryWithoutAReference) {
 TEST(BenchRunner, RawRaysMeasureEmbreeBeforeEachGroup) {
     const fs::path dir = femto::testing::temp_dir("bench-raw");
     write(dir / "scene.xml",
-          "<scene version=\"3.0.0\"><integrator type=\"path\"/><sensor type=\"perspective\">"
-          "<transform name=\"to_world\"><lookat origin=\"0,0,4\" target=\"0,0,0\" "
-          "up=\"0,1,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
-          "value=\"16\"/><integer name=\"height\" value=\"16\"/></film></sensor><shape "
-          "type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/></transform>"
-          "</shape><shape type=\"rectangle\"><transform name=\"to_world\"><scale "
-          "value=\"0.3\"/><rotate x=\"1\" angle=\"180\"/><translate z=\"1\"/></transform>"
-          "<emitter type=\"area\"/></shape></scene>");
+          lit_plane("path",
+                    "<film type=\"hdrfilm\"><integer name=\"width\" value=\"16\"/><integer "
+                    "name=\"height\" value=\"16\"/></film>"));
     write(dir / "e.xml",
           "<experiment><scene file=\"scene.xml\" name=\"s\"/><variant name=\"v\"/><budgets "
           "spp=\"1 2\"/><seeds count=\"2\"/><raw_rays seconds=\"0.05\"/><threads "
@@ -452,9 +462,7 @@ TEST(BenchRunner, RawRaysMeasureEmbreeBeforeEachGroup) {
         EXPECT_GE(std::stoull(f[4]), 1u << 20) << line;  // at least one pass over the rays
     }
     EXPECT_EQ(rows, 2 * 2 * 3);  // (budget, seed) groups x kinds
-    std::ifstream report_file(dir / "out" / "report.md");
-    const std::string report((std::istreambuf_iterator<char>(report_file)),
-                             std::istreambuf_iterator<char>());
+    const std::string report = read(dir / "out" / "report.md");
     EXPECT_NE(report.find("Embree's raw rate"), std::string::npos) << report;
     EXPECT_NE(report.find("rays/s vs Embree's raw incoherent"), std::string::npos) << report;
     // Resuming with nothing left to run measures nothing more.
@@ -463,5 +471,34 @@ TEST(BenchRunner, RawRaysMeasureEmbreeBeforeEachGroup) {
     EXPECT_EQ(
         std::count(std::istreambuf_iterator<char>(again), std::istreambuf_iterator<char>(), '\n'),
         1 + rows);
+    fs::remove_all(dir);
+}
+
+// <reference scene="..."/>: one scene's reference for every scene (a scene at several scales
+// against its unit scale): rendered once, and the same scene measured twice under two names
+// gives the same errors.
+TEST(BenchRunner, OneScenesReferenceServesEveryScene) {
+    const fs::path dir = femto::testing::temp_dir("bench-ref-scene");
+    write(dir / "scene.xml",
+          lit_plane("path",
+                    "<film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/><integer "
+                    "name=\"height\" value=\"8\"/></film>"));
+    write(dir / "e.xml",
+          "<experiment><scene file=\"scene.xml\" name=\"a\"/><scene file=\"scene.xml\" "
+          "name=\"b\"/><variant name=\"v\"/><budgets spp=\"2\"/><reference variant=\"v\" "
+          "spp=\"64\" scene=\"a\"/><threads value=\"1\"/></experiment>");
+    const Experiment e = load_experiment((dir / "e.xml").string());
+    RunnerOptions o;
+    o.out_dir = (dir / "out").string();
+    o.progress = false;
+    ASSERT_TRUE(run_experiment(e, o));
+    int cached = 0;
+    for (const auto& f : fs::directory_iterator(dir / "out" / "cache"))
+        cached += f.path().filename().string().find("reference-a-") == 0;
+    EXPECT_EQ(cached, 2);  // its mean and variance, nothing for b
+    const std::vector<RunRow> rows = read_results((dir / "out" / "results.csv").string(), e);
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_EQ(rows[0].scene, "a");
+    EXPECT_DOUBLE_EQ(rows[0].rel_mse, rows[1].rel_mse);  // same render, same reference
     fs::remove_all(dir);
 }

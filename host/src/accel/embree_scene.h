@@ -1,6 +1,7 @@
 // Internal: the Embree scene over a femto scene's shapes. femto::Scene traces through it, and
-// bench/rays.cpp builds one to measure Embree's raw ray rate in the same BVH, so the two share
-// one construction (device, build quality, scene flags, geometry, null-surface filter).
+// `femto bench`'s <raw_rays> (host/src/bench/raw_rays.cpp) builds one to measure Embree's raw
+// ray rate in the same BVH, so the two share one construction (device, build quality, scene
+// flags, geometry, null-surface filter).
 #pragma once
 
 #include <embree3/rtcore.h>

@@ -155,19 +155,21 @@ void read_budgets(const Reader& r, const pugi::xml_node& n, Experiment& e) {
 }
 
 void read_reference(const Reader& r, const pugi::xml_node& n, Experiment& e) {
-    r.check_attributes(n, {"file", "variant", "spp", "seed"});
+    r.check_attributes(n, {"file", "variant", "spp", "seed", "scene"});
     r.only_children(n, {});
     ReferenceSpec& ref = e.reference;
     ref.location = r.at(n);
     if (n.attribute("file")) {
-        if (n.attribute("variant") || n.attribute("spp") || n.attribute("seed"))
+        if (n.attribute("variant") || n.attribute("spp") || n.attribute("seed") ||
+            n.attribute("scene"))
             r.fail(n,
                    "<reference> takes either file=\"...\" or variant=\"...\" spp=\"...\" "
-                   "(seed=\"...\")");
+                   "(seed=\"...\" scene=\"...\")");
         ref.file = r.resolve(n, n.attribute("file").value(), false);
         return;
     }
     ref.variant = r.required(n, "variant");
+    ref.scene = n.attribute("scene").value();
     // Rendered in two halves of spp / 2 samples.
     ref.spp = uint32_t(r.whole(n, "spp", r.number(n, "spp", r.required(n, "spp")), 2, kMaxSpp));
     if (n.attribute("seed"))
@@ -314,6 +316,12 @@ void check_metrics(const Reader& r, const pugi::xml_node& root, Experiment& e) {
 
 }  // namespace
 
+const SceneSpec& Experiment::reference_scene(const SceneSpec& scene) const {
+    for (const SceneSpec& s : scenes)
+        if (!reference.scene.empty() && s.name == reference.scene) return s;
+    return scene;
+}
+
 const Variant* Experiment::find_variant(const std::string& wanted) const {
     for (const Variant& v : variants)
         if (v.name == wanted) return &v;
@@ -396,6 +404,10 @@ Experiment load_experiment(const std::string& path) {
         if (!names.insert(s.name).second)
             throw SceneError(
                 s.location, fmt::format("two scenes are named \"{}\" (give name=\"...\")", s.name));
+    if (!e.reference.scene.empty() && !names.count(e.reference.scene))
+        throw SceneError(e.reference.location,
+                         fmt::format("<reference> names scene \"{}\", which is not declared",
+                                     e.reference.scene));
     return e;
 }
 

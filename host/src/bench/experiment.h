@@ -31,10 +31,12 @@ struct Variant {
 };
 
 /// The reference every run is measured against: a file (.npy cube [H, W, T, C] or .exr image),
-/// or `variant` rendered at `spp` samples (seed `seed`), rendered once and cached.
+/// or `variant` rendered at `spp` samples (seed `seed`), rendered once and cached: per scene, or
+/// of the one `scene` for every scene (a scene at several scales against its unit scale).
 struct ReferenceSpec {
     std::string file;
     std::string variant;
+    std::string scene;  ///< empty: each scene's own
     uint32_t spp = 0;
     uint64_t seed = 0;
     SourceLocation location;
@@ -79,6 +81,8 @@ struct Experiment {
     std::string digest;
 
     const Variant* find_variant(const std::string& name) const;
+    /// The scene whose reference `scene`'s runs are measured against.
+    const SceneSpec& reference_scene(const SceneSpec& scene) const;
     /// The budgets in the order they run, as text ("16" spp or "2.5" s).
     std::vector<std::string> budget_labels() const;
     bool timed() const { return !time_budgets.empty(); }

@@ -154,31 +154,26 @@ std::string separator_row(const std::string& header) {
     return row + "\n";
 }
 
-// Samples per second against the first variant's, pair by pair: the runs of one budget and
-// seed ran one after the other.
-Ratio throughput_ratio(const Series& base, const Series& s) {
+// The median of b / a over the runs both hold (keys "budget seed"): runs of one group ran one
+// after the other, so a drift of the machine's speed cancels.
+Ratio paired_ratio(const std::map<std::string, double>& a_of_run,
+                   const std::map<std::string, double>& b_of_run) {
     std::vector<double> a, b;
-    for (const auto& [run, rate] : s.rate_of_run)
-        if (auto it = base.rate_of_run.find(run); it != base.rate_of_run.end())
-            a.push_back(it->second), b.push_back(rate);
-    return paired_median_ratio(a, b);
-}
-
-// Each run's ray rate over Embree's raw rate measured just before its (budget, seed) group.
-Ratio raw_ray_ratio(const RawRates& raw, const Series& s) {
-    std::vector<double> a, b;
-    for (const auto& [run, rate] : s.ray_rate_of_run)
-        if (auto it = raw.incoherent_of_run.find(run); it != raw.incoherent_of_run.end())
-            a.push_back(it->second), b.push_back(rate);
+    for (const auto& [run, value] : b_of_run)
+        if (auto it = a_of_run.find(run); it != a_of_run.end())
+            a.push_back(it->second), b.push_back(value);
     return paired_median_ratio(a, b);
 }
 
 std::string throughput_cells(const Experiment& e, const RawRates& raw, const Series& base,
                              const Series& s) {
     return fmt::format(
-        " {} | {} |{} {} |{}", ratio_text(throughput_ratio(base, s)), g(median(s.ray_rates) * 1e-6),
-        raw.empty() ? "" : " " + ratio_text(raw_ray_ratio(raw, s)) + " |", g(median(s.cores_used)),
-        e.child_processes ? " " + g(median(s.peak_mb)) + " |" : "");
+        " {} | {} |{} {} |{}", ratio_text(paired_ratio(base.rate_of_run, s.rate_of_run)),
+        g(median(s.ray_rates) * 1e-6),
+        raw.empty()
+            ? ""
+            : " " + ratio_text(paired_ratio(raw.incoherent_of_run, s.ray_rate_of_run)) + " |",
+        g(median(s.cores_used)), e.child_processes ? " " + g(median(s.peak_mb)) + " |" : "");
 }
 
 // A study without a reference: throughput and memory only.

@@ -372,9 +372,10 @@ void write_reference_profiles(const Experiment& e, const SceneSpec& scene, const
 std::vector<std::string> reference_keys(const Experiment& e, const RunnerOptions& options) {
     std::vector<std::string> keys;
     for (const SceneSpec& scene : e.scenes)
-        keys.push_back(!e.has_reference()         ? std::string("none")
-                       : e.reference.file.empty() ? reference_key(e, scene, options)
-                                                  : digest_hex(read_bytes(e.reference.file)));
+        keys.push_back(!e.has_reference() ? std::string("none")
+                       : e.reference.file.empty()
+                           ? reference_key(e, e.reference_scene(scene), options)
+                           : digest_hex(read_bytes(e.reference.file)));
     return keys;
 }
 
@@ -633,7 +634,7 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
         const SceneSpec& scene = e.scenes[s];
         std::optional<Cube> reference;
         if (e.has_reference()) {
-            reference = reference_cube(e, scene, keys[s], options, threads, dir);
+            reference = reference_cube(e, e.reference_scene(scene), keys[s], options, threads, dir);
             stopped = !reference;
             if (stopped) break;
             write_reference_profiles(e, scene, *reference, dir);
