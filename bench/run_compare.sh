@@ -19,7 +19,7 @@ base="$root/build-bench-compare"
 before_src="$base/src-$rev"
 before_build="$base/build-$rev"
 
-bench_build femto_cli
+bench_build  # the CLI and every plugin it loads
 if [[ ! -d "$before_src" ]]; then
     mkdir -p "$base"
     git -C "$root" worktree add --detach "$before_src" "$rev" >/dev/null
@@ -28,7 +28,7 @@ if [[ ! -f "$before_build/build.ninja" ]]; then
     cmake -S "$before_src" -B "$before_build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
         -DFEMTO_TESTS=OFF >/dev/null
 fi
-ninja -C "$before_build" femto_cli
+ninja -C "$before_build"
 
 log="$results/compare_run.log"
 bench_log_header "$log"
