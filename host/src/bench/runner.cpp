@@ -9,9 +9,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -260,15 +262,24 @@ Rendered render_in_child(const std::string& file, const LoadOptions& lo, uint64_
             fmt::format("cannot run \"{}\" for a run in a child process", options.executable));
     int status = 0;
     bool forwarded = false;
-    while (waitpid(pid, &status, WNOHANG) != pid) {
-        if (options.stop && options.stop->load() && !forwarded)
-            kill(pid, SIGTERM), forwarded = true;
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    for (pid_t waited = 0; waited != pid;) {
+        waited = waitpid(pid, &status, WNOHANG);
+        if (waited < 0 && errno != EINTR)  // the child is gone without a status: never wait on
+            throw SceneError(
+                fmt::format("lost the run's child process ({})", std::strerror(errno)));
+        if (options.stop && options.stop->load() && !forwarded) {
+            kill(pid, SIGTERM);
+            forwarded = true;
+        }
+        if (waited != pid) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     Rendered r;
     r.stopped =
         (options.stop && options.stop->load()) || (WIFEXITED(status) && WEXITSTATUS(status) == 130);
-    if (r.stopped) return fs::remove_all(scratch), r;
+    if (r.stopped) {
+        fs::remove_all(scratch);
+        return r;
+    }
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
         throw SceneError(fmt::format(
             "a run in a child process ({} bench-run --scene {} --seed {} --spp {}) failed with {} "
