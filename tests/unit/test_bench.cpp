@@ -15,6 +15,7 @@
 #include "bench/runner.h"
 #include "femto/error.h"
 #include "femto/testing/render.h"
+#include "util/strings.h"
 
 namespace fs = std::filesystem;
 using namespace femto::bench;
@@ -34,6 +35,14 @@ void write(const fs::path& p, const std::string& text) { std::ofstream(p) << tex
 std::string read(const fs::path& p) {
     std::ifstream in(p);
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// Options of a study written into `out`, without a line per run.
+RunnerOptions quiet_into(const fs::path& out) {
+    RunnerOptions o;
+    o.out_dir = out.string();
+    o.progress = false;
+    return o;
 }
 
 // A plane at z = 0 lit by a small rectangular lamp above it, seen from z = 4 by `film` (max_depth
@@ -103,6 +112,15 @@ TEST(BenchMeasures, FormulasOnAHandComputedCube) {
     EXPECT_DOUBLE_EQ(resolved_frame_rel_mse(x, unresolved), 0.0);
     unresolved.variance = {1, 1, 0, 0, 0, 0};  // frame 1: noise 1 of 4: none resolved
     EXPECT_TRUE(std::isnan(resolved_frame_rel_mse(x, unresolved)));
+}
+
+// results.csv and raw_rays.csv cells: every comma splits, so an empty cell and a cell cut
+// short stay visible in the count.
+TEST(BenchCsv, CellsSplitAtEveryComma) {
+    using femto::detail::split;
+    EXPECT_EQ(split("a,b,c", ','), (std::vector<std::string>{"a", "b", "c"}));
+    EXPECT_EQ(split("a,,b,", ','), (std::vector<std::string>{"a", "", "b", ""}));
+    EXPECT_EQ(split("", ','), (std::vector<std::string>{""}));
 }
 
 TEST(BenchMeasures, PairedThroughputRatio) {
@@ -250,9 +268,7 @@ TEST(BenchRunner, RunsResumesStopsAndRefusesAChangedExperiment) {
         "<threads value=\"1\"/></experiment>";
     write(dir / "e.xml", experiment);
     const Experiment e = load_experiment((dir / "e.xml").string());
-    RunnerOptions o;
-    o.out_dir = (dir / "out").string();
-    o.progress = false;
+    RunnerOptions o = quiet_into(dir / "out");
     std::atomic<bool> stop{true};  // stopped before the first run: nothing is measured
     o.stop = &stop;
     EXPECT_FALSE(run_experiment(e, o));
@@ -348,9 +364,7 @@ TEST(BenchRunner, TimeBudgetsBecomeSampleCounts) {
           "seconds=\"0.02 0.2\"/><reference variant=\"v\" spp=\"16\"/><threads value=\"1\"/>"
           "</experiment>");
     const Experiment e = load_experiment((dir / "e.xml").string());
-    RunnerOptions o;
-    o.out_dir = (dir / "out").string();
-    o.progress = false;
+    RunnerOptions o = quiet_into(dir / "out");
     ASSERT_TRUE(run_experiment(e, o));
     const std::vector<RunRow> rows = read_results((dir / "out" / "results.csv").string(), e);
     ASSERT_EQ(rows.size(), 2u);
@@ -385,9 +399,7 @@ TEST(BenchRunner, ChildProcessesMeasurePeakMemoryWithoutAReference) {
     const Experiment e = load_experiment((dir / "e.xml").string());
     EXPECT_TRUE(e.child_processes);
     EXPECT_FALSE(e.has_reference());
-    RunnerOptions o;
-    o.out_dir = (dir / "out").string();
-    o.progress = false;
+    RunnerOptions o = quiet_into(dir / "out");
     o.executable = FEMTO_CLI_PATH;
     ASSERT_TRUE(run_experiment(e, o));
     const std::vector<RunRow> rows = read_results((dir / "out" / "results.csv").string(), e);
@@ -443,9 +455,7 @@ TEST(BenchRunner, RawRaysMeasureEmbreeBeforeEachGroup) {
           "spp=\"1 2\"/><seeds count=\"2\"/><raw_rays seconds=\"0.05\"/><threads "
           "value=\"1\"/></experiment>");
     const Experiment e = load_experiment((dir / "e.xml").string());
-    RunnerOptions o;
-    o.out_dir = (dir / "out").string();
-    o.progress = false;
+    RunnerOptions o = quiet_into(dir / "out");
     ASSERT_TRUE(run_experiment(e, o));
     std::ifstream csv(dir / "out" / "raw_rays.csv");
     std::string line;
@@ -488,9 +498,7 @@ TEST(BenchRunner, OneScenesReferenceServesEveryScene) {
           "name=\"b\"/><variant name=\"v\"/><budgets spp=\"2\"/><reference variant=\"v\" "
           "spp=\"64\" scene=\"a\"/><threads value=\"1\"/></experiment>");
     const Experiment e = load_experiment((dir / "e.xml").string());
-    RunnerOptions o;
-    o.out_dir = (dir / "out").string();
-    o.progress = false;
+    RunnerOptions o = quiet_into(dir / "out");
     ASSERT_TRUE(run_experiment(e, o));
     int cached = 0;
     for (const auto& f : fs::directory_iterator(dir / "out" / "cache"))

@@ -1,5 +1,7 @@
 #include "bench/measures.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -245,6 +247,13 @@ Ratio equal_error_ratio(const std::vector<double>& seconds_a, const std::vector<
     r.lo = samples[size_t(0.025 * double(samples.size()))];
     r.hi = samples[std::min(samples.size() - 1, size_t(0.975 * double(samples.size())))];
     return r;
+}
+
+double process_cpu_seconds() {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+           1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
 double median(std::vector<double> v) {

@@ -82,6 +82,10 @@ Ratio paired_median_ratio(const std::vector<double>& a, const std::vector<double
 /// The median (NaN when empty).
 double median(std::vector<double> v);
 
+/// This process's CPU time so far (user + system, every thread), in seconds: over a run's wall
+/// clock, the cores it actually used.
+double process_cpu_seconds();
+
 /// The 97.5 % quantile of Student's t with `dof` degrees of freedom (a two-sided 95 % interval).
 double student_t975(int dof);
 

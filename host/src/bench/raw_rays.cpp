@@ -5,7 +5,6 @@
 
 #include <embree3/rtcore.h>
 #include <pmmintrin.h>
-#include <sys/resource.h>
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -17,6 +16,7 @@
 #include <thread>
 
 #include "accel/embree_scene.h"
+#include "bench/measures.h"
 #include "femto/random.h"
 #include "femto/shape.h"
 #include "femto/warp.h"
@@ -31,13 +31,6 @@ using Clock = std::chrono::steady_clock;
 void enable_flush_to_zero() {
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-}
-
-double process_cpu_seconds() {
-    rusage ru{};
-    getrusage(RUSAGE_SELF, &ru);
-    return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-           1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
 // Shapes picked by area: a cumulative distribution over `shapes`.

@@ -67,12 +67,19 @@ double metric_of(const Experiment& e, const std::string& metric, const RunRow& r
 }
 
 struct Series {
-    std::vector<double> seconds, samples, errors;
-    std::vector<double> ray_rates, sample_rates, cores_used, peak_mb;
-    std::map<std::string, double> rate_of_run;      // samples/s by "budget seed": pairs runs
-    std::map<std::string, double> ray_rate_of_run;  // rays/s, the same
+    std::vector<double> seconds, samples, errors, cores_used, peak_mb;
+    // Samples and rays per second of each run, by "budget seed": what pairs it with the runs of
+    // other variants (and Embree's raw rate) measured just before or after it.
+    std::map<std::string, double> rate_of_run, ray_rate_of_run;
     std::map<std::string, std::vector<double>> by_budget;
 };
+
+// The median of a run-keyed map's values.
+double median_of(const std::map<std::string, double>& by_run) {
+    std::vector<double> values;
+    for (const auto& [run, value] : by_run) values.push_back(value);
+    return median(std::move(values));
+}
 
 // The runs of one scene, by variant (in the experiment's order), with their error `metric`.
 std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
@@ -87,13 +94,11 @@ std::vector<std::pair<std::string, Series>> series_of(const Experiment& e,
             s.seconds.push_back(r.seconds);
             s.samples.push_back(double(r.samples));
             s.errors.push_back(metric_of(e, metric, r));
-            if (r.seconds > 0) s.ray_rates.push_back(double(r.rays) / r.seconds);
-            if (r.seconds > 0) s.sample_rates.push_back(double(r.samples) / r.seconds);
-            if (r.seconds > 0)
-                s.rate_of_run[r.budget + " " +
-                              std::to_string(r.seed)] = double(r.samples) / r.seconds,
-                              s.ray_rate_of_run[r.budget + " " + std::to_string(r.seed)] =
-                                  double(r.rays) / r.seconds;
+            if (r.seconds > 0) {
+                const std::string run = r.budget + " " + std::to_string(r.seed);
+                s.rate_of_run[run] = double(r.samples) / r.seconds;
+                s.ray_rate_of_run[run] = double(r.rays) / r.seconds;
+            }
             if (std::isfinite(r.cores_used)) s.cores_used.push_back(r.cores_used);
             if (std::isfinite(r.peak_mb)) s.peak_mb.push_back(r.peak_mb);
             s.by_budget[r.budget].push_back(metric_of(e, metric, r));
@@ -117,23 +122,24 @@ struct RawRates {
     bool empty() const { return by_kind.empty(); }
 };
 
-RawRates read_raw_rates(const fs::path& csv, const std::string& scene) {
-    RawRates raw;
+// Every scene's raw rates, from raw_rays.csv (rows `scene, budget, seed, kind, rays, seconds,
+// cores_used`); none when the study measured none.
+std::map<std::string, RawRates> read_raw_rates(const fs::path& csv) {
+    std::map<std::string, RawRates> by_scene;
     std::ifstream in(csv);
     std::string line;
     std::getline(in, line);  // the header
     while (std::getline(in, line)) {
-        std::vector<std::string> f;
-        std::stringstream ss(line);
-        for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
-        if (f.size() != 7 || f[0] != scene) continue;  // another scene's, or cut short
+        const std::vector<std::string> f = detail::split(line, ',');
+        if (f.size() != 7) continue;  // cut short by a kill
         const double seconds = std::atof(f[5].c_str());
         if (!(seconds > 0)) continue;
         const double rate = std::atof(f[4].c_str()) / seconds;
+        RawRates& raw = by_scene[f[0]];
         raw.by_kind[f[3]].push_back(rate);
         if (f[3] == "incoherent") raw.incoherent_of_run[f[1] + " " + f[2]] = rate;
     }
-    return raw;
+    return by_scene;
 }
 
 // The columns every table has: throughput against the first variant, rays (against Embree's
@@ -169,7 +175,7 @@ std::string throughput_cells(const Experiment& e, const RawRates& raw, const Ser
                              const Series& s) {
     return fmt::format(
         " {} | {} |{} {} |{}", ratio_text(paired_ratio(base.rate_of_run, s.rate_of_run)),
-        g(median(s.ray_rates) * 1e-6),
+        g(median_of(s.ray_rate_of_run) * 1e-6),
         raw.empty()
             ? ""
             : " " + ratio_text(paired_ratio(raw.incoherent_of_run, s.ray_rate_of_run)) + " |",
@@ -182,7 +188,7 @@ std::string throughput_section(const Experiment& e, const RawRates& raw,
     const std::string header = "| variant | runs | median samples/s |" + throughput_header(e, raw);
     std::string md = header + "\n" + separator_row(header);
     for (const auto& [name, s] : series)
-        md += fmt::format("| {} | {} | {} |", name, s.seconds.size(), g(median(s.sample_rates))) +
+        md += fmt::format("| {} | {} | {} |", name, s.seconds.size(), g(median_of(s.rate_of_run))) +
               throughput_cells(e, raw, series.front().second, s) + "\n";
     return md + "\n";
 }
@@ -236,9 +242,8 @@ std::string metric_table(const Experiment& e, const std::vector<RunRow>& rows,
 }
 
 std::string scene_section(const Experiment& e, const std::vector<RunRow>& rows,
-                          const SceneSpec& scene, const fs::path& dir) {
+                          const SceneSpec& scene, const RawRates& raw) {
     std::string md = fmt::format("## {}\n\n`{}`\n\n", scene.name, scene.file);
-    const RawRates raw = read_raw_rates(dir / "raw_rays.csv", scene.name);
     if (!raw.empty()) md += raw_rates_line(raw);
     if (!e.has_reference())
         return md + throughput_section(e, raw, series_of(e, rows, scene.name, "relmse"));
@@ -357,7 +362,11 @@ void write_report(const Experiment& e, const std::vector<RunRow>& rows, const Ma
         e.child_processes ? "; peak MB: each run's child process's peak resident memory "
                             "(loading, rendering and writing the film's outputs)"
                           : "");
-    for (const SceneSpec& scene : e.scenes) md += scene_section(e, rows, scene, dir);
+    const std::map<std::string, RawRates> raw = read_raw_rates(dir / "raw_rays.csv");
+    for (const SceneSpec& scene : e.scenes) {
+        const auto found = raw.find(scene.name);
+        md += scene_section(e, rows, scene, found == raw.end() ? RawRates{} : found->second);
+    }
     md += e.has_reference() ? "Rows: `results.csv` (one per run), per-frame errors: `frames.csv`, "
                               "plot: `plot.svg`.\n"
                             : "Rows: `results.csv` (one per run).\n";

@@ -4,7 +4,6 @@
 
 #include <fmt/format.h>
 #include <spawn.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -30,6 +29,7 @@
 #include "femto/image_io.h"
 #include "femto/sensor.h"
 #include "femto/tfilter.h"
+#include "util/strings.h"
 
 namespace fs = std::filesystem;
 
@@ -152,13 +152,6 @@ double peak_resident_mb() {
     return NAN;
 }
 
-double cpu_seconds_now() {
-    rusage ru{};
-    getrusage(RUSAGE_SELF, &ru);
-    return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-           1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
-}
-
 // Renders `lo`'s scene with `seed` at `spp` samples per pixel. Ctrl-C stops it at once (the
 // run is then discarded: a render stopped within a pass has pixels with fewer samples). With
 // `measure`, the film's cube is read back (through `scratch`); with a `child_stem` instead, the
@@ -193,14 +186,14 @@ Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t see
         watcher.join();
     };
     Rendered r;
-    const double cpu_before = cpu_seconds_now();
+    const double cpu_before = process_cpu_seconds();
     try {
         r.stats = render(*scene, ro);
     } catch (...) {
         finish_watcher();
         throw;
     }
-    r.cpu_seconds = cpu_seconds_now() - cpu_before;
+    r.cpu_seconds = process_cpu_seconds() - cpu_before;
     finish_watcher();
     r.stopped = r.stats.interrupted || (options.stop && options.stop->load());
     if (!r.stopped && !child_stem.empty())
@@ -597,9 +590,7 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
     while (std::getline(in, line)) {
         ++number;
         if (line.empty()) continue;
-        std::vector<std::string> f;
-        std::stringstream ss(line);
-        for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+        const std::vector<std::string> f = detail::split(line, ',');
         const size_t columns = kFixedColumns + e.windows.size() + e.pixels.size();
         if (f.size() != columns)
             throw SceneError(fmt::format("{}:{}: expected {} fields, found {}", csv_path, number,

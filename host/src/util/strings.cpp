@@ -52,6 +52,16 @@ std::string tag_with_article(PluginKind kind) {
     return with_article("<" + std::string(kind_tag(kind)) + ">");
 }
 
+std::vector<std::string> split(const std::string& text, char sep) {
+    std::vector<std::string> out(1);
+    for (const char c : text)
+        if (c == sep)
+            out.emplace_back();
+        else
+            out.back() += c;
+    return out;
+}
+
 std::string join(const std::vector<std::string>& items, const std::string& sep) {
     std::string out;
     for (size_t i = 0; i < items.size(); ++i) {

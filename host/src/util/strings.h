@@ -20,6 +20,8 @@ std::string did_you_mean(const std::string& name, const std::vector<std::string>
 std::string with_article(const std::string& noun);
 /// "an <emitter>", "a <bsdf>": a kind's XML tag after its article.
 std::string tag_with_article(PluginKind kind);
+/// The pieces of `text` between `sep`s ("a,,b" -> "a", "", "b"; "" -> one empty piece).
+std::vector<std::string> split(const std::string& text, char sep);
 /// "a, b, c"
 std::string join(const std::vector<std::string>& items, const std::string& sep = ", ");
 
