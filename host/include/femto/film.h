@@ -210,6 +210,9 @@ public:
     /// Latest world time (camera time minus the sensor distance) this film records, for a
     /// film in world time; infinite otherwise.
     virtual double max_world_time() const;
+    /// Whether integrators may stop paths that can no longer arrive by max_time() /
+    /// max_world_time() (TimeWindow::prune); a time-resolved film's `prune_paths`.
+    virtual bool prunes_paths() const { return true; }
     /// Bytes a block keeps per pixel of its area, when that is as much as the film keeps per
     /// pixel (a transient film's blocks hold every bin); 0 when blocks are small. The renderer
     /// then picks tiles small enough that blocks in flight stay a small share of the film's

@@ -130,8 +130,8 @@ public:
     /// Whether light leaving the current vertex over at least `distance` more optical length
     /// still arrives within the window (check it before tracing a connection).
     bool arrives_in_time(double distance) const {
-        return std::isfinite(window_.world_end) ? time_ <= window_.world_end
-                                                : time_ + distance <= window_.end;
+        // In world time the connection is the sensor segment, which the film removes.
+        return time_ + (std::isfinite(window_.world_end) ? 0.0 : distance) <= cut();
     }
     /// Adds `radiance` that reaches the sensor at film position `pos` from the current vertex
     /// over a connection of optical length `connection` (ShadowConnection::optical_length).
@@ -140,7 +140,7 @@ public:
     }
 
 private:
-    double cut() const { return std::min(window_.end, window_.world_end); }
+    double cut() const { return window_.light_cut(); }
 
     TimeWindow window_;
     Vec3 position_;

@@ -225,6 +225,7 @@ public:
     /// sensor segment is subtracted after the path ends, so the integrator cannot cut it).
     double max_time() const override;
     double max_world_time() const override;
+    bool prunes_paths() const override { return prune_paths_; }
 
     const TimeGrid& grid() const { return grid_; }
     const TemporalFilter& tfilter() const { return *tfilter_; }
@@ -260,6 +261,7 @@ protected:
 
 private:
     bool pilot_ = false;  // between begin_pilot() and end_pilot()
+    bool prune_paths_ = true;
     TimeResolvedBlock::Arrivals arrivals_;
 };
 

@@ -66,17 +66,30 @@ struct TimeWindow {
     double world_end = std::numeric_limits<double>::infinity();
     /// Earliest emission time of any emitter (PulseProfile::earliest).
     double earliest_emission = 0.0;
+    /// Whether the window may cut paths and connections (the film's `prune_paths`, on by
+    /// default). Off, paths end only by depth or roulette and connections are never skipped
+    /// for time: the image is the same, only slower; it measures what pruning saves. `end`
+    /// and `world_end` stay the film's either way (time-sampling strategies spread vertices
+    /// over them).
+    bool prune = true;
     /// Longest optical length a camera path may have travelled and still bring light to the
     /// film: light leaving an emitter no earlier than earliest_emission must arrive by `end`,
     /// or by world_end after the path's sensor distance `sensor_distance` (negative: unknown
-    /// yet, the path has not scattered).
+    /// yet, the path has not scattered). Infinite when the window does not prune.
     double path_cut(double sensor_distance = -1.0) const {
-        const double world = sensor_distance >= 0 ? world_end + sensor_distance
-                                                  : std::numeric_limits<double>::infinity();
+        constexpr double kNever = std::numeric_limits<double>::infinity();
+        if (!prune) return kNever;
+        const double world = sensor_distance >= 0 ? world_end + sensor_distance : kNever;
         return std::min(end, world) - earliest_emission;
     }
+    /// Longest time (emission time included) a light path may reach and still be recorded:
+    /// the window's end, or its world end (a light path's world time is its own time: the
+    /// connection to the sensor is the sensor segment). Infinite when the window does not prune.
+    double light_cut() const {
+        return prune ? std::min(end, world_end) : std::numeric_limits<double>::infinity();
+    }
     /// Whether the window ends every path (camera time, or world time once a path scatters).
-    bool bounded() const { return std::isfinite(end) || std::isfinite(world_end); }
+    bool bounded() const { return prune && (std::isfinite(end) || std::isfinite(world_end)); }
 };
 
 /// The time a film records for a contribution that arrives at camera time `time`: camera

@@ -119,6 +119,7 @@ uint64_t Scene::rays_traced() const {
 void Scene::refresh_time_window() {
     time_window_.end = sensor_->film().max_time();
     time_window_.world_end = sensor_->film().max_world_time();
+    time_window_.prune = sensor_->film().prunes_paths();
     time_window_.earliest_emission = earliest_emission_;
 }
 

@@ -43,8 +43,8 @@ void MonteCarloIntegrator::preprocess(const Scene& scene) {
         throw SceneError(location_,
                          type_name() +
                              " with max_depth=-1 and no Russian roulette (rr_depth=0) needs a "
-                             "time window that ends its paths (a transient or streak film); set "
-                             "max_depth or rr_depth otherwise");
+                             "time window that ends its paths (a transient or streak film with "
+                             "prune_paths on); set max_depth or rr_depth otherwise");
 }
 
 }  // namespace femto

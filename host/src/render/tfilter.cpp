@@ -52,6 +52,10 @@ std::vector<ParamSpec> TimeResolvedFilm::inherited_params() {
         {{"world_time", "boolean", "false",
           "bin by world time (the sensor segment removed, eq. 4.1) instead of camera time"},
          {"exposure", "float", "0", "exposure of the PNG preview(s), in stops"},
+         {"prune_paths", "boolean", "true",
+          "stop paths and skip connections once nothing they carry can arrive within the "
+          "window (ch. 5.6.1); false: paths end only by max_depth or roulette (same image, "
+          "slower: measures what pruning saves)"},
          {"tfilter", "tfilter", "histogram", "temporal reconstruction (nested)"}});
 }
 
@@ -59,6 +63,7 @@ TimeResolvedFilm::TimeResolvedFilm(const Properties& props)
     : Film(props), grid_(read_time_grid(props)) {
     if (props.get_bool("world_time", false)) grid_.frame = TimeFrame::World;
     exposure_ = float(props.get_float("exposure", 0.0));
+    prune_paths_ = props.get_bool("prune_paths", true);
     tfilter_ = std::static_pointer_cast<TemporalFilter>(
         props.child(PluginKind::TemporalFilter, "histogram"));
     tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
