@@ -9,15 +9,23 @@ using femto::testing::IntegratorConformance;
 
 namespace {
 const std::string kDepth = "<integer name=\"max_depth\" value=\"$max_depth\"/>";
+// Photon mapping with kernels small against the checks' scenes (R = 0.02 against a plane of
+// 4 x 4 at 1.5 from its light; T = 0.01, two of the tof-plane's bins) and few photons per
+// pass: the checks average over passes (their spp) and seeds.
+const std::string kPpm = kDepth +
+                         "<integer name=\"photons_per_pass\" value=\"20000\"/><float "
+                         "name=\"initial_radius\" value=\"0.02\"/><float "
+                         "name=\"initial_bandwidth\" value=\"0.01\"/>";
 }  // namespace
 
-INSTANTIATE_TEST_SUITE_P(Builtin, IntegratorConformance,
-                         ::testing::Values(IntegratorCase{"path", kDepth, -1, true},
-                                           IntegratorCase{"transient_path", kDepth, -1, true},
-                                           IntegratorCase{"direct", "", 2, false},
-                                           IntegratorCase{"transient_light", kDepth, -1, true,
-                                                          true},
-                                           IntegratorCase{"transient_bdpt", kDepth, -1, true},
-                                           IntegratorCase{"bdpt", kDepth, -1, true},
-                                           IntegratorCase{"volpath", kDepth, -1, true}),
-                         femto::testing::case_name);
+INSTANTIATE_TEST_SUITE_P(
+    Builtin, IntegratorConformance,
+    ::testing::Values(IntegratorCase{"path", kDepth, -1, true},
+                      IntegratorCase{"transient_path", kDepth, -1, true},
+                      IntegratorCase{"direct", "", 2, false},
+                      IntegratorCase{"transient_light", kDepth, -1, true, true},
+                      IntegratorCase{"transient_bdpt", kDepth, -1, true},
+                      IntegratorCase{"bdpt", kDepth, -1, true},
+                      IntegratorCase{"volpath", kDepth, -1, true},
+                      IntegratorCase{"transient_ppm", kPpm, -1, false, false, 0.02, 0.01}),
+    femto::testing::case_name);

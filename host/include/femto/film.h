@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "femto/color.h"
+#include "femto/kernel.h"
 #include "femto/math.h"
 #include "femto/object.h"
 #include "femto/rfilter.h"
@@ -20,8 +21,12 @@ namespace femto {
 /// One radiance contribution of a camera sample and its time: the optical path length (time x
 /// c, in scene units) of the path that carried it, plus emission time and vertex delays, as
 /// PathClock computes it. Steady films ignore the time.
+/// A density estimate (photon mapping) may spread its contribution in time by a kernel of its
+/// own: time-resolved films then integrate that kernel over their bins in place of their
+/// temporal filter's reconstruction (one smoothing, never two).
 struct Contribution {
     Color radiance;
+    TimeKernel kernel;  ///< none unless a density estimate spreads it
     double time = 0.0;
 };
 
@@ -80,8 +85,8 @@ struct RejectedContributions {
 /// What the integrator reports for one camera sample.
 class ContributionList {
 public:
-    void add(const Color& radiance, double time) {
-        if (!radiance.is_black()) items_.push_back({radiance, time});
+    void add(const Color& radiance, double time, TimeKernel kernel = {}) {
+        if (!radiance.is_black()) items_.push_back({radiance, kernel, time});
     }
     void clear() {
         items_.clear();

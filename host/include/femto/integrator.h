@@ -50,6 +50,10 @@ public:
     /// Called once before each pass, from one thread, after the film's start_pass() (e.g. a
     /// photon pass that the pass's samples then query; it may use TBB itself).
     virtual void begin_pass(const Scene& /*scene*/, const PassInfo& /*pass*/) {}
+    /// Samples per pixel in each pass, when the integrator needs a fixed number (a progressive
+    /// photon mapper's iteration is one photon pass and one camera sample per pixel); 0 (the
+    /// default) lets the renderer choose.
+    virtual uint32_t samples_per_pass() const { return 0; }
     /// Estimates the radiance arriving along the camera ray `ray` (unit direction). Camera
     /// integrators implement it; the default throws std::logic_error.
     virtual void sample(const Scene& scene, Sampler& sampler, const Ray& ray,

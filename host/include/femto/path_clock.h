@@ -80,6 +80,12 @@ public:
     /// Adds `radiance` that a light subpath brought to its vertex (`light`) and that reaches the
     /// current vertex over a connection of optical length `connection`.
     void record(const Color& radiance, const LightClock& light, double connection) const;
+    /// Adds `radiance` that a photon brought to the current vertex (a density estimate), the
+    /// photon having reached its own vertex at `photon_time` (its LightClock::time() there,
+    /// emission time included), spread in time by the estimate's kernel `kernel`.
+    void record(const Color& radiance, double photon_time, TimeKernel kernel) const {
+        out_.add(radiance, time_ + photon_time, kernel);
+    }
     /// Adds a value measured at the current vertex that no emitter sent (ambient occlusion, a
     /// debugging quantity): it is recorded at the clock's time.
     void record(const Color& value) const { out_.add(value, time_); }

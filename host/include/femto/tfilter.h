@@ -70,18 +70,22 @@ template <typename Add>
 Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t pixel,
                    const ContributionList& sample, bool world_time, std::vector<BinWeight>& scratch,
                    Add&& add) {
-    if (filter.is_histogram()) {
-        for (const Contribution& c : sample.items()) {
-            const int bin =
-                grid.bin_of(recorded_time(c.time, sample.sensor_distance(), world_time));
-            if (bin >= 0) add(bin, c.radiance);
-        }
-        return Color(0.f);
-    }
-    const bool spreads = filter.max_radius() > 0;
+    const bool histogram = filter.is_histogram(), spreads = filter.max_radius() > 0;
     Color spill(0.f);
     for (const Contribution& c : sample.items()) {
         const double t = recorded_time(c.time, sample.sensor_distance(), world_time);
+        if (c.kernel.spreads()) {  // the estimate's own kernel replaces the filter
+            const double inside =
+                integrate_over_bins(grid, c.kernel.shape, t, c.kernel.half_width,
+                                    [&](int bin, double w) { add(bin, c.radiance * float(w)); });
+            spill += c.radiance * float((grid.bin_of(t) >= 0 ? 1.0 : 0.0) - inside);
+            continue;
+        }
+        if (histogram) {
+            const int bin = grid.bin_of(t);
+            if (bin >= 0) add(bin, c.radiance);
+            continue;
+        }
         scratch.clear();
         filter.splat(grid, pixel, sample.sample_index(), t, scratch);
         float inside = 0.f;

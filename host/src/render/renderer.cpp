@@ -279,8 +279,11 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     // integrators that splat keep a pass's splats in memory, so theirs are smaller.
     const uint64_t pixels = uint64_t(W) * uint64_t(H);
     const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 18 : 22);
-    const uint32_t pass_spp = uint32_t(
-        std::max<uint64_t>(1, std::min<uint64_t>((spp + 15) / 16, max_pass_samples / pixels)));
+    const uint32_t pass_spp =
+        integrator.samples_per_pass() > 0
+            ? integrator.samples_per_pass()
+            : uint32_t(std::max<uint64_t>(
+                  1, std::min<uint64_t>((spp + 15) / 16, max_pass_samples / pixels)));
     const uint32_t pilot_spp = film.pilot_samples();
     Progress progress(options.progress, pixels * (uint64_t(spp) + pilot_spp));
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(

@@ -278,7 +278,11 @@ public:
         std::vector<float> depth(pixels);
         for (size_t p = 0; p < pixels; ++p) depth[p] = weights_[p].depth();
         io::Attributes attrs = io::time_resolved_attributes(grid_, info, tfilter_->type_name());
-        if (tfilter_->max_radius() > 0) attrs.push_back(window_spill_attribute());
+        // A spreading filter, or an integrator's own time kernel (photon mapping), spills.
+        const bool spilled = std::any_of(weights_.begin(), weights_.end(), [](const PixelSums& s) {
+            return s.spill[0] != 0 || s.spill[1] != 0 || s.spill[2] != 0;
+        });
+        if (tfilter_->max_radius() > 0 || spilled) attrs.push_back(window_spill_attribute());
         const std::vector<float> scale = pixel_normalisation();
         const std::vector<size_t> shape = {size_t(height_), size_t(width_), size_t(grid_.bins), 3};
         io::OutputSet files;  // all appear together, or none

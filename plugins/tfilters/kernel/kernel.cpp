@@ -22,7 +22,8 @@
 // peaks: bench/README.md). Each kernel is still normalised, so energy is kept (a
 // "sample-point" adaptive estimate). T_1 is clamped to [half a bin, 1/8 of the window].
 // Pixels with fewer than two pilot arrivals use the median bandwidth of the others.
-#include <fmt/format.h>
+
+#include "femto/kernel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -35,47 +36,10 @@ namespace {
 
 using namespace femto;
 
-enum class Shape { Box, Epanechnikov, Perlin, Gaussian };
-
-// Cumulative distribution of the canonical kernel on [-1, 1] (0 below, 1 above).
-double kernel_cdf(Shape shape, double u) {
-    if (u <= -1.0) return 0.0;
-    if (u >= 1.0) return 1.0;
-    switch (shape) {
-        case Shape::Box:
-            return 0.5 * (u + 1.0);
-        case Shape::Epanechnikov:  // k(u) = 3/4 (1 - u^2)
-            return 0.5 + 0.75 * u - 0.25 * u * u * u;
-        case Shape::Perlin: {  // k(u) = 1 - (6x^5 - 15x^4 + 10x^3), x = |u|: Perlin's smootherstep
-            const double x = std::abs(u), x4 = x * x * x * x;
-            const double half = x - 2.5 * x4 + 3.0 * x4 * x - x4 * x * x;  // integral over [0, x]
-            return u >= 0 ? 0.5 + half : 0.5 - half;
-        }
-        case Shape::Gaussian: {  // sigma = 1/3, truncated at 3 sigma and renormalised
-            static const double norm = std::erf(3.0 / std::sqrt(2.0));
-            return 0.5 + 0.5 * std::erf(3.0 * u / std::sqrt(2.0)) / norm;
-        }
-    }
-    return 0.0;
-}
-
 class KernelFilter final : public TemporalFilter {
 public:
     explicit KernelFilter(const Properties& props) {
-        const std::string kernel = props.get_string("kernel", "perlin");
-        if (kernel == "box")
-            shape_ = Shape::Box;
-        else if (kernel == "epanechnikov")
-            shape_ = Shape::Epanechnikov;
-        else if (kernel == "perlin")
-            shape_ = Shape::Perlin;
-        else if (kernel == "gaussian")
-            shape_ = Shape::Gaussian;
-        else
-            props.fail("kernel",
-                       fmt::format("unknown kernel \"{}\"; valid: box, epanechnikov, perlin, "
-                                   "gaussian",
-                                   kernel));
+        shape_ = read_kernel_shape(props, "kernel", "perlin");
         alpha_ = props.get_float("alpha", 0.8);
         if (!(alpha_ > 0.0 && alpha_ <= 1.0))
             props.fail("alpha", "alpha must lie in (0, 1] (1 keeps the bandwidth fixed)");
@@ -109,11 +73,9 @@ public:
         }
     }
 
-    /// T_j / T_1 for sample index j - 1: the product of eq. 5.47 in closed form,
-    /// Gamma(alpha + j) / (Gamma(alpha + 1) Gamma(j + 1)).
+    /// T_j / T_1 for sample index j - 1: the product of eq. 5.47 in closed form.
     double closed_form(uint32_t sample_index) const {
-        const double j = double(sample_index) + 1.0;
-        return std::exp(std::lgamma(alpha_ + j) - std::lgamma(alpha_ + 1.0) - std::lgamma(j + 1.0));
+        return progressive_shrink(alpha_, sample_index);
     }
     double shrink(uint32_t sample_index) const {
         return sample_index < schedule_.size() ? schedule_[sample_index]
@@ -145,19 +107,9 @@ public:
             if (bin >= 0) out.push_back({bin, 1.f});
             return;
         }
-        const double lo = std::max(t - T, grid.start), hi = std::min(t + T, grid.end());
-        if (!(lo < hi)) return;
-        const int first = std::max(0, int(std::floor((lo - grid.start) / grid.bin_width)));
-        const int last =
-            std::min(grid.bins - 1, int(std::floor((hi - grid.start) / grid.bin_width)));
-        const double inv = 1.0 / T;
-        double below = kernel_cdf(shape_, (lo - t) * inv);
-        for (int b = first; b <= last; ++b) {
-            const double edge = std::min(hi, grid.start + double(b + 1) * grid.bin_width);
-            const double upto = kernel_cdf(shape_, (edge - t) * inv);
-            if (upto > below) out.push_back({b, float(upto - below)});
-            below = upto;
-        }
+        integrate_over_bins(grid, shape_, t, T, [&](int bin, double w) {
+            out.push_back({bin, float(w)});
+        });
     }
 
     double max_radius() const override { return max_t1_; }
@@ -219,7 +171,7 @@ private:
         return std::clamp(std::isnan(t) ? hi : t, lo, hi);
     }
 
-    Shape shape_ = Shape::Perlin;
+    KernelShape shape_ = KernelShape::Perlin;
     double alpha_ = 0.8;
     double fixed_bandwidth_ = 0.0;
     size_t k_neighbors_ = 40;
