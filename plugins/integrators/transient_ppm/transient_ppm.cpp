@@ -71,10 +71,12 @@ constexpr uint64_t kPhotonChunk = 1024;
 class TransientPpm final : public MonteCarloIntegrator {
 public:
     explicit TransientPpm(const Properties& props) : MonteCarloIntegrator(props, 5) {
-        const int64_t photons = props.get_int("photons_per_pass", 100000);
-        if (photons < 1 || photons > (int64_t(1) << 32))
-            props.fail("photons_per_pass", "photons_per_pass must lie in [1, 2^32]");
-        photons_per_pass_ = uint64_t(photons);
+        if (props.has("photons_per_pass")) {
+            const int64_t photons = props.get_int("photons_per_pass");
+            if (photons < 1 || photons > (int64_t(1) << 32))
+                props.fail("photons_per_pass", "photons_per_pass must lie in [1, 2^32]");
+            requested_photons_ = uint64_t(photons);
+        }
         schedule_.alpha = props.get_float("alpha", 4.0 / 7.0);
         if (!(schedule_.alpha > 0.0 && schedule_.alpha < 1.0))
             props.fail("alpha",
@@ -99,6 +101,13 @@ public:
                              "transient_ppm estimates light on surfaces only; this scene has "
                              "participating media (use transient_path or transient_bdpt)");
         starts_.prepare(scene, "transient_ppm");
+        // By default one photon path per pixel, so that a pass's photon and camera halves cost
+        // about the same (bench/README.md: more, shorter passes beat fewer, richer ones).
+        const Film& film = scene.sensor().film();
+        photons_per_pass_ =
+            requested_photons_ > 0
+                ? requested_photons_
+                : std::max<uint64_t>(1024, uint64_t(film.width()) * uint64_t(film.height()));
         radius_1_ = initial_radius_ > 0 ? initial_radius_ : default_radius(scene);
         bandwidth_1_ = initial_bandwidth_ > 0 ? initial_bandwidth_ : default_bandwidth(scene);
     }
@@ -130,7 +139,8 @@ private:
     void gather(const Hit& hit, const Bsdf& bsdf, const Throughput& throughput,
                 const PathClock& clock, int64_t depth) const;
 
-    uint64_t photons_per_pass_ = 100000;
+    uint64_t requested_photons_ = 0;  // photons_per_pass, 0 when not given
+    uint64_t photons_per_pass_ = 0;   // what preprocess() settled on
     ProgressiveBandwidths schedule_;
     double initial_radius_ = 0, initial_bandwidth_ = 0;  // 0: the defaults
     KernelShape spatial_ = KernelShape::Epanechnikov, temporal_ = KernelShape::Perlin;
@@ -324,7 +334,8 @@ FEMTO_PLUGIN(
     TransientPpm, femto::PluginKind::Integrator, "transient_ppm",
     "Transient progressive photon mapping on surfaces (ch. 5.5.1, appendix 5.B): a "
     "spatio-temporal photon density estimate whose radius and time bandwidth shrink every pass",
-    {{"photons_per_pass", "integer", "100000", "photon paths traced before each pass"},
+    {{"photons_per_pass", "integer", "",
+      "photon paths traced before each pass; default: the film's pixel count (at least 1024)"},
      {"alpha", "float", "0.571428",
       "share of each pass's bandwidth reduction kept (eq. 5.58); 4/7 "
       "minimises the asymptotic MSE"},
