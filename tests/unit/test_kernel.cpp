@@ -1,11 +1,14 @@
-// Density-estimation kernels (femto/kernel.h) against quadrature, and the progressive
-// bandwidth schedules against their definitions (eq. 5.47, 5.58, 5.77-5.78).
+// Density-estimation kernels (femto/kernel.h) against quadrature, the progressive bandwidth
+// schedules against their definitions (eq. 5.47, 5.58, 5.77-5.78), and the photons' grid
+// (femto/point_grid.h) against brute force.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "femto/kernel.h"
+#include "femto/point_grid.h"
+#include "femto/random.h"
 
 using namespace femto;
 
@@ -123,4 +126,38 @@ TEST(Kernel, PhotonMappingScheduleFollowsEq558) {
     }
     EXPECT_EQ(schedule.radius_squared(r1 * r1, 0), r1 * r1);
     EXPECT_EQ(schedule.time(t1, 0), t1);
+}
+
+TEST(PointGrid, VisitsEveryPointWithinTheRadiusOnce) {
+    // Random points in a box that straddles the origin (negative cells), queries at random
+    // places and on points themselves: the grid must visit every point within the radius, each
+    // once, for the caller to keep those within it.
+    Pcg32 rng(7, 3);
+    auto uniform = [&](float lo, float hi) { return lo + (hi - lo) * rng.next_float(); };
+    std::vector<Vec3> points;
+    for (int i = 0; i < 5000; ++i)
+        points.push_back({uniform(-3.f, 2.f), uniform(-1.f, 1.f), uniform(-0.5f, 4.f)});
+    for (float radius : {0.05f, 0.3f, 1.5f}) {
+        PointGrid grid;
+        grid.build(points, radius);
+        for (int q = 0; q < 200; ++q) {
+            const Vec3 x =
+                q % 4 == 0 ? points[size_t(q)]
+                           : Vec3{uniform(-3.5f, 2.5f), uniform(-1.5f, 1.5f), uniform(-1.f, 4.5f)};
+            std::vector<int> visits(points.size(), 0);
+            grid.query(x, [&](uint32_t i) { ++visits[i]; });
+            for (size_t i = 0; i < points.size(); ++i) {
+                const Vec3 d = points[i] - x;
+                ASSERT_LE(visits[i], 1) << "point " << i << " visited twice";
+                if (dot(d, d) <= radius * radius) {
+                    ASSERT_EQ(visits[i], 1) << "point " << i << " within " << radius << " missed";
+                }
+            }
+        }
+    }
+    PointGrid empty;
+    empty.build({}, 1.f);
+    int visited = 0;
+    empty.query(Vec3(0.f), [&](uint32_t) { ++visited; });
+    EXPECT_EQ(visited, 0);
 }

@@ -72,6 +72,8 @@ TEST(TransientPpm, RefusesBadParametersWithTheirLocation) {
         {"<float name=\"beta_t\" value=\"1.5\"/>", "beta_t must lie in [0, 1]"},
         {"<integer name=\"photons_per_pass\" value=\"0\"/>", "photons_per_pass must lie in"},
         {"<integer name=\"photons_per_pass\" value=\"-5\"/>", "photons_per_pass must lie in"},
+        {"<integer name=\"photons_per_pass\" value=\"100000000\"/>",
+         "photons_per_pass must lie in"},
         {"<float name=\"initial_radius\" value=\"0\"/>", "initial_radius must be positive"},
         {"<float name=\"initial_radius\" value=\"-1\"/>", "initial_radius must be positive"},
         {"<float name=\"initial_bandwidth\" value=\"nan\"/>", "initial_bandwidth"},
@@ -86,17 +88,22 @@ TEST(TransientPpm, RefusesBadParametersWithTheirLocation) {
 }
 
 TEST(TransientPpm, RefusesASecondTimeSmoothingAndMedia) {
-    // The estimate smooths time itself: a kernel temporal filter would smooth twice.
-    std::string xml = test::with_integrator("cornell-box", "transient_ppm", 0, false);
+    // The estimate smooths time itself: a kernel temporal filter would smooth twice, whether
+    // the time bandwidth is the default or given.
     LoadOptions options;
     options.defines = {{"res", "8"}, {"spp", "1"}, {"tfilter", "kernel"}};
-    auto scene = load_scene_string(xml, options, test::kScenes);
-    try {
-        femto::testing::render_steady(*scene, 1);
-        ADD_FAILURE() << "a kernel tfilter was accepted";
-    } catch (const SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("<tfilter type=\"histogram\"/>"), std::string::npos)
-            << e.what();
+    for (const std::string bandwidth : {"", "<float name=\"initial_bandwidth\" value=\"0.1\"/>"}) {
+        auto scene = load_scene_string(
+            test::with_integrator("cornell-box", "transient_ppm", 0, false, bandwidth), options,
+            test::kScenes);
+        try {
+            femto::testing::render_steady(*scene, 1);
+            ADD_FAILURE() << "a kernel tfilter was accepted with \"" << bandwidth << "\"";
+        } catch (const SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find("<tfilter type=\"histogram\"/>"),
+                      std::string::npos)
+                << e.what();
+        }
     }
     // Surfaces only (volumetric photons are not there yet): a scene with media is refused.
     options.defines = {{"res", "8"}, {"spp", "1"}};

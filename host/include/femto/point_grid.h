@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 #include "femto/math.h"
@@ -21,6 +22,8 @@ public:
     /// Indexes `points` for queries of radius up to `radius` (> 0). The grid keeps indices into
     /// the caller's array, which must outlive the queries.
     void build(const std::vector<Vec3>& points, float radius) {
+        if (points.size() > size_t(UINT32_MAX))
+            throw std::length_error("PointGrid: more than 2^32 - 1 points");
         cell_ = 2.f * radius;
         inv_cell_ = 1.f / cell_;
         buckets_ = 1;

@@ -73,8 +73,9 @@ public:
     explicit TransientPpm(const Properties& props) : MonteCarloIntegrator(props, 5) {
         if (props.has("photons_per_pass")) {
             const int64_t photons = props.get_int("photons_per_pass");
-            if (photons < 1 || photons > (int64_t(1) << 32))
-                props.fail("photons_per_pass", "photons_per_pass must lie in [1, 2^32]");
+            // 2^24 photon paths leave a few GB of photons per pass at most.
+            if (photons < 1 || photons > (int64_t(1) << 24))
+                props.fail("photons_per_pass", "photons_per_pass must lie in [1, 2^24]");
             requested_photons_ = uint64_t(photons);
         }
         schedule_.alpha = props.get_float("alpha", 4.0 / 7.0);
@@ -101,6 +102,7 @@ public:
                              "transient_ppm estimates light on surfaces only; this scene has "
                              "participating media (use transient_path or transient_bdpt)");
         starts_.prepare(scene, "transient_ppm");
+        require_histogram(scene);
         // By default one photon path per pixel, so that a pass's photon and camera halves cost
         // about the same (bench/README.md: more, shorter passes beat fewer, richer ones).
         const Film& film = scene.sensor().film();
@@ -133,6 +135,7 @@ private:
 
     double default_radius(const Scene& scene) const;
     double default_bandwidth(const Scene& scene) const;
+    static void require_histogram(const Scene& scene);
     void trace_photons(const Scene& scene, const PassInfo& pass);
     void trace_photon(const Scene& scene, Sampler& sampler, PhotonMap& into) const;
     bool photon_useful(int64_t depth) const { return max_depth() < 0 || depth + 1 <= max_depth(); }
@@ -314,18 +317,22 @@ double TransientPpm::default_radius(const Scene& scene) const {
     return std::clamp(3.0 * footprint, 1e-6 * extent, extent / 50.0);
 }
 
-// T_1: two film bins (a steady film: the value does not matter, the kernel is ignored).
-double TransientPpm::default_bandwidth(const Scene& scene) const {
+// The estimate smooths time itself: a time-resolved film must not smooth a second time.
+void TransientPpm::require_histogram(const Scene& scene) {
     const auto* film = dynamic_cast<const TimeResolvedFilm*>(&scene.sensor().film());
-    if (!film) return 1.0;
-    if (!film->tfilter().is_histogram())
+    if (film && !film->tfilter().is_histogram())
         throw SceneError(film->tfilter().location(),
                          fmt::format("transient_ppm smooths time with its own kernel "
                                      "(temporal_kernel, initial_bandwidth); the film must not "
                                      "smooth a second time: use <tfilter type=\"histogram\"/> "
                                      "instead of \"{}\"",
                                      film->tfilter().type_name()));
-    return 2.0 * film->grid().bin_width;
+}
+
+// T_1: two film bins (a steady film: the value does not matter, the kernel is ignored).
+double TransientPpm::default_bandwidth(const Scene& scene) const {
+    const auto* film = dynamic_cast<const TimeResolvedFilm*>(&scene.sensor().film());
+    return film ? 2.0 * film->grid().bin_width : 1.0;
 }
 
 }  // namespace
