@@ -63,9 +63,6 @@ public:
                 }
     }
 
-    /// Bytes held (for memory reports).
-    size_t bytes() const { return start_.capacity() * 4 + index_.capacity() * 4; }
-
 private:
     struct Cell {
         int x, y, z;

@@ -53,14 +53,17 @@ struct Photon {
     int32_t depth;  // segments from the emitter to the vertex
 };
 
-// One pass's photons: positions apart (the grid indexes them), the rest alongside.
-struct PhotonMap {
+// Photons: positions apart (the grid indexes them), the rest alongside.
+struct Photons {
     std::vector<Vec3> positions;
     std::vector<Photon> photons;
-    PointGrid grid;
     void clear() {
         positions.clear();
         photons.clear();
+    }
+    void append(const Photons& more) {
+        positions.insert(positions.end(), more.positions.begin(), more.positions.end());
+        photons.insert(photons.end(), more.photons.begin(), more.photons.end());
     }
 };
 
@@ -118,7 +121,7 @@ public:
         radius2_ = schedule_.radius_squared(radius_1_ * radius_1_, pass.pass);
         bandwidth_ = schedule_.time(bandwidth_1_, pass.pass);
         trace_photons(scene, pass);
-        map_.grid.build(map_.positions, float(std::sqrt(radius2_)));
+        grid_.build(map_.positions, float(std::sqrt(radius2_)));
     }
 
     void sample(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
@@ -137,7 +140,7 @@ private:
     double default_bandwidth(const Scene& scene) const;
     static void require_histogram(const Scene& scene);
     void trace_photons(const Scene& scene, const PassInfo& pass);
-    void trace_photon(const Scene& scene, Sampler& sampler, PhotonMap& into) const;
+    void trace_photon(const Scene& scene, Sampler& sampler, Photons& into) const;
     bool photon_useful(int64_t depth) const { return max_depth() < 0 || depth + 1 <= max_depth(); }
     void gather(const Hit& hit, const Bsdf& bsdf, const Throughput& throughput,
                 const PathClock& clock, int64_t depth) const;
@@ -152,8 +155,9 @@ private:
     // Set per render / per pass, read by sample().
     double radius_1_ = 0, bandwidth_1_ = 0;
     double radius2_ = 0, bandwidth_ = 0;
-    PhotonMap map_;
-    std::vector<PhotonMap> chunks_;
+    Photons map_;                  // this pass's photons
+    PointGrid grid_;               // over map_.positions
+    std::vector<Photons> chunks_;  // per chunk of photon paths, appended to map_ in order
 };
 
 // ---- camera paths ----------------------------------------------------------------------------
@@ -211,7 +215,7 @@ void TransientPpm::gather(const Hit& hit, const Bsdf& bsdf, const Throughput& th
     const float radius = float(std::sqrt(radius2_));
     const double norm = 1.0 / (spatial_norm_ * radius2_);
     const TimeKernel kernel{float(bandwidth_), temporal_};
-    map_.grid.query(hit.p, [&](uint32_t i) {
+    grid_.query(hit.p, [&](uint32_t i) {
         const Vec3 d = map_.positions[i] - hit.p;
         const float dist2 = dot(d, d);
         if (!(dist2 < float(radius2_))) return;
@@ -238,7 +242,7 @@ void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
     const Sampler& prototype = scene.sensor().sampler();
     tbb::parallel_for(uint64_t(0), chunks, [&](uint64_t c) {
         std::unique_ptr<Sampler> sampler = prototype.clone();
-        PhotonMap& into = chunks_[size_t(c)];
+        Photons& into = chunks_[size_t(c)];
         into.clear();
         const uint64_t end = std::min(photons_per_pass_, (c + 1) * kPhotonChunk);
         for (uint64_t i = c * kPhotonChunk; i < end; ++i) {
@@ -247,15 +251,12 @@ void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
         }
     });
     map_.clear();
-    for (const PhotonMap& chunk : chunks_) {
-        map_.positions.insert(map_.positions.end(), chunk.positions.begin(), chunk.positions.end());
-        map_.photons.insert(map_.photons.end(), chunk.photons.begin(), chunk.photons.end());
-    }
+    for (const Photons& chunk : chunks_) map_.append(chunk);
 }
 
 // One photon path: a photon at every vertex with a non-delta lobe, until the path ends (window,
 // depth, roulette or escape).
-void TransientPpm::trace_photon(const Scene& scene, Sampler& sampler, PhotonMap& into) const {
+void TransientPpm::trace_photon(const Scene& scene, Sampler& sampler, Photons& into) const {
     const LightPathStarts::Start start = LightPathStarts::sample(scene, sampler);
     if (!start) return;
     const EmissionSample& es = start.emission;
