@@ -128,6 +128,24 @@ TEST(Kernel, PhotonMappingScheduleFollowsEq558) {
     EXPECT_EQ(schedule.time(t1, 0), t1);
 }
 
+TEST(Kernel, VolumetricScheduleShrinksTheBallVolume) {
+    // In 3D the kernel's volume R^3 takes the share beta_R of each iteration's reduction: with
+    // alpha 1/2 and beta_T 1/4, R_{j+1}^3 / R_j^3 = ((j + alpha) / (j + 1))^(3/4), and R^3 T
+    // shrinks by (j + alpha) / (j + 1).
+    const ProgressiveBandwidths schedule{0.5, 0.25, 3};
+    const double r1 = 0.25, t1 = 0.1;
+    for (uint64_t j = 1; j < 100000; j = j < 16 ? j + 1 : j * 3) {
+        const double ratio = (double(j) + 0.5) / (double(j) + 1.0);
+        const double r3 = std::pow(schedule.radius_squared(r1 * r1, j - 1), 1.5),
+                     r3_next = std::pow(schedule.radius_squared(r1 * r1, j), 1.5);
+        const double t = schedule.time(t1, j - 1), t_next = schedule.time(t1, j);
+        const double tol = 16 * 2.2e-16 * (double(j) + 1) * std::log(double(j) + 2);
+        EXPECT_NEAR(r3_next / r3, std::pow(ratio, 0.75), tol) << "j = " << j;
+        EXPECT_NEAR(t_next / t, std::pow(ratio, 0.25), tol) << "j = " << j;
+        EXPECT_NEAR((r3_next * t_next) / (r3 * t), ratio, 2 * tol) << "j = " << j;
+    }
+}
+
 TEST(PointGrid, VisitsEveryPointWithinTheRadiusOnce) {
     // Random points in a box that straddles the origin (negative cells), queries at random
     // places and on points themselves: the grid must visit every point within the radius, each

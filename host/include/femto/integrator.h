@@ -6,6 +6,7 @@
 // docs/writing-plugins.md explains splatting and the per-pass hook.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -54,6 +55,11 @@ public:
     /// photon mapper's iteration is one photon pass and one camera sample per pixel); 0 (the
     /// default) lets the renderer choose.
     virtual uint32_t samples_per_pass() const { return 0; }
+    /// How far in time (optical length) the integrator's own kernel may move a contribution
+    /// (Contribution::kernel: a density estimator's largest time bandwidth); 0 by default.
+    /// Scene::time_window() extends the film's window by it, so that light arriving just after
+    /// the window's end is still traced and spread into the last bins. Read before each pass.
+    virtual double time_reach() const { return 0.0; }
     /// Estimates the radiance arriving along the camera ray `ray` (unit direction). Camera
     /// integrators implement it; the default throws std::logic_error.
     virtual void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
@@ -87,6 +93,15 @@ public:
     bool hide_emitters() const { return hide_emitters_; }
     /// True when a path with `depth` segments may not be extended.
     bool depth_exhausted(int64_t depth) const { return max_depth_ >= 0 && depth >= max_depth_; }
+    /// Russian roulette for a path of `depth` segments that can still carry at most `gain` of
+    /// what it started with: from rr_depth() on it survives with probability
+    /// q = min(gain, 0.95), drawing one number. Returns the factor its weight takes: 1 / q when
+    /// it survives (1 before rr_depth()), 0 when it ends.
+    float roulette(int64_t depth, float gain, Sampler& sampler) const {
+        if (rr_depth_ <= 0 || depth < rr_depth_) return 1.f;
+        const float q = std::min(gain, 0.95f);
+        return sampler.next_1d() < q ? 1.f / q : 0.f;
+    }
     /// Refuses unbounded paths (max_depth -1 and no roulette) without a finite time window:
     /// nothing would end them.
     void preprocess(const Scene& scene) override;

@@ -74,15 +74,18 @@ double integrate_over_bins(const TimeGrid& grid, KernelShape shape, double t, do
 double progressive_shrink(double alpha, uint64_t iteration);
 
 /// The joint schedule of transient progressive photon mapping (eq. 5.58, 5.77-5.78): after
-/// `iteration` iterations the squared radius is R_1^2 s^beta_R and the time bandwidth T_1 s^beta_T,
-/// s = progressive_shrink(alpha, iteration), beta_R = 1 - beta_t, so that each iteration
-/// scales the variance of the estimate, proportional to 1 / (R^2 T), by (j + 1) / (j + alpha).
+/// `iteration` iterations the spatial kernel's volume is R_1^d s^beta_R and the time bandwidth
+/// T_1 s^beta_T, s = progressive_shrink(alpha, iteration), beta_R = 1 - beta_t, so that each
+/// iteration scales the variance of the estimate, proportional to 1 / (R^d T), by
+/// (j + 1) / (j + alpha). d = `dims` is 2 for photons on surfaces (the thesis' case, where
+/// R^2 shrinks by s^beta_R) and 3 for photons in a medium (docs/photon-mapping.md).
 struct ProgressiveBandwidths {
     double alpha = 4.0 / 7.0;
     double beta_t = 1.0 / 3.0;
+    int dims = 2;
     double radius_squared(double initial_radius_squared, uint64_t iteration) const {
         return initial_radius_squared *
-               std::pow(progressive_shrink(alpha, iteration), 1.0 - beta_t);
+               std::pow(progressive_shrink(alpha, iteration), 2.0 * (1.0 - beta_t) / double(dims));
     }
     double time(double initial_bandwidth, uint64_t iteration) const {
         return initial_bandwidth * std::pow(progressive_shrink(alpha, iteration), beta_t);

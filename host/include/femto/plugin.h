@@ -32,7 +32,7 @@ namespace femto {
 /// (11: measurement sensors: Sensor::has_area()/ray_weight()/attach()/needs_shape(),
 ///  Shape::sensor_ptr(), ContributionList::scale(); films count refused contributions:
 ///  RejectedContributions, Film::rejected()/add_rejected(), TimeResolvedBlock::rejected().)
-inline constexpr uint32_t kPluginAbiVersion = 13;
+inline constexpr uint32_t kPluginAbiVersion = 14;
 
 struct PluginDescriptor {
     uint32_t abi_version;

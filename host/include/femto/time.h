@@ -59,7 +59,8 @@ struct TimeGrid {
 /// still carry would arrive before it (ch. 5.6.1). Scene::time_window() holds the current one.
 struct TimeWindow {
     /// Latest time (optical path length, camera time) the film records: the window's end plus
-    /// the temporal filter's reach; infinite for steady films and in world time.
+    /// the temporal filter's reach and the integrator's (Integrator::time_reach()); infinite
+    /// for steady films and in world time.
     double end = std::numeric_limits<double>::infinity();
     /// Latest world time the film records (a world-time film's `end`); infinite otherwise. A
     /// camera path learns how much camera time that allows at its first scattering vertex.

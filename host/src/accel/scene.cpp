@@ -117,8 +117,10 @@ uint64_t Scene::rays_traced() const {
 }
 
 void Scene::refresh_time_window() {
-    time_window_.end = sensor_->film().max_time();
-    time_window_.world_end = sensor_->film().max_world_time();
+    // A density estimator's time kernel reaches back from past the film's end.
+    const double reach = integrator_ ? integrator_->time_reach() : 0.0;
+    time_window_.end = sensor_->film().max_time() + reach;
+    time_window_.world_end = sensor_->film().max_world_time() + reach;
     time_window_.prune = sensor_->film().prunes_paths();
     time_window_.earliest_emission = earliest_emission_;
 }

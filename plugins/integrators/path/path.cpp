@@ -185,11 +185,9 @@ private:
         const Vec3 wo = hit.to_world(bs.wo);
         path.medium.cross(hit, wo);
         path.ray = hit.spawn(wo);
-        if (rr_depth() > 0 && path.depth >= rr_depth()) {
-            const float q = std::min(path.throughput.max_gain(), 0.95f);
-            if (!(sampler.next_1d() < q)) return false;
-            path.throughput *= Color(1.f / q);
-        }
+        const float survived = roulette(path.depth, path.throughput.max_gain(), sampler);
+        if (survived == 0.f) return false;
+        path.throughput *= Color(survived);
         ++path.depth;
         return true;
     }

@@ -397,11 +397,9 @@ private:
     // leave it out (they need only be the same for every strategy of a path).
     template <typename Weight>
     bool survives_roulette(int segments, float gain, Sampler& sampler, Weight& weight) const {
-        if (rr_depth() <= 0 || segments < rr_depth()) return true;
-        const float q = std::min(gain, 0.95f);
-        if (!(sampler.next_1d() < q)) return false;
-        weight *= Color(1.f / q);
-        return true;
+        const float survived = roulette(segments, gain, sampler);
+        weight *= Color(survived);
+        return survived > 0.f;
     }
 
     // A random walk's state between vertices.

@@ -168,11 +168,10 @@ private:
     // Russian roulette from rr_depth on, on the share of the emitted power the path still
     // carries; then the path has one more segment.
     bool survives(Sampler& sampler, LightPath& path) const {
-        if (rr_depth() > 0 && path.depth >= rr_depth()) {
-            const float q = std::min(path.power.max_component() / path.start, 0.95f);
-            if (!(sampler.next_1d() < q)) return false;
-            path.power *= 1.f / q;
-        }
+        const float survived =
+            roulette(path.depth, path.power.max_component() / path.start, sampler);
+        if (survived == 0.f) return false;
+        path.power *= survived;
         ++path.depth;
         return true;
     }

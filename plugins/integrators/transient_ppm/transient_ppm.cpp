@@ -1,22 +1,28 @@
-// transient_ppm: transient progressive photon mapping on surfaces (thesis ch. 5.5.1 and
-// appendix 5.B; Knaus & Zwicker's probabilistic PPM, which the appendix follows).
+// transient_ppm: transient progressive photon mapping on surfaces and in media (thesis ch.
+// 5.5.1 and appendix 5.B; Knaus & Zwicker's probabilistic PPM, which the appendix follows;
+// Jensen & Christensen's volumetric photons for media).
 //
 // Every pass (one iteration j = 1, 2, ...) does two things:
 //   - begin_pass() traces `photons_per_pass` photon paths from the emitters, as the light
-//     tracer's paths (pulses, delays, eta, adjoint shading factors), and stores a photon at
-//     every surface vertex with a non-delta lobe: its position, incoming direction, power and
-//     time (its LightClock's: emission time + optical length + delays), in a PointGrid;
-//   - sample() follows each camera ray through delta bounces (mirrors, glass) to its first
-//     vertex with a non-delta lobe and estimates the light leaving it toward the camera from
-//     the photons within R_j (eq. 5.54): each photon i adds
+//     tracer's paths (pulses, delays, eta, adjoint shading factors, mean-free-path sampling in
+//     media), and stores a photon at every surface vertex with a non-delta lobe and at every
+//     medium vertex: its position, incoming direction, power and time (its LightClock's:
+//     emission time + optical length + delays), in two maps (surfaces, media);
+//   - sample() follows each camera ray through delta bounces (mirrors, glass) and, in media,
+//     samples a distance by the mean free path; at its first vertex with a non-delta lobe it
+//     estimates the light leaving toward the camera from the surface photons within R_j
+//     (eq. 5.54): each photon i adds
 //         throughput * f(wo, wi_i) * power_i * K_R(|x - x_i|)
 //     at time t_eye + t_i spread by the temporal kernel K_T of half-width T_j, which the film
-//     integrates exactly over its bins (Contribution::kernel). Emitters seen through delta
-//     bounces are added as the path tracer adds them.
+//     integrates exactly over its bins (Contribution::kernel). At a medium vertex the same sum
+//     runs over the volume photons with the phase function for f and a 3D kernel, divided by
+//     sigma_s there (the photons' density is sigma_s times the radiance). Emitters seen through
+//     delta bounces are added as the path tracer adds them.
 // The pixel estimate is the average over passes (eq. 5.55). Both bandwidths shrink with the
 // pass (eq. 5.58, femto::ProgressiveBandwidths): T_j = T_1 s_j^beta_T and
-// R_j^2 = R_1^2 s_j^(1 - beta_T), s_j = progressive_shrink(alpha, j - 1); alpha = 4/7 and
-// beta_T = 1/3 minimise the AMSE (5.B.4).
+// R_j^d = R_1^d s_j^(1 - beta_T), s_j = progressive_shrink(alpha, j - 1); on surfaces (d = 2)
+// alpha = 4/7 and beta_T = 1/3 minimise the AMSE (5.B.4), in media (d = 3) alpha = 1/2 and
+// beta_T = 1/4 (docs/photon-mapping.md derives them).
 //
 // Film rule: the estimate smooths time with its own kernel, so a time-resolved film must use
 // `<tfilter type="histogram"/>` (no second smoothing); steady films ignore time (ordinary PPM).
@@ -33,6 +39,7 @@
 
 #include "femto/integrator.h"
 #include "femto/kernel.h"
+#include "femto/medium.h"
 #include "femto/path_clock.h"
 #include "femto/plugin.h"
 #include "femto/point_grid.h"
@@ -45,7 +52,7 @@ namespace {
 
 using namespace femto;
 
-// What a photon leaves at a surface vertex.
+// What a photon leaves at a surface or medium vertex.
 struct Photon {
     Vec3 wi;        // toward where it came from (world)
     Color power;    // flux it carries (emitted / densities / photons per pass)
@@ -57,6 +64,10 @@ struct Photon {
 struct Photons {
     std::vector<Vec3> positions;
     std::vector<Photon> photons;
+    void add(const Vec3& p, const Photon& photon) {
+        positions.push_back(p);
+        photons.push_back(photon);
+    }
     void clear() {
         positions.clear();
         photons.clear();
@@ -67,8 +78,67 @@ struct Photons {
     }
 };
 
+// A pass's photons of one chunk of photon paths.
+struct PhotonChunk {
+    Photons surface, volume;
+};
+
+// One kind of estimate (on surfaces: 2D kernel; in media: 3D): its schedule, R_1, this pass's
+// bandwidths and photons.
+struct PhotonMap {
+    ProgressiveBandwidths schedule;
+    double radius_1 = 0;  // R_1 (0 until preprocess(): the default)
+    double radius2 = 0, bandwidth = 0;
+    double ball = 1;  // kernel_ball_integral(spatial, schedule.dims)
+    Photons photons;
+    PointGrid grid;
+
+    // Sets the pass's bandwidths and indexes its photons.
+    void begin(uint64_t pass, double bandwidth_1) {
+        radius2 = schedule.radius_squared(radius_1 * radius_1, pass);
+        bandwidth = schedule.time(bandwidth_1, pass);
+        grid.build(photons.positions, float(std::sqrt(radius2)));
+    }
+    // Calls each(photon, K_R) for every photon within R_j of x, K_R being the normalised
+    // spatial kernel of `shape` at its distance.
+    template <typename Each>
+    void for_each_near(const Vec3& x, KernelShape shape, Each&& each) const {
+        const float radius = float(std::sqrt(radius2));
+        const double norm = 1.0 / (ball * std::pow(double(radius), schedule.dims));
+        grid.query(x, [&](uint32_t i) {
+            const Vec3 d = photons.positions[i] - x;
+            const float dist2 = dot(d, d);
+            if (!(dist2 < float(radius2))) return;
+            each(photons.photons[i],
+                 kernel_profile(shape, std::sqrt(double(dist2)) / radius) * norm);
+        });
+    }
+};
+
+// Everything one photon path carries from vertex to vertex.
+struct PhotonPath {
+    Ray ray;
+    LightClock clock;
+    MediumTracker medium;
+    Color power;        // flux the path carries
+    float start = 1.f;  // its largest channel at the emitter, for Russian roulette
+    int64_t depth = 1;  // segments so far, the one being traced included
+};
+
+// The camera path's state.
+struct EyePath {
+    Ray ray;
+    PathClock clock;
+    MediumTracker medium;
+    Throughput throughput;
+    int64_t depth = 1;
+};
+
+// Where a segment through a medium ended.
+enum class SegmentEnd { Surface, Scattered, Stop };
+
 // Photon paths are traced in chunks of this many, each chunk's photons appended in chunk order,
-// so that the map does not depend on the thread count.
+// so that the maps do not depend on the thread count.
 constexpr uint64_t kPhotonChunk = 1024;
 
 class TransientPpm final : public MonteCarloIntegrator {
@@ -81,29 +151,22 @@ public:
                 props.fail("photons_per_pass", "photons_per_pass must lie in [1, 2^24]");
             requested_photons_ = uint64_t(photons);
         }
-        schedule_.alpha = props.get_float("alpha", 4.0 / 7.0);
-        if (!(schedule_.alpha > 0.0 && schedule_.alpha < 1.0))
-            props.fail("alpha",
-                       "alpha must lie in (0, 1): the share of each pass's "
-                       "bandwidth reduction kept (eq. 5.58)");
-        schedule_.beta_t = props.get_float("beta_t", 1.0 / 3.0);
-        if (!(schedule_.beta_t >= 0.0 && schedule_.beta_t <= 1.0))
-            props.fail("beta_t", "beta_t must lie in [0, 1] (beta_R = 1 - beta_t, eq. 5.58)");
-        initial_radius_ = positive_or_default(props, "initial_radius");
+        surface_.schedule = read_schedule(props, "", 4.0 / 7.0, 1.0 / 3.0, 2);
+        volume_.schedule = read_schedule(props, "volume_", 0.5, 0.25, 3);
+        surface_.radius_1 = positive_or_default(props, "initial_radius");
+        volume_.radius_1 = positive_or_default(props, "volume_initial_radius");
         initial_bandwidth_ = positive_or_default(props, "initial_bandwidth");
         spatial_ = read_kernel_shape(props, "spatial_kernel", "epanechnikov");
         temporal_ = read_kernel_shape(props, "temporal_kernel", "perlin");
-        spatial_norm_ = kernel_ball_integral(spatial_, 2);
+        surface_.ball = kernel_ball_integral(spatial_, 2);
+        volume_.ball = kernel_ball_integral(spatial_, 3);
     }
 
     uint32_t samples_per_pass() const override { return 1; }
+    double time_reach() const override { return bandwidth_1_; }
 
     void preprocess(const Scene& scene) override {
         MonteCarloIntegrator::preprocess(scene);
-        if (scene.has_media())
-            throw SceneError(location(),
-                             "transient_ppm estimates light on surfaces only; this scene has "
-                             "participating media (use transient_path or transient_bdpt)");
         starts_.prepare(scene, "transient_ppm");
         require_histogram(scene);
         // By default one photon path per pixel, so that a pass's photon and camera halves cost
@@ -113,15 +176,16 @@ public:
             requested_photons_ > 0
                 ? requested_photons_
                 : std::max<uint64_t>(1024, uint64_t(film.width()) * uint64_t(film.height()));
-        radius_1_ = initial_radius_ > 0 ? initial_radius_ : default_radius(scene);
+        const double radius = default_radius(scene);
+        if (!(surface_.radius_1 > 0)) surface_.radius_1 = radius;
+        if (!(volume_.radius_1 > 0)) volume_.radius_1 = radius;
         bandwidth_1_ = initial_bandwidth_ > 0 ? initial_bandwidth_ : default_bandwidth(scene);
     }
 
     void begin_pass(const Scene& scene, const PassInfo& pass) override {
-        radius2_ = schedule_.radius_squared(radius_1_ * radius_1_, pass.pass);
-        bandwidth_ = schedule_.time(bandwidth_1_, pass.pass);
         trace_photons(scene, pass);
-        grid_.build(map_.positions, float(std::sqrt(radius2_)));
+        surface_.begin(pass.pass, bandwidth_1_);
+        volume_.begin(pass.pass, bandwidth_1_);
     }
 
     void sample(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
@@ -135,100 +199,163 @@ private:
             props.fail(name, fmt::format("{} must be positive and finite (scene units)", name));
         return v;
     }
+    static ProgressiveBandwidths read_schedule(const Properties& props, const std::string& prefix,
+                                               double alpha, double beta_t, int dims);
 
     double default_radius(const Scene& scene) const;
     double default_bandwidth(const Scene& scene) const;
     static void require_histogram(const Scene& scene);
     void trace_photons(const Scene& scene, const PassInfo& pass);
-    void trace_photon(const Scene& scene, Sampler& sampler, Photons& into) const;
+    void trace_photon(const Scene& scene, Sampler& sampler, PhotonChunk& into) const;
+    SegmentEnd photon_in_medium(Sampler& sampler, PhotonPath& path, bool found, const Hit& hit,
+                                PhotonChunk& into) const;
+    bool photon_continues(Sampler& sampler, PhotonPath& path) const;
     bool photon_useful(int64_t depth) const { return max_depth() < 0 || depth + 1 <= max_depth(); }
-    void gather(const Hit& hit, const Bsdf& bsdf, const Throughput& throughput,
-                const PathClock& clock, int64_t depth) const;
+    bool eye_continues(Sampler& sampler, EyePath& eye, const Hit& hit, const Bsdf& bsdf) const;
+    SegmentEnd eye_in_medium(Sampler& sampler, EyePath& eye, bool found, const Hit& hit) const;
+    void gather(const Hit& hit, const Bsdf& bsdf, const EyePath& eye) const;
+    void gather_volume(const Medium& medium, const EyePath& eye, const Color& weight) const;
+    TimeKernel time_kernel(const PhotonMap& map) const {
+        return TimeKernel{float(map.bandwidth), temporal_};
+    }
+    bool joins(int64_t eye_depth, const Photon& photon) const {
+        return max_depth() < 0 || eye_depth + photon.depth <= max_depth();
+    }
 
     uint64_t requested_photons_ = 0;  // photons_per_pass, 0 when not given
     uint64_t photons_per_pass_ = 0;   // what preprocess() settled on
-    ProgressiveBandwidths schedule_;
-    double initial_radius_ = 0, initial_bandwidth_ = 0;  // 0: the defaults
+    double initial_bandwidth_ = 0;    // 0: the default
     KernelShape spatial_ = KernelShape::Epanechnikov, temporal_ = KernelShape::Perlin;
-    double spatial_norm_ = 1;  // kernel_ball_integral(spatial_, 2)
     LightPathStarts starts_;
-    // Set per render / per pass, read by sample().
-    double radius_1_ = 0, bandwidth_1_ = 0;
-    double radius2_ = 0, bandwidth_ = 0;
-    Photons map_;                  // this pass's photons
-    PointGrid grid_;               // over map_.positions
-    std::vector<Photons> chunks_;  // per chunk of photon paths, appended to map_ in order
+    double bandwidth_1_ = 0;           // T_1, set by preprocess()
+    PhotonMap surface_, volume_;       // this pass's photons, read by sample()
+    std::vector<PhotonChunk> chunks_;  // per chunk of photon paths, appended in order
 };
+
+ProgressiveBandwidths TransientPpm::read_schedule(const Properties& props,
+                                                  const std::string& prefix, double alpha,
+                                                  double beta_t, int dims) {
+    ProgressiveBandwidths schedule{alpha, beta_t, dims};
+    const std::string a = prefix + "alpha", b = prefix + "beta_t";
+    schedule.alpha = props.get_float(a, alpha);
+    if (!(schedule.alpha > 0.0 && schedule.alpha < 1.0))
+        props.fail(a, a + " must lie in (0, 1): the share of each pass's bandwidth reduction "
+                          "kept (eq. 5.58)");
+    schedule.beta_t = props.get_float(b, beta_t);
+    if (!(schedule.beta_t >= 0.0 && schedule.beta_t <= 1.0))
+        props.fail(b, b + " must lie in [0, 1] (beta_R = 1 - beta_t, eq. 5.58)");
+    return schedule;
+}
 
 // ---- camera paths ----------------------------------------------------------------------------
 
 void TransientPpm::sample(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
                           ContributionList& out) const {
     if (max_depth() == 0) return;
-    Ray ray = camera_ray;
-    PathClock clock(scene, out, ray.o);
-    MediumTracker medium = MediumTracker::at_sensor(scene);
-    Throughput throughput;
-    for (int64_t depth = 1;; ++depth) {
+    EyePath eye{camera_ray, PathClock(scene, out, camera_ray.o), MediumTracker::at_sensor(scene),
+                Throughput{}};
+    for (;;) {
         Hit hit;
-        if (!scene.intersect(ray, hit)) return;
+        const bool found = scene.intersect(eye.ray, hit);
+        if (eye.medium.medium && eye_in_medium(sampler, eye, found, hit) != SegmentEnd::Surface)
+            return;
+        if (!found) return;
         const Bsdf& bsdf = *hit.shape->bsdf();
-        clock.travel_to(hit.p, medium.eta());
-        if (!bsdf.is_null()) clock.reach_vertex();
-        if (clock.expired()) return;
+        eye.clock.travel_to(hit.p, eye.medium.eta());
+        if (!bsdf.is_null()) eye.clock.reach_vertex();
+        if (eye.clock.expired()) return;
         // Every vertex before this one was a delta bounce: emission is the path's to find.
         if (const Emitter* emitter = hit.shape->emitter())
-            if (depth > 1 || !hide_emitters())
-                clock.record(throughput(emitter->eval(hit, -ray.d)), *emitter, sampler);
-        if (bsdf.is_null()) {
-            medium.cross(hit, ray.d);
-            ray = hit.spawn(ray.d);
-            --depth;  // not a scattering event
+            if (eye.depth > 1 || !hide_emitters())
+                eye.clock.record(eye.throughput(emitter->eval(hit, -eye.ray.d)), *emitter, sampler);
+        if (bsdf.is_null()) {  // an index-matched boundary: not a scattering event
+            eye.medium.cross(hit, eye.ray.d);
+            eye.ray = hit.spawn(eye.ray.d);
             continue;
         }
-        if (depth_exhausted(depth)) return;
-        apply_vertex_event(bsdf, hit, sampler, clock, throughput);
-        const uint32_t flags = bsdf.flags();
-        if (flags & kBsdfSmooth) gather(hit, bsdf, throughput, clock, depth);
-        if (!(flags & kBsdfDelta)) return;
-        // Continue through a delta lobe only; a smooth lobe's light is the gather's.
-        const float u_lobe = sampler.next_1d();
-        const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
-        if (!bs.valid() || !(bs.sampled_lobe & kBsdfDelta) || bs.weight.is_black()) return;
-        throughput *= bs.weight;
-        medium.refract(bs);
-        const Vec3 wo = hit.to_world(bs.wo);
-        medium.cross(hit, wo);
-        ray = hit.spawn(wo);
-        if (rr_depth() > 0 && depth >= rr_depth()) {
-            const float q = std::min(throughput.max_gain(), 0.95f);
-            if (!(sampler.next_1d() < q)) return;
-            throughput *= Color(1.f / q);
-        }
+        if (depth_exhausted(eye.depth)) return;
+        apply_vertex_event(bsdf, hit, sampler, eye.clock, eye.throughput);
+        if (bsdf.flags() & kBsdfSmooth) gather(hit, bsdf, eye);
+        if (!(bsdf.flags() & kBsdfDelta) || !eye_continues(sampler, eye, hit, bsdf)) return;
     }
 }
 
-// The photon density estimate at the eye vertex `hit` (eq. 5.54), each photon's light
-// recorded at its own time with the temporal kernel.
-void TransientPpm::gather(const Hit& hit, const Bsdf& bsdf, const Throughput& throughput,
-                          const PathClock& clock, int64_t depth) const {
-    const float radius = float(std::sqrt(radius2_));
-    const double norm = 1.0 / (spatial_norm_ * radius2_);
-    const TimeKernel kernel{float(bandwidth_), temporal_};
-    grid_.query(hit.p, [&](uint32_t i) {
-        const Vec3 d = map_.positions[i] - hit.p;
-        const float dist2 = dot(d, d);
-        if (!(dist2 < float(radius2_))) return;
-        const Photon& ph = map_.photons[i];
-        if (max_depth() >= 0 && depth + ph.depth > max_depth()) return;
+// The camera ray crosses a medium toward `hit` (if `found`): a distance by the mean free path
+// either ends the camera path at a medium vertex, where the volume photons estimate the
+// in-scattered light, or reaches the surface with the segment's weight.
+SegmentEnd TransientPpm::eye_in_medium(Sampler& sampler, EyePath& eye, bool found,
+                                       const Hit& hit) const {
+    const Medium& medium = *eye.medium.medium;
+    const DistanceMixture free_path(medium, nullptr, false, DistanceContext{kInfinity});
+    const double tmax = found ? double(hit.t) : kInfinity;
+    const double u = double(sampler.next_1d());
+    const DistanceSample ds = sample_distance(medium, eye.ray, tmax, free_path, u, sampler);
+    if (!ds.scattered) {
+        eye.throughput *= ds.weight;
+        return found && !eye.throughput.is_black() ? SegmentEnd::Surface : SegmentEnd::Stop;
+    }
+    eye.clock.travel_to(eye.ray.at(float(ds.distance)), medium.eta());
+    eye.clock.reach_vertex();
+    if (eye.clock.expired() || depth_exhausted(eye.depth)) return SegmentEnd::Stop;
+    gather_volume(medium, eye, ds.weight);
+    return SegmentEnd::Scattered;
+}
+
+// Continues the camera path through a delta lobe of `bsdf` (a smooth lobe's light is the
+// gather's), then Russian roulette. Returns false when the path ends.
+bool TransientPpm::eye_continues(Sampler& sampler, EyePath& eye, const Hit& hit,
+                                 const Bsdf& bsdf) const {
+    const float u_lobe = sampler.next_1d();
+    const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
+    if (!bs.valid() || !(bs.sampled_lobe & kBsdfDelta) || bs.weight.is_black()) return false;
+    eye.throughput *= bs.weight;
+    eye.medium.refract(bs);
+    const Vec3 wo = hit.to_world(bs.wo);
+    eye.medium.cross(hit, wo);
+    eye.ray = hit.spawn(wo);
+    const float survived = roulette(eye.depth, eye.throughput.max_gain(), sampler);
+    if (survived == 0.f) return false;
+    eye.throughput *= Color(survived);
+    ++eye.depth;
+    return true;
+}
+
+// The photon density estimate at the eye's surface vertex `hit` (eq. 5.54), each photon's
+// light recorded at its own time with the temporal kernel.
+void TransientPpm::gather(const Hit& hit, const Bsdf& bsdf, const EyePath& eye) const {
+    const TimeKernel kernel = time_kernel(surface_);
+    surface_.for_each_near(hit.p, spatial_, [&](const Photon& ph, double k) {
+        if (!joins(eye.depth, ph)) return;
         const Vec3 wi = hit.to_local(ph.wi);
         // eval() is f |cos theta| in the shading frame; the photons' flux density needs f.
         const float cos_wi = std::abs(wi.z);
         if (!(cos_wi > 1e-6f)) return;
         const Color f = bsdf.eval(hit, hit.wi, wi);
         if (f.is_black()) return;
-        const double k = kernel_profile(spatial_, std::sqrt(double(dist2)) / radius) * norm;
-        clock.record(throughput(f * ph.power * float(k / cos_wi)), ph.time, kernel);
+        eye.clock.record(eye.throughput(f * ph.power * float(k / cos_wi)), ph.time, kernel);
+    });
+}
+
+// The volume photons' estimate of the light scattered toward the camera at the eye's medium
+// vertex (the clock's position). The volume photons' density there is sigma_s times the
+// radiance, so the sum over them, weighted by the phase function, is divided by sigma_s; the
+// distance sample's `weight` (transmittance x sigma_s / pdf) loses that factor.
+void TransientPpm::gather_volume(const Medium& medium, const EyePath& eye,
+                                 const Color& weight) const {
+    const Vec3 x = eye.clock.position(), wo = -eye.ray.d;
+    const Color sigma_s = medium.sigma_s(x);
+    auto per_density = [](float w, float s) { return s > 0.f ? w / s : 0.f; };
+    Throughput throughput = eye.throughput;
+    throughput *= Color(per_density(weight.r, sigma_s.r), per_density(weight.g, sigma_s.g),
+                        per_density(weight.b, sigma_s.b));
+    if (throughput.is_black()) return;
+    const PhaseFunction& phase = medium.phase();
+    const TimeKernel kernel = time_kernel(volume_);
+    volume_.for_each_near(x, spatial_, [&](const Photon& ph, double k) {
+        if (!joins(eye.depth, ph)) return;
+        const float p = phase.eval(ph.wi, wo);
+        if (!(p > 0.f)) return;
+        eye.clock.record(throughput(ph.power * float(p * k)), ph.time, kernel);
     });
 }
 
@@ -242,79 +369,122 @@ void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
     const Sampler& prototype = scene.sensor().sampler();
     tbb::parallel_for(uint64_t(0), chunks, [&](uint64_t c) {
         std::unique_ptr<Sampler> sampler = prototype.clone();
-        Photons& into = chunks_[size_t(c)];
-        into.clear();
+        PhotonChunk& into = chunks_[size_t(c)];
+        into.surface.clear();
+        into.volume.clear();
         const uint64_t end = std::min(photons_per_pass_, (c + 1) * kPhotonChunk);
         for (uint64_t i = c * kPhotonChunk; i < end; ++i) {
             sampler->start(seed, i, pass.pass);
             trace_photon(scene, *sampler, into);
         }
     });
-    map_.clear();
-    for (const Photons& chunk : chunks_) map_.append(chunk);
+    surface_.photons.clear();
+    volume_.photons.clear();
+    for (const PhotonChunk& chunk : chunks_) {
+        surface_.photons.append(chunk.surface);
+        volume_.photons.append(chunk.volume);
+    }
 }
 
-// One photon path: a photon at every vertex with a non-delta lobe, until the path ends (window,
-// depth, roulette or escape).
-void TransientPpm::trace_photon(const Scene& scene, Sampler& sampler, Photons& into) const {
+// One photon path: a photon at every surface vertex with a non-delta lobe and at every medium
+// vertex, until the path ends (window, depth, roulette or escape).
+void TransientPpm::trace_photon(const Scene& scene, Sampler& sampler, PhotonChunk& into) const {
     const LightPathStarts::Start start = LightPathStarts::sample(scene, sampler);
     if (!start) return;
     const EmissionSample& es = start.emission;
-    LightClock clock(scene, *start.emitter, es.p, sampler);
-    MediumTracker medium = starts_.medium(*start.emitter, es, es.d);
-    Color power = start.power() * float(1.0 / double(photons_per_pass_));
-    const float start_power = power.max_component();
-    Ray ray = emission_ray(es);
-    for (int64_t depth = 1; photon_useful(depth);) {
+    PhotonPath path{emission_ray(es), LightClock(scene, *start.emitter, es.p, sampler),
+                    starts_.medium(*start.emitter, es, es.d),
+                    start.power() * float(1.0 / double(photons_per_pass_))};
+    path.start = path.power.max_component();
+    while (photon_useful(path.depth)) {
         Hit hit;
-        if (!scene.intersect(ray, hit)) return;
+        const bool found = scene.intersect(path.ray, hit);
+        if (path.medium.medium) {
+            const SegmentEnd end = photon_in_medium(sampler, path, found, hit, into);
+            if (end == SegmentEnd::Scattered) continue;
+            if (end == SegmentEnd::Stop) return;
+        }
+        if (!found) return;
         const Bsdf& bsdf = *hit.shape->bsdf();
-        clock.travel_to(hit.p, medium.eta());
-        if (clock.expired()) return;
+        path.clock.travel_to(hit.p, path.medium.eta());
+        if (path.clock.expired()) return;
         if (bsdf.is_null()) {
-            medium.cross(hit, ray.d);
-            ray = hit.spawn(ray.d);
+            path.medium.cross(hit, path.ray.d);
+            path.ray = hit.spawn(path.ray.d);
             continue;
         }
-        if (bsdf.flags() & kBsdfSmooth) {
-            into.positions.push_back(hit.p);
-            into.photons.push_back({-ray.d, power, clock.time(), int32_t(depth)});
-        }
-        if (!photon_useful(depth + 1)) return;
-        const VertexEvent event = apply_vertex_event(bsdf, hit, sampler, clock);
+        if (bsdf.flags() & kBsdfSmooth)
+            into.surface.add(hit.p,
+                             {-path.ray.d, path.power, path.clock.time(), int32_t(path.depth)});
+        if (!photon_useful(path.depth + 1)) return;
+        const VertexEvent event = apply_vertex_event(bsdf, hit, sampler, path.clock);
         const float u_lobe = sampler.next_1d();
         const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
         if (!bs.valid() || bs.weight.is_black()) return;
         const Vec3 wo = hit.to_world(bs.wo);
-        power = leaving(event, bs.weight * power) * adjoint_shading_factor(hit, -ray.d, wo);
-        if (power.is_black()) return;
-        medium.refract(bs);
-        medium.cross(hit, wo);
-        ray = hit.spawn(wo);
-        if (rr_depth() > 0 && depth >= rr_depth()) {
-            const float q = std::min(power.max_component() / start_power, 0.95f);
-            if (!(sampler.next_1d() < q)) return;
-            power *= 1.f / q;
-        }
-        ++depth;
+        path.power =
+            leaving(event, bs.weight * path.power) * adjoint_shading_factor(hit, -path.ray.d, wo);
+        if (path.power.is_black()) return;
+        path.medium.refract(bs);
+        path.medium.cross(hit, wo);
+        path.ray = hit.spawn(wo);
+        if (!photon_continues(sampler, path)) return;
     }
+}
+
+// The photon crosses a medium toward `hit` (if `found`): a distance by the mean free path
+// decides whether it scatters first; there it leaves a volume photon and goes on in a
+// direction drawn from the phase function (weight 1).
+SegmentEnd TransientPpm::photon_in_medium(Sampler& sampler, PhotonPath& path, bool found,
+                                          const Hit& hit, PhotonChunk& into) const {
+    const Medium& medium = *path.medium.medium;
+    const DistanceMixture free_path(medium, nullptr, false, DistanceContext{kInfinity});
+    const double tmax = found ? double(hit.t) : kInfinity;
+    const double u = double(sampler.next_1d());
+    const DistanceSample ds = sample_distance(medium, path.ray, tmax, free_path, u, sampler);
+    path.power *= ds.weight;
+    if (path.power.is_black()) return SegmentEnd::Stop;
+    if (!ds.scattered) return found ? SegmentEnd::Surface : SegmentEnd::Stop;
+    path.clock.travel_to(path.ray.at(float(ds.distance)), medium.eta());
+    if (path.clock.expired()) return SegmentEnd::Stop;
+    const Vec3 x = path.clock.position(), wi = -path.ray.d;
+    into.volume.add(x, {wi, path.power, path.clock.time(), int32_t(path.depth)});
+    if (!photon_useful(path.depth + 1)) return SegmentEnd::Stop;
+    path.ray = Ray{x, medium.phase().sample(wi, sampler.next_2d()), 0.f, kInfinity};
+    return photon_continues(sampler, path) ? SegmentEnd::Scattered : SegmentEnd::Stop;
+}
+
+// Russian roulette from rr_depth on, on the share of the emitted power the photon still
+// carries; then the path has one more segment.
+bool TransientPpm::photon_continues(Sampler& sampler, PhotonPath& path) const {
+    const float survived = roulette(path.depth, path.power.max_component() / path.start, sampler);
+    if (survived == 0.f) return false;
+    path.power *= survived;
+    ++path.depth;
+    return true;
 }
 
 // ---- defaults --------------------------------------------------------------------------------
 
 // R_1: three pixel footprints where the image centre's camera ray meets the scene (the
-// distance between it and the next pixel's ray there), at most 1/50 of the scene's bounding
-// radius; 1/500 of that radius when the centre ray escapes.
+// distance between it and the next pixel's ray there), or a mean free path away when the
+// sensor sits in a medium and that is nearer; at most 1/50 of the scene's bounding radius.
+// 1/500 of that radius when the centre ray finds neither (one scene unit in an empty scene).
 double TransientPpm::default_radius(const Scene& scene) const {
     const Film& film = scene.sensor().film();
     const Vec2 centre{0.5f * float(film.width()), 0.5f * float(film.height())};
     const Ray a = scene.sensor().sample_ray(centre, {0.5f, 0.5f});
     const Ray b = scene.sensor().sample_ray(centre + Vec2{1.f, 0.f}, {0.5f, 0.5f});
     const double extent = scene.bounds().radius();
+    const bool sized = extent > 0 && std::isfinite(extent);
     Ray probe = a;
     Hit hit;
-    if (!scene.intersect(probe, hit)) return extent / 500.0;
-    const double footprint = double(length(a.at(hit.t) - b.at(hit.t)));
+    double distance = scene.intersect(probe, hit) ? double(hit.t) : kInfinity;
+    if (const Medium* medium = scene.sensor().medium(); medium && medium->majorant() > 0.f)
+        distance = std::min(distance, 1.0 / double(medium->majorant()));
+    if (!std::isfinite(distance)) return sized ? extent / 500.0 : 1.0;
+    const double footprint = double(length(a.at(float(distance)) - b.at(float(distance))));
+    if (!sized) return 3.0 * footprint;
     return std::clamp(3.0 * footprint, 1e-6 * extent, extent / 50.0);
 }
 
@@ -340,7 +510,7 @@ double TransientPpm::default_bandwidth(const Scene& scene) const {
 
 FEMTO_PLUGIN(
     TransientPpm, femto::PluginKind::Integrator, "transient_ppm",
-    "Transient progressive photon mapping on surfaces (ch. 5.5.1, appendix 5.B): a "
+    "Transient progressive photon mapping on surfaces and in media (ch. 5.5.1, appendix 5.B): a "
     "spatio-temporal photon density estimate whose radius and time bandwidth shrink every pass",
     {{"photons_per_pass", "integer", "",
       "photon paths traced before each pass; default: the film's pixel count (at least 1024)"},
@@ -350,9 +520,16 @@ FEMTO_PLUGIN(
      {"beta_t", "float", "0.333333",
       "share of the reduction given to the time bandwidth (beta_R "
       "= 1 - beta_t; 1/3 is optimal)"},
+     {"volume_alpha", "float", "0.5",
+      "alpha of the volume photons' estimate (3D kernel); 1/2 minimises its asymptotic MSE"},
+     {"volume_beta_t", "float", "0.25",
+      "beta_t of the volume photons' estimate; 1/4 is optimal for a 3D kernel"},
      {"initial_radius", "float", "",
-      "R_1 (scene units); default: 3 pixel footprints at the "
-      "image centre's first hit, at most 1/50 of the scene's bounding radius"},
+      "R_1 of the surface estimate (scene units); default: 3 pixel footprints at the "
+      "image centre's first hit (or a mean free path away in a medium), at most 1/50 of the "
+      "scene's bounding radius"},
+     {"volume_initial_radius", "float", "",
+      "R_1 of the volume photons' 3D kernel (scene units); default: as initial_radius's"},
      {"initial_bandwidth", "float", "",
       "T_1, half-width of the time kernel (scene units); "
       "default: 2 film bins"},
