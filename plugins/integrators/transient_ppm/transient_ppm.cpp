@@ -68,9 +68,16 @@ struct Photons {
         positions.push_back(p);
         photons.push_back(photon);
     }
-    void clear() {
+    // Empty, with room for exactly n photons (no growth by doubling while appending).
+    void reserve_exactly(size_t n) {
         positions.clear();
         photons.clear();
+        if (positions.capacity() < n || positions.capacity() > 2 * n + 1024) {
+            positions = std::vector<Vec3>();
+            photons = std::vector<Photon>();
+            positions.reserve(n);
+            photons.reserve(n);
+        }
     }
     void append(const Photons& more) {
         positions.insert(positions.end(), more.positions.begin(), more.positions.end());
@@ -229,7 +236,7 @@ private:
     LightPathStarts starts_;
     double bandwidth_1_ = 0;           // T_1, set by preprocess()
     PhotonMap surface_, volume_;       // this pass's photons, read by sample()
-    std::vector<PhotonChunk> chunks_;  // per chunk of photon paths, appended in order
+    std::vector<PhotonChunk> chunks_;  // per chunk of photon paths, appended in order, freed
 };
 
 ProgressiveBandwidths TransientPpm::read_schedule(const Properties& props,
@@ -370,19 +377,23 @@ void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
     tbb::parallel_for(uint64_t(0), chunks, [&](uint64_t c) {
         std::unique_ptr<Sampler> sampler = prototype.clone();
         PhotonChunk& into = chunks_[size_t(c)];
-        into.surface.clear();
-        into.volume.clear();
+        into = PhotonChunk{};
         const uint64_t end = std::min(photons_per_pass_, (c + 1) * kPhotonChunk);
         for (uint64_t i = c * kPhotonChunk; i < end; ++i) {
             sampler->start(seed, i, pass.pass);
             trace_photon(scene, *sampler, into);
         }
     });
-    surface_.photons.clear();
-    volume_.photons.clear();
-    for (const PhotonChunk& chunk : chunks_) {
+    size_t surface = 0, volume = 0;
+    for (const PhotonChunk& chunk : chunks_)
+        surface += chunk.surface.photons.size(), volume += chunk.volume.photons.size();
+    surface_.photons.reserve_exactly(surface);
+    volume_.photons.reserve_exactly(volume);
+    // Each chunk is freed once appended: a pass holds its photons about once, not twice.
+    for (PhotonChunk& chunk : chunks_) {
         surface_.photons.append(chunk.surface);
         volume_.photons.append(chunk.volume);
+        chunk = PhotonChunk{};
     }
 }
 
