@@ -28,16 +28,17 @@ public:
         inv_cell_ = 1.f / cell_;
         buckets_ = 1;
         while (buckets_ < 2 * points.size() && buckets_ < (size_t(1) << 30)) buckets_ <<= 1;
+        // Counting sort without temporaries (a pass's photon map is most of its memory): count
+        // per bucket, prefix sums, place each point at its bucket's next slot (which moves each
+        // start to the next bucket's), then shift the starts back.
         start_.assign(buckets_ + 1, 0);
-        std::vector<uint32_t> bucket_of(points.size());
-        for (size_t i = 0; i < points.size(); ++i) {
-            bucket_of[i] = bucket(cell_of(points[i]));
-            ++start_[bucket_of[i] + 1];
-        }
+        for (const Vec3& p : points) ++start_[bucket(cell_of(p)) + 1];
         for (size_t b = 0; b < buckets_; ++b) start_[b + 1] += start_[b];
         index_.resize(points.size());
-        std::vector<uint32_t> next(start_.begin(), start_.end() - 1);
-        for (size_t i = 0; i < points.size(); ++i) index_[next[bucket_of[i]]++] = uint32_t(i);
+        for (size_t i = 0; i < points.size(); ++i)
+            index_[start_[bucket(cell_of(points[i]))]++] = uint32_t(i);
+        for (size_t b = buckets_; b > 0; --b) start_[b] = start_[b - 1];
+        start_[0] = 0;
     }
 
     /// Calls each(i) for every point i within `radius` (at most the build radius) of `x`,

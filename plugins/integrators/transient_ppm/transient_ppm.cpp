@@ -70,15 +70,11 @@ struct Photons {
     }
     // Empty, with room for exactly n photons (no growth by doubling while appending).
     void reserve_exactly(size_t n) {
-        positions.clear();
-        photons.clear();
-        if (positions.capacity() < n || positions.capacity() > 2 * n + 1024) {
-            positions = std::vector<Vec3>();
-            photons = std::vector<Photon>();
-            positions.reserve(n);
-            photons.reserve(n);
-        }
+        release();
+        positions.reserve(n);
+        photons.reserve(n);
     }
+    void release() { *this = Photons{}; }
     void append(const Photons& more) {
         positions.insert(positions.end(), more.positions.begin(), more.positions.end());
         photons.insert(photons.end(), more.photons.begin(), more.photons.end());
@@ -369,6 +365,9 @@ void TransientPpm::gather_volume(const Medium& medium, const EyePath& eye,
 // ---- photon paths ----------------------------------------------------------------------------
 
 void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
+    // The last pass's photons are not needed while this pass's are traced.
+    surface_.photons.release();
+    volume_.photons.release();
     const uint64_t chunks = (photons_per_pass_ + kPhotonChunk - 1) / kPhotonChunk;
     chunks_.resize(size_t(chunks));
     // Photon streams: another seed than the camera samples', the pass as the sample index.
