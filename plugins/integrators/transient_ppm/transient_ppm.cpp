@@ -90,7 +90,8 @@ struct PhotonChunk {
 // bandwidths and photons.
 struct PhotonMap {
     ProgressiveBandwidths schedule;
-    double radius_1 = 0;  // R_1 (0 until preprocess(): the default)
+    double requested_radius = 0;  // R_1 as given (0: the default)
+    double radius_1 = 0;          // R_1 in use, set by preprocess()
     double radius2 = 0, bandwidth = 0;
     double ball = 1;  // kernel_ball_integral(spatial, schedule.dims)
     Photons photons;
@@ -156,8 +157,8 @@ public:
         }
         surface_.schedule = read_schedule(props, "", 4.0 / 7.0, 1.0 / 3.0, 2);
         volume_.schedule = read_schedule(props, "volume_", 0.5, 0.25, 3);
-        surface_.radius_1 = positive_or_default(props, "initial_radius");
-        volume_.radius_1 = positive_or_default(props, "volume_initial_radius");
+        surface_.requested_radius = positive_or_default(props, "initial_radius");
+        volume_.requested_radius = positive_or_default(props, "volume_initial_radius");
         initial_bandwidth_ = positive_or_default(props, "initial_bandwidth");
         spatial_ = read_kernel_shape(props, "spatial_kernel", "epanechnikov");
         temporal_ = read_kernel_shape(props, "temporal_kernel", "perlin");
@@ -180,8 +181,8 @@ public:
                 ? requested_photons_
                 : std::max<uint64_t>(1024, uint64_t(film.width()) * uint64_t(film.height()));
         const double radius = default_radius(scene);
-        if (!(surface_.radius_1 > 0)) surface_.radius_1 = radius;
-        if (!(volume_.radius_1 > 0)) volume_.radius_1 = radius;
+        for (PhotonMap* map : {&surface_, &volume_})
+            map->radius_1 = map->requested_radius > 0 ? map->requested_radius : radius;
         bandwidth_1_ = initial_bandwidth_ > 0 ? initial_bandwidth_ : default_bandwidth(scene);
     }
 
