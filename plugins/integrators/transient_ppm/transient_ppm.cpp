@@ -30,7 +30,6 @@
 // only when d_e + d_l <= max_depth, so max_depth means what it means for transient_path.
 // docs/photon-mapping.md derives the defaults of R_1 and T_1.
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -41,6 +40,7 @@
 #include "femto/kernel.h"
 #include "femto/medium.h"
 #include "femto/path_clock.h"
+#include "femto/photon_tracing.h"
 #include "femto/plugin.h"
 #include "femto/point_grid.h"
 #include "femto/random.h"
@@ -119,16 +119,6 @@ struct PhotonMap {
     }
 };
 
-// Everything one photon path carries from vertex to vertex.
-struct PhotonPath {
-    Ray ray;
-    LightClock clock;
-    MediumTracker medium;
-    Color power;        // flux the path carries
-    float start = 1.f;  // its largest channel at the emitter, for Russian roulette
-    int64_t depth = 1;  // segments so far, the one being traced included
-};
-
 // The camera path's state.
 struct EyePath {
     Ray ray;
@@ -140,10 +130,6 @@ struct EyePath {
 
 // Where a segment through a medium ended.
 enum class SegmentEnd { Surface, Scattered, Stop };
-
-// Photon paths are traced in chunks of this many, each chunk's photons appended in chunk order,
-// so that the maps do not depend on the thread count.
-constexpr uint64_t kPhotonChunk = 1024;
 
 class TransientPpm final : public MonteCarloIntegrator {
 public:
@@ -210,11 +196,6 @@ private:
     double default_bandwidth(const Scene& scene) const;
     static void require_histogram(const Scene& scene);
     void trace_photons(const Scene& scene, const PassInfo& pass);
-    void trace_photon(const Scene& scene, Sampler& sampler, PhotonChunk& into) const;
-    SegmentEnd photon_in_medium(Sampler& sampler, PhotonPath& path, bool found, const Hit& hit,
-                                PhotonChunk& into) const;
-    bool photon_continues(Sampler& sampler, PhotonPath& path) const;
-    bool photon_useful(int64_t depth) const { return max_depth() < 0 || depth + 1 <= max_depth(); }
     bool eye_continues(Sampler& sampler, EyePath& eye, const Hit& hit, const Bsdf& bsdf) const;
     SegmentEnd eye_in_medium(Sampler& sampler, EyePath& eye, bool found, const Hit& hit) const;
     void gather(const Hit& hit, const Bsdf& bsdf, const EyePath& eye) const;
@@ -365,25 +346,30 @@ void TransientPpm::gather_volume(const Medium& medium, const EyePath& eye,
 
 // ---- photon paths ----------------------------------------------------------------------------
 
+// What a photon path leaves: a surface photon at every vertex with a smooth lobe, a volume
+// photon at every medium vertex.
+struct PhotonStore : PhotonVisitor {
+    PhotonChunk& into;
+    explicit PhotonStore(PhotonChunk& chunk) : into(chunk) {}
+    void surface(const Hit& hit, const PhotonPath& path) {
+        into.surface.add(hit.p, {-path.ray.d, path.power, path.clock.time(), int32_t(path.depth)});
+    }
+    void medium_vertex(const PhotonPath& path) {
+        into.volume.add(path.clock.position(),
+                        {-path.ray.d, path.power, path.clock.time(), int32_t(path.depth)});
+    }
+};
+
 void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
     // The last pass's photons are not needed while this pass's are traced.
     surface_.photons.release();
     volume_.photons.release();
-    const uint64_t chunks = (photons_per_pass_ + kPhotonChunk - 1) / kPhotonChunk;
-    chunks_.resize(size_t(chunks));
-    // Photon streams: another seed than the camera samples', the pass as the sample index.
-    const uint64_t seed = mix64(pass.seed ^ 0x70686f746f6e73ull);
-    const Sampler& prototype = scene.sensor().sampler();
-    tbb::parallel_for(uint64_t(0), chunks, [&](uint64_t c) {
-        std::unique_ptr<Sampler> sampler = prototype.clone();
-        PhotonChunk& into = chunks_[size_t(c)];
-        into = PhotonChunk{};
-        const uint64_t end = std::min(photons_per_pass_, (c + 1) * kPhotonChunk);
-        for (uint64_t i = c * kPhotonChunk; i < end; ++i) {
-            sampler->start(seed, i, pass.pass);
-            trace_photon(scene, *sampler, into);
-        }
-    });
+    const double scale = 1.0 / double(photons_per_pass_);
+    trace_photon_paths(scene, pass, photons_per_pass_, chunks_,
+                       [&](Sampler& sampler, PhotonChunk& into) {
+                           PhotonStore store(into);
+                           trace_photon_path(scene, starts_, *this, sampler, scale, store);
+                       });
     size_t surface = 0, volume = 0;
     for (const PhotonChunk& chunk : chunks_)
         surface += chunk.surface.photons.size(), volume += chunk.volume.photons.size();
@@ -395,84 +381,6 @@ void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
         volume_.photons.append(chunk.volume);
         chunk = PhotonChunk{};
     }
-}
-
-// One photon path: a photon at every surface vertex with a non-delta lobe and at every medium
-// vertex, until the path ends (window, depth, roulette or escape).
-void TransientPpm::trace_photon(const Scene& scene, Sampler& sampler, PhotonChunk& into) const {
-    const LightPathStarts::Start start = LightPathStarts::sample(scene, sampler);
-    if (!start) return;
-    const EmissionSample& es = start.emission;
-    PhotonPath path{emission_ray(es), LightClock(scene, *start.emitter, es.p, sampler),
-                    starts_.medium(*start.emitter, es, es.d),
-                    start.power() * float(1.0 / double(photons_per_pass_))};
-    path.start = path.power.max_component();
-    while (photon_useful(path.depth)) {
-        Hit hit;
-        const bool found = scene.intersect(path.ray, hit);
-        if (path.medium.medium) {
-            const SegmentEnd end = photon_in_medium(sampler, path, found, hit, into);
-            if (end == SegmentEnd::Scattered) continue;
-            if (end == SegmentEnd::Stop) return;
-        }
-        if (!found) return;
-        const Bsdf& bsdf = *hit.shape->bsdf();
-        path.clock.travel_to(hit.p, path.medium.eta());
-        if (path.clock.expired()) return;
-        if (bsdf.is_null()) {
-            path.medium.cross(hit, path.ray.d);
-            path.ray = hit.spawn(path.ray.d);
-            continue;
-        }
-        if (bsdf.flags() & kBsdfSmooth)
-            into.surface.add(hit.p,
-                             {-path.ray.d, path.power, path.clock.time(), int32_t(path.depth)});
-        if (!photon_useful(path.depth + 1)) return;
-        const VertexEvent event = apply_vertex_event(bsdf, hit, sampler, path.clock);
-        const float u_lobe = sampler.next_1d();
-        const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
-        if (!bs.valid() || bs.weight.is_black()) return;
-        const Vec3 wo = hit.to_world(bs.wo);
-        path.power =
-            leaving(event, bs.weight * path.power) * adjoint_shading_factor(hit, -path.ray.d, wo);
-        if (path.power.is_black()) return;
-        path.medium.refract(bs);
-        path.medium.cross(hit, wo);
-        path.ray = hit.spawn(wo);
-        if (!photon_continues(sampler, path)) return;
-    }
-}
-
-// The photon crosses a medium toward `hit` (if `found`): a distance by the mean free path
-// decides whether it scatters first; there it leaves a volume photon and goes on in a
-// direction drawn from the phase function (weight 1).
-SegmentEnd TransientPpm::photon_in_medium(Sampler& sampler, PhotonPath& path, bool found,
-                                          const Hit& hit, PhotonChunk& into) const {
-    const Medium& medium = *path.medium.medium;
-    const DistanceMixture free_path(medium, nullptr, false, DistanceContext{kInfinity});
-    const double tmax = found ? double(hit.t) : kInfinity;
-    const double u = double(sampler.next_1d());
-    const DistanceSample ds = sample_distance(medium, path.ray, tmax, free_path, u, sampler);
-    path.power *= ds.weight;
-    if (path.power.is_black()) return SegmentEnd::Stop;
-    if (!ds.scattered) return found ? SegmentEnd::Surface : SegmentEnd::Stop;
-    path.clock.travel_to(path.ray.at(float(ds.distance)), medium.eta());
-    if (path.clock.expired()) return SegmentEnd::Stop;
-    const Vec3 x = path.clock.position(), wi = -path.ray.d;
-    into.volume.add(x, {wi, path.power, path.clock.time(), int32_t(path.depth)});
-    if (!photon_useful(path.depth + 1)) return SegmentEnd::Stop;
-    path.ray = Ray{x, medium.phase().sample(wi, sampler.next_2d()), 0.f, kInfinity};
-    return photon_continues(sampler, path) ? SegmentEnd::Scattered : SegmentEnd::Stop;
-}
-
-// Russian roulette from rr_depth on, on the share of the emitted power the photon still
-// carries; then the path has one more segment.
-bool TransientPpm::photon_continues(Sampler& sampler, PhotonPath& path) const {
-    const float survived = roulette(path.depth, path.power.max_component() / path.start, sampler);
-    if (survived == 0.f) return false;
-    path.power *= survived;
-    ++path.depth;
-    return true;
 }
 
 // ---- defaults --------------------------------------------------------------------------------
