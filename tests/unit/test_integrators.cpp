@@ -21,6 +21,14 @@ const std::string kPpm =
     "name=\"initial_bandwidth\" value=\"0.01\"/><string name=\"spatial_kernel\" "
     "value=\"box\"/><string name=\"temporal_kernel\" value=\"box\"/><float name=\"alpha\" "
     "value=\"0.999999\"/><float name=\"volume_alpha\" value=\"0.999999\"/>";
+// Photon beams: the same fixed box kernels in fog (a blur of 0.25 across each beam, T = 0.01);
+// surfaces are path traced, so only the media check has a kernel.
+const std::string kBeams =
+    kDepth +
+    "<integer name=\"photons_per_pass\" value=\"2000\"/><float name=\"initial_radius\" "
+    "value=\"0.25\"/><float name=\"initial_bandwidth\" value=\"0.01\"/><string "
+    "name=\"spatial_kernel\" value=\"box\"/><string name=\"temporal_kernel\" "
+    "value=\"box\"/><float name=\"alpha\" value=\"0.999999\"/>";
 }  // namespace
 
 INSTANTIATE_TEST_SUITE_P(
@@ -32,5 +40,12 @@ INSTANTIATE_TEST_SUITE_P(
                       IntegratorCase{"transient_bdpt", kDepth, -1, true},
                       IntegratorCase{"bdpt", kDepth, -1, true},
                       IntegratorCase{"volpath", kDepth, -1, true},
-                      IntegratorCase{"transient_ppm", kPpm, -1, true, false, 0.02, 0.01, 0.25}),
+                      IntegratorCase{"transient_ppm", kPpm, -1, true, false, 0.02, 0.01, 0.25},
+                      IntegratorCase{.type = "transient_beams",
+                                     .parameters = kBeams,
+                                     .media = true,
+                                     .volume_radius = 0.25,
+                                     .volume_dims = 1,
+                                     .volume_time = 0.01,
+                                     .media_only = true}),
     femto::testing::case_name);

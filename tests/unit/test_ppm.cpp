@@ -7,6 +7,7 @@
 #include "agreement_util.h"
 #include "femto/testing/media.h"
 #include "femto/testing/render.h"
+#include "pulsed_fog.h"
 #include "scene_util.h"
 
 using namespace femto;
@@ -169,15 +170,6 @@ std::vector<double> exact_pulsed_cube() {
     return cube;
 }
 
-// Least-squares slope of y against x.
-double fitted_slope(const std::vector<double>& x, const std::vector<double>& y) {
-    const double k = double(x.size());
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (size_t i = 0; i < x.size(); ++i)
-        sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
-    return (k * sxy - sx * sy) / (k * sxx - sx * sx);
-}
-
 }  // namespace
 
 TEST(TransientPpm, WindowReachesAsFarAsItsTimeKernel) {
@@ -213,7 +205,7 @@ TEST(TransientPpm, ErrorFallsAtTheRateOfAppendix5B) {
         log_mse.push_back(std::log(mse));
         points += " " + std::to_string(n) + ":" + std::to_string(mse);
     }
-    const double slope = fitted_slope(log_n, log_mse);
+    const double slope = test::fitted_slope(log_n, log_mse);
     ::testing::Test::RecordProperty("mse_slope", std::to_string(slope));
     std::printf("transient_ppm MSE slope %.3f (predicted -0.571); MSE by passes:%s\n", slope,
                 points.c_str());
@@ -222,58 +214,12 @@ TEST(TransientPpm, ErrorFallsAtTheRateOfAppendix5B) {
 
 namespace {
 
-// Single scattering in fog (sigma_a 0.1, sigma_s 0.5, Henyey-Greenstein g = 0.3) along the ray
-// of a one-pixel orthographic camera at the origin looking along +x, lit by a point light of
-// intensity 3 at (2, 1, 0) that emits at time 1 + 0.15 N(0, 1): the closed form of
-// femto/testing/media.h spread by the pulse, smooth in time as appendix 5.B's analysis assumes.
-constexpr int kFogBins = 300;
-constexpr double kFogStart = 2.6, kFogWidth = 0.02, kFogSigma = 0.15;
-
-femto::testing::Fog rate_fog() {
-    femto::testing::Fog fog;
-    fog.g = 0.3;
-    return fog;
-}
-
 std::string pulsed_fog_ppm(int passes) {
-    return test::scene_xml(
-        rate_fog().xml() +
+    return test::pulsed_fog_scene(
         "<integrator type=\"transient_ppm\"><integer name=\"max_depth\" value=\"2\"/><integer "
         "name=\"photons_per_pass\" value=\"2000\"/><float name=\"volume_initial_radius\" "
-        "value=\"0.3\"/><float name=\"initial_bandwidth\" value=\"0.1\"/></integrator><sensor "
-        "type=\"orthographic\"><float name=\"near_clip\" value=\"0\"/><transform "
-        "name=\"to_world\"><scale x=\"0.001\" y=\"0.001\"/><lookat origin=\"0,0,0\" "
-        "target=\"1,0,0\" up=\"0,0,1\"/></transform><ref id=\"fog\"/>" +
-        test::independent_sampler(passes) +
-        test::box_transient_film(1, 1, kFogStart, kFogWidth, kFogBins) +
-        "</sensor><emitter type=\"point\"><point name=\"position\" value=\"2,1,0\"/><float "
-        "name=\"intensity\" value=\"3\"/><string name=\"pulse\" value=\"gaussian\"/><float "
-        "name=\"pulse_sigma\" value=\"" +
-        test::xml_number(kFogSigma) + "\"/><float name=\"time_offset\" value=\"1\"/></emitter>");
-}
-
-// The exact single-scattering profile: the delta-pulse closed form on 20000 steps along the
-// ray, each step's arrival spread over the bins by the Gaussian pulse.
-std::vector<double> exact_pulsed_fog() {
-    const femto::testing::Fog fog = rate_fog();
-    std::vector<double> out(kFogBins, 0.0);
-    const double end = kFogStart + kFogBins * kFogWidth;
-    const int steps = 20000;
-    const double h = end / steps;
-    auto normal_cdf = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
-    for (int n = 0; n < steps; ++n) {
-        const double s = (n + 0.5) * h, r = std::hypot(2 - s, 1.0);
-        const double value = fog.sigma_s * fog.phase((2 - s) / r) * 3 *
-                             std::exp(-fog.sigma_t() * (s + r)) / (r * r) * h;
-        const double mean = 1 + fog.eta * (s + r);
-        for (int b = 0; b < kFogBins; ++b) {
-            const double lo = kFogStart + b * kFogWidth;
-            if (lo + kFogWidth < mean - 8 * kFogSigma || lo > mean + 8 * kFogSigma) continue;
-            out[size_t(b)] += value * (normal_cdf((lo + kFogWidth - mean) / kFogSigma) -
-                                       normal_cdf((lo - mean) / kFogSigma));
-        }
-    }
-    return out;
+        "value=\"0.3\"/><float name=\"initial_bandwidth\" value=\"0.1\"/></integrator>",
+        passes);
 }
 
 }  // namespace
@@ -284,7 +230,7 @@ TEST(TransientPpm, VolumeErrorFallsAtTheRateOfItsDerivation) {
     // error against the closed form, averaged over 16 seeds at n = 64 ... 1024 passes (2000
     // photons each), must fall with a fitted log-log slope within 0.1 of -1/2. (Over 8 seeds
     // the fit scatters by about 0.06: -0.46, -0.50, -0.44, -0.59 for seeds 1-8 ... 25-32.)
-    const std::vector<double> exact = exact_pulsed_fog();
+    const std::vector<double> exact = test::exact_pulsed_fog();
     std::vector<double> log_n, log_mse;
     std::string points;
     const int seeds = 16;
@@ -302,7 +248,7 @@ TEST(TransientPpm, VolumeErrorFallsAtTheRateOfItsDerivation) {
         log_mse.push_back(std::log(mse));
         points += " " + std::to_string(n) + ":" + std::to_string(mse);
     }
-    const double slope = fitted_slope(log_n, log_mse);
+    const double slope = test::fitted_slope(log_n, log_mse);
     ::testing::Test::RecordProperty("mse_slope", std::to_string(slope));
     std::printf("transient_ppm volume MSE slope %.3f (predicted -0.5); MSE by passes:%s\n", slope,
                 points.c_str());

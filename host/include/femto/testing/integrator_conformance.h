@@ -17,7 +17,8 @@
 //                                  holds to 1e-6 relative and the amplitude stays the same at
 //                                  scales 1e-6 ... 1e6 (not for density estimators)
 //   SingleScatteringInAMedium      the exact single-scattering term along a camera ray in fog
-//                                  (for a density estimator: smoothed by its kernels)
+//                                  (for a density estimator: smoothed by its kernels, photon
+//                                  points' or beams')
 // A check an integrator cannot take (a path depth it never reaches, media) is skipped with the
 // reason. To join, an integrator adds one line to a test file that includes this header once:
 //
@@ -77,6 +78,15 @@ struct IntegratorCase {
     /// must make them boxes of radius `volume_radius` and half-width `kernel_time` that do not
     /// shrink over the check's passes (a schedule with alpha within 1e-6 of 1); 0 skips it.
     double volume_radius = 0;
+    /// The dimension of that volume kernel: 3 for photons (a ball around the camera point), 1
+    /// for photon beams (a blur across each beam, at its closest approach to the camera ray).
+    int volume_dims = 3;
+    /// The time half-width of the volume kernel, when only media are density-estimated (photon
+    /// beams); 0: `kernel_time`.
+    double volume_time = 0;
+    /// It renders only scenes with participating media (photon beams): the checks in scenes
+    /// without a medium are skipped.
+    bool media_only = false;
     bool density_estimate() const { return kernel_radius > 0 || kernel_time > 0; }
 };
 
@@ -94,6 +104,12 @@ protected:
     /// its fixed depth.
     int depth(int wanted) const {
         return GetParam().fixed_depth >= 0 ? GetParam().fixed_depth : wanted;
+    }
+    /// Skips a check whose scene has no participating medium when the integrator needs one.
+    void skip_if_media_only() const {
+        if (GetParam().media_only)
+            GTEST_SKIP() << "renders only scenes with participating media; the check's scene has "
+                            "none";
     }
     /// True when the integrator cannot see through an orthographic camera.
     bool needs_connectable_sensor() const { return GetParam().connects_to_sensor; }
@@ -174,6 +190,7 @@ inline std::string point_light(const std::string& position, double intensity) {
 
 TEST_P(IntegratorConformance, TimeIntegralIsTheSteadyImage) {
     using namespace conformance;
+    skip_if_media_only();
     // An open box (floor, back and red left wall), a glass sphere, a fluorescent sphere and an
     // area light. With the same seed a transient and a steady film see the same random numbers,
     // so their images agree to float rounding (the cube sums per bin in float, hdrfilm in
@@ -312,6 +329,7 @@ inline double tof_pixel_energy(const Cube& cube, int px, int py, std::pair<int, 
 
 TEST_P(IntegratorConformance, TofPlaneArrivalAndAmplitude) {
     using namespace conformance;
+    skip_if_media_only();
     // Every pixel's energy must lie in the bins its footprint spans (tof_bins(): camera and
     // world time); its time integral is the footprint's mean of rho / pi * I * H / d^3. The
     // third run, world time behind an index-matched boundary (a clear medium between null
@@ -395,6 +413,7 @@ TEST_P(IntegratorConformance, TofPlaneArrivalAndAmplitude) {
 
 TEST_P(IntegratorConformance, FurnaceIsAGeometricSeries) {
     using namespace conformance;
+    skip_if_media_only();
     // Inside a closed diffuse sphere of albedo a that emits Le everywhere, paths of at most D
     // segments gather L = Le (1 + a + ... + a^(D-1)).
     const int D = depth(6);
@@ -425,6 +444,7 @@ TEST_P(IntegratorConformance, FurnaceIsAGeometricSeries) {
 
 TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
     using namespace conformance;
+    skip_if_media_only();
     const bool pinhole = needs_connectable_sensor();
     // The tof plane, fluorescent: it absorbs the blue third of the white light and re-emits it
     // as green after an exponential delay of mean tau (efficiency 1, no elastic reflection).
@@ -481,6 +501,7 @@ TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
 
 TEST_P(IntegratorConformance, GlassSlabDelay) {
     using namespace conformance;
+    skip_if_media_only();
     if (needs_connectable_sensor())
         GTEST_SKIP() << "the emitter is seen only through glass, and no connection to the sensor "
                         "passes a specular surface (test_light_tracer.cpp checks the light "
@@ -533,6 +554,7 @@ TEST_P(IntegratorConformance, GlassSlabDelay) {
 
 TEST_P(IntegratorConformance, TimeOfFlightIsExactAtEveryScale) {
     using namespace conformance;
+    skip_if_media_only();
     if (needs_connectable_sensor())
         GTEST_SKIP() << "the wall is seen only through glass and a mirror, and no connection to "
                         "the sensor passes a specular surface";
@@ -616,7 +638,7 @@ TEST_P(IntegratorConformance, SingleScatteringInAMedium) {
     if (!GetParam().media) GTEST_SKIP() << "does not render participating media";
     const int D = depth(2);
     if (D != 2) GTEST_SKIP() << "needs paths of exactly 2 segments (single scattering)";
-    const bool density = GetParam().density_estimate();
+    const bool density = GetParam().density_estimate() || GetParam().volume_radius > 0;
     if (density && !(GetParam().volume_radius > 0))
         GTEST_SKIP() << "a density estimator states its volume kernel (volume_radius)";
     const Fog fog;
@@ -638,10 +660,15 @@ TEST_P(IntegratorConformance, SingleScatteringInAMedium) {
     // inside it.
     const double end = start + bins * width;
     if (density) {
-        const double T = GetParam().kernel_time;
-        const auto expected = single_scattering_smoothed(fog, {0, 0, 0}, {1, 0, 0}, {2, 1, 0},
-                                                         intensity, 0.0, (end + T) / fog.eta, start,
-                                                         width, bins, GetParam().volume_radius, T);
+        const double T =
+            GetParam().volume_time > 0 ? GetParam().volume_time : GetParam().kernel_time;
+        const double s1 = (end + T) / fog.eta, R = GetParam().volume_radius;
+        const auto expected =
+            GetParam().volume_dims == 1
+                ? single_scattering_beams(fog, {0, 0, 0}, {1, 0, 0}, {2, 1, 0}, intensity, 0.0, s1,
+                                          start, width, bins, R, T)
+                : single_scattering_smoothed(fog, {0, 0, 0}, {1, 0, 0}, {2, 1, 0}, intensity, 0.0,
+                                             s1, start, width, bins, R, T);
         EXPECT_GT(expect_bins(cube, variance, expected, 1e-3), 60);
         return;
     }
