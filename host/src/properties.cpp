@@ -6,6 +6,7 @@
 
 #include "femto/plugin.h"
 #include "femto/texture.h"
+#include "femto/volume.h"
 #include "util/strings.h"
 
 namespace femto {
@@ -285,6 +286,24 @@ std::shared_ptr<Texture> get_texture(const Properties& props, const std::string&
                                      "would make negative radiance",
                                      name, default_text(c)));
     return std::make_shared<ConstantTexture>(c);
+}
+
+std::shared_ptr<Volume> get_volume(const Properties& props, const std::string& name,
+                                   const Color& def) {
+    // A grey value is a scalar (1 channel): what a density or a scalar sigma_t must be.
+    const auto constant = [](const Color& c) {
+        return std::make_shared<ConstantVolume>(c, c.r == c.g && c.g == c.b ? 1 : 3);
+    };
+    if (!props.has(name)) {
+        props.note_default(name, default_text(def));
+        return constant(def);
+    }
+    if (props.type(name) == Properties::Type::Object)
+        return std::static_pointer_cast<Volume>(props.get_object(name, PluginKind::Volume));
+    const Color c = props.get_color(name);
+    if (!(c.r >= 0 && c.g >= 0 && c.b >= 0))
+        props.fail(name, fmt::format("\"{}\" must not be negative, got {}", name, default_text(c)));
+    return constant(c);
 }
 
 }  // namespace femto

@@ -153,6 +153,21 @@ bad_texture)
   printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="rectangle"><bsdf type="diffuse">\n<texture type="bitmap" name="reflectance"><string name="filename" value="corrupt.png"/></texture></bsdf></shape>\n</scene>\n' > t.xml
   expect_exit 2 '^femto: error: t\.xml:4:[0-9]+: "bitmap": cannot read image "[^"]*corrupt\.png": ' -- "$femto" render t.xml -o out/t -q
   [ "$(wc -l < stderr.txt)" -eq 1 ] || { cat stderr.txt >&2; fail "more than one line on stderr"; };;
+bad_volume)
+  # Media volumes: a missing .vol, a truncated one, an unknown volume type, a negative constant;
+  # each one located line and exit code 2, no image written.
+  head='<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="cube"><bsdf type="null"/>\n<medium type="heterogeneous" name="interior">'
+  printf "$head"'<volume name="sigma_t" type="gridvolume"><string name="filename" value="none.vol"/></volume></medium></shape>\n</scene>\n' > v1.xml
+  expect_exit 2 '^femto: error: v1\.xml:4:[0-9]+: file "none\.vol" not found' -- "$femto" render v1.xml -o out/v1 -q
+  printf 'VOL\003' > short.vol
+  printf "$head"'<volume name="sigma_t" type="gridvolume"><string name="filename" value="short.vol"/></volume></medium></shape>\n</scene>\n' > v2.xml
+  expect_exit 2 '^femto: error: v2\.xml:4:[0-9]+: "gridvolume": grid volume "[^"]*short\.vol": truncated header' -- "$femto" render v2.xml -o out/v2 -q
+  printf "$head"'<volume name="sigma_t" type="voxels"/></medium></shape>\n</scene>\n' > v3.xml
+  expect_exit 2 '^femto: error: v3\.xml:4:[0-9]+: unknown <volume> plugin "voxels"' -- "$femto" render v3.xml -o out/v3 -q
+  printf "$head"'<volume name="sigma_t" type="constvolume"><float name="value" value="-2"/></volume></medium></shape>\n</scene>\n' > v4.xml
+  expect_exit 2 '^femto: error: v4\.xml:4:[0-9]+: "constvolume": a constvolume.s value must be >= 0' -- "$femto" render v4.xml -o out/v4 -q
+  [ "$(wc -l < stderr.txt)" -eq 1 ] || { cat stderr.txt >&2; fail "more than one line on stderr"; }
+  [ ! -e out/v4.exr ] || fail "an output was written";;
 bad_spp)
   expect_exit 2 '^femto: error: --spp: expected a whole number from 1 to 4294967295, got "0"' -- "$femto" render "$scene" --spp 0 -q
   expect_exit 2 '^femto: error: --spp: expected a whole number .*got "-3"' -- "$femto" render "$scene" --spp -3 -q

@@ -440,26 +440,27 @@ TEST(Heterogeneous, MalformedFilesAreSceneErrorsNamingTheFile) {
         {"float16.vol", "encoding 2 (float16)", with([](VolFile& v) { v.encoding = 2; })});
     bad.push_back({"encoding.vol", "encoding 77", with([](VolFile& v) { v.encoding = 77; })});
     bad.push_back({"header.vol", "truncated header", good.bytes().substr(0, 20)});
-    bad.push_back({"channels.vol", "3 channels", with([](VolFile& v) { v.channels = 3; })});
+    bad.push_back({"channels.vol", "needs", with([](VolFile& v) { v.channels = 3; })});
+    bad.push_back({"six_channels.vol", "6 channels", with([](VolFile& v) { v.channels = 6; })});
     bad.push_back({"zero_channels.vol", "0 channels", with([](VolFile& v) { v.channels = 0; })});
     bad.push_back({"zero_res.vol", "invalid resolution", with([](VolFile& v) { v.res[1] = 0; })});
     bad.push_back(
         {"negative_res.vol", "invalid resolution", with([](VolFile& v) { v.res[2] = -4; })});
-    bad.push_back({"huge.vol", "more than 2^31 voxels",
+    bad.push_back({"huge.vol", "more than 2^31 values",
                    with([](VolFile& v) { v.res[0] = v.res[1] = v.res[2] = 1 << 20; })});
-    bad.push_back({"huge2.vol", "more than 2^31 voxels", with([](VolFile& v) {
+    bad.push_back({"huge2.vol", "more than 2^31 values", with([](VolFile& v) {
                        v.res[0] = v.res[1] = 2147483647;
                        v.res[2] = 2;
                    })});
     bad.push_back({"truncated.vol", "truncated", good.bytes().substr(0, good.bytes().size() - 4)});
     bad.push_back({"trailing.vol", "trailing data", good.bytes() + "xxxx"});
     bad.push_back({"wrong_size.vol", "needs", with([](VolFile& v) { v.res[0] = 3; })});
-    bad.push_back({"nan.vol", "density nan at voxel (x 1, y 2, z 3)", with([](VolFile& v) {
+    bad.push_back({"nan.vol", "value nan at voxel (x 1, y 2, z 3)", with([](VolFile& v) {
                        v.data.back() = std::numeric_limits<float>::quiet_NaN();
                    })});
-    bad.push_back({"inf.vol", "density inf",
+    bad.push_back({"inf.vol", "value inf",
                    with([](VolFile& v) { v.data[5] = std::numeric_limits<float>::infinity(); })});
-    bad.push_back({"negative.vol", "density -0.5 at voxel (x 1, y 0, z 0)",
+    bad.push_back({"negative.vol", "value -0.5 at voxel (x 1, y 0, z 0)",
                    with([](VolFile& v) { v.data[1] = -0.5f; })});
     bad.push_back(
         {"flat_box.vol", "invalid bounding box", with([](VolFile& v) { v.bbox[4] = v.bbox[1]; })});
@@ -522,14 +523,24 @@ TEST(Heterogeneous, BadParametersAreLocatedSceneErrors) {
         EXPECT_NE(medium_error(p).find("overflows"), std::string::npos);
     }
     {
-        Properties p("heterogeneous", {"media.xml", 2, 1});  // no density
-        EXPECT_THROW(femto::create_object(PluginKind::Medium, "heterogeneous", p),
-                     femto::SceneError);
+        // No density: Mitsuba 3's default, sigma_t 1 everywhere.
+        Properties p("heterogeneous", {"media.xml", 2, 1});
+        EXPECT_FLOAT_EQ(make_medium(p)->sigma_t({5, 5, 5}).r, 1.f);
     }
     {
         Properties p = medium_props(dir / "g.vol");
-        p.set_float("sigma_t", 3.0);  // not a parameter of this plugin
-        EXPECT_NE(medium_error(p).find("sigma_t"), std::string::npos);
+        p.set_float("sigma_t", 3.0);  // Mitsuba 3's name for the density: one or the other
+        EXPECT_NE(medium_error(p).find("not both"), std::string::npos);
+    }
+    {
+        // A 3-channel grid is a colour (an albedo), not a density.
+        VolFile rgb = make_grid(2, 2, 2, {0, 0, 0}, {1, 1, 1}, [](int, int, int) { return 1.0; });
+        rgb.channels = 3;
+        rgb.data.resize(rgb.data.size() * 3, 0.5f);
+        write_bytes(dir / "rgb.vol", rgb.bytes());
+        const std::string what = medium_error(medium_props(dir / "rgb.vol"));
+        EXPECT_NE(what.find("\"density\" has 3 channels"), std::string::npos) << what;
+        EXPECT_NE(what.find("media.xml:3:4"), std::string::npos) << what;
     }
     fs::remove_all(dir);
 }
@@ -568,17 +579,20 @@ TEST(Heterogeneous, GridsTooDenseToTrackAreRefused) {
     fs::remove_all(dir);
 }
 
-TEST(Heterogeneous, RelativeFileNamesResolveNextToTheSceneFile) {
-    const auto dir = femto::test::temp_dir("het-relative");
-    fs::create_directories(dir / "grids");
-    write_bytes(
-        dir / "grids" / "g.vol",
-        make_grid(2, 2, 2, {0, 0, 0}, {1, 1, 1}, [](int, int, int) { return 3.0; }).bytes());
+// Programmatic Properties are not resolved by anyone: the plugin opens the name it is given
+// (the loader resolves names written in scene files; test_volumes.cpp tests that).
+TEST(Heterogeneous, NamesGivenDirectlyAreOpenedAsGiven) {
+    const auto dir = femto::test::temp_dir("het-direct");
+    write_bytes(dir / "g.vol", make_grid(2, 2, 2, {0, 0, 0}, {1, 1, 1}, [](int, int, int) {
+                                   return 3.0;
+                               }).bytes());
+    EXPECT_FLOAT_EQ(make_medium(dir / "g.vol")->majorant(), 3.f);
     Properties p("heterogeneous", {(dir / "scene.xml").string(), 2, 1});
-    p.set("density", Properties::Type::String, std::string("grids/g.vol"),
+    p.set("density", Properties::Type::String, std::string("g.vol"),
           {(dir / "scene.xml").string(), 3, 5});
-    auto m = make_medium(p);
-    EXPECT_FLOAT_EQ(m->majorant(), 3.f);
+    const std::string what = medium_error(p);
+    EXPECT_NE(what.find("scene.xml:3:5"), std::string::npos) << what;
+    EXPECT_NE(what.find("no such file"), std::string::npos) << what;
     fs::remove_all(dir);
 }
 

@@ -134,8 +134,7 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
         {"shape serialized",
          [&](Properties& p) { p.set_string("filename", in("tri.serialized")); }},
         {"texture bitmap", [&](Properties& p) { p.set_string("filename", in("pixel.ppm")); }},
-        {"medium heterogeneous",
-         [&](Properties& p) { p.set_string("density", in("density.vol")); }},
+        {"volume gridvolume", [&](Properties& p) { p.set_string("filename", in("density.vol")); }},
         {"emitter collimated", [](Properties& p) { p.set_float("radius", 1.0); }},
         {"film transient", time_window},
         {"film streak",
@@ -255,8 +254,8 @@ TEST(PluginSchemas, DefaultsMatchTheConstructors) {
          {PluginKind::Integrator, PluginKind::Sensor, PluginKind::Film,
           PluginKind::ReconstructionFilter, PluginKind::TemporalFilter, PluginKind::Sampler,
           PluginKind::Shape, PluginKind::Bsdf, PluginKind::Emitter, PluginKind::Texture,
-          PluginKind::Medium, PluginKind::Phase, PluginKind::Distance, PluginKind::Connection,
-          PluginKind::Angular})
+          PluginKind::Medium, PluginKind::Phase, PluginKind::Volume, PluginKind::Distance,
+          PluginKind::Connection, PluginKind::Angular})
         EXPECT_TRUE(kinds.count(k)) << "no <" << femto::kind_tag(k) << "> plugin was found";
 
     std::set<std::string> known_seen;

@@ -35,8 +35,11 @@ const char* kind_tag(PluginKind kind);
 bool kind_from_tag(const std::string& tag, PluginKind& kind);
 
 /// One documented parameter of a plugin schema. `type` is free text for the docs ("float",
-/// "color|texture", "transform", "bsdf" for a child object, ...). A name "*" in the schema
-/// accepts any entry (for plugins that forward parameters).
+/// "color|texture", "transform", "bsdf" for a child object, ...), alternatives separated by
+/// '|'. The alternative "filename" declares a file the plugin reads: the loader looks a
+/// relative <string> value up next to the scene file that names it (and in the scene's <path>
+/// folders) and hands the plugin the path found, or reports a file found nowhere. A name "*"
+/// in the schema accepts any entry (for plugins that forward parameters).
 struct ParamSpec {
     const char* name;
     const char* type;

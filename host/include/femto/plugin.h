@@ -32,7 +32,9 @@ namespace femto {
 /// (11: measurement sensors: Sensor::has_area()/ray_weight()/attach()/needs_shape(),
 ///  Shape::sensor_ptr(), ContributionList::scale(); films count refused contributions:
 ///  RejectedContributions, Film::rejected()/add_rejected(), TimeResolvedBlock::rejected().)
-inline constexpr uint32_t kPluginAbiVersion = 14;
+/// (15: file-name parameters are declared in the schema (type "filename", see ParamSpec) and
+///  only those are resolved by the loader; Volume (femto/volume.h); create_child_object().)
+inline constexpr uint32_t kPluginAbiVersion = 15;
 
 struct PluginDescriptor {
     uint32_t abi_version;
@@ -50,6 +52,11 @@ struct PluginDescriptor {
 /// was not given in the scene (e.g. a film's default <tfilter>). Throws SceneError.
 ObjectPtr create_default_object(PluginKind kind, const std::string& type,
                                 const SourceLocation& loc);
+
+/// Builds plugin `type` of `kind` from `props`, checked against its schema as the loader checks
+/// a scene's objects, for a parent that turns a shorthand parameter into the object it stands
+/// for (a medium's density file name into a `gridvolume`). Throws SceneError.
+ObjectPtr create_child_object(PluginKind kind, const std::string& type, const Properties& props);
 
 }  // namespace femto
 

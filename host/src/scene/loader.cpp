@@ -277,6 +277,7 @@ public:
         for (const auto& child : node.children) add_child(props, child, node.tag, arg_index);
 
         const PluginDescriptor& desc = find_plugin(kind, type, options_.plugin_dirs, node.location);
+        resolve_file_names(props, desc, node);
         check_schema(props, desc, node);
         ObjectPtr obj = construct(desc, props, node);
         report_unread(props, node);
@@ -326,19 +327,44 @@ public:
         }
     }
 
+    // A schema type lists the alternatives a parameter takes: "color|texture", "filename|volume".
+    static bool takes(const ParamSpec& spec, const char* alternative) {
+        const std::string types = spec.type;
+        size_t begin = 0;
+        while (begin <= types.size()) {
+            const size_t end = std::min(types.find('|', begin), types.size());
+            if (types.compare(begin, end - begin, alternative) == 0) return true;
+            begin = end + 1;
+        }
+        return false;
+    }
+
+    // Every <string> parameter the schema declares a "filename" is a file the plugin reads: it is
+    // looked up here, next to the file that names it (an <include>d file's folder, then the
+    // <path>s and the top-level scene's folder), so that no plugin resolves names itself and a
+    // file found nowhere is an error at the element that names it.
+    void resolve_file_names(Properties& props, const PluginDescriptor& desc,
+                            const XmlNode& node) const {
+        for (const auto& c : node.children) {
+            const std::string* name = c.attribute("name");
+            const std::string* value = c.attribute("value");
+            if (c.tag != "string" || !name || !value || value->empty()) continue;
+            for (const ParamSpec& spec : desc.params)
+                if (*name == spec.name && takes(spec, "filename")) {
+                    props.set(*name, Properties::Type::String, find_input_file(c, *value),
+                              c.location);
+                    break;
+                }
+        }
+    }
+
     // An object's name is the parameter it binds to, so the parameter must take an object of
     // its kind ("color|texture" takes a <texture>, "film" a <film>).
     static void check_object_fits(const Properties::Entry& e, const ParamSpec& spec,
                                   const PluginDescriptor& desc, const XmlNode& node) {
         const ObjectPtr& obj = std::get<ObjectPtr>(e.value);
-        if (!obj) return;
+        if (!obj || takes(spec, kind_tag(obj->kind()))) return;
         const std::string types = spec.type;
-        size_t begin = 0;
-        while (begin <= types.size()) {
-            const size_t end = std::min(types.find('|', begin), types.size());
-            if (types.compare(begin, end - begin, kind_tag(obj->kind())) == 0) return;
-            begin = end + 1;
-        }
         throw SceneError(
             e.location, fmt::format("<{}> named \"{}\": parameter \"{}\" of <{} type=\"{}\"> "
                                     "takes {}, not a <{}> (an object's name is the parameter "
@@ -510,9 +536,7 @@ public:
                       parse_number(c, require_attr(c, "value"), name.c_str()), c.location);
         } else if (c.tag == "string") {
             check_attributes(c, {"name", "value"});
-            std::string v = require_attr(c, "value");
-            if (name == "filename" && !v.empty()) v = find_input_file(c, v);
-            props.set(name, Properties::Type::String, v, c.location);
+            props.set(name, Properties::Type::String, require_attr(c, "value"), c.location);
         } else if (c.tag == "point" || c.tag == "vector") {
             check_attributes(c, {"name", "value", "x", "y", "z"});
             props.set(name, c.tag == "point" ? Properties::Type::Point : Properties::Type::Vector,
@@ -691,6 +715,20 @@ ObjectPtr create_default(PluginKind kind, const std::string& type, const SourceL
     return Instantiator(options).construct(desc, props, node);
 }
 
+ObjectPtr create_with(PluginKind kind, const std::string& type, const Properties& props_in) {
+    const LoadOptions& options = current_options();
+    Properties props = props_in;
+    XmlNode node;
+    node.tag = kind_tag(kind);
+    node.location = props.location();
+    Instantiator inst(options);
+    const PluginDescriptor& desc = find_plugin(kind, type, options.plugin_dirs, props.location());
+    inst.check_schema(props, desc, node);
+    ObjectPtr obj = inst.construct(desc, props, node);
+    inst.report_unread(props, node);
+    return obj;
+}
+
 }  // namespace detail
 
 std::unique_ptr<Scene> load_scene(const std::string& path, const LoadOptions& options) {
@@ -707,20 +745,10 @@ std::unique_ptr<Scene> load_scene_string(const std::string& xml, const LoadOptio
     return detail::Instantiator(options).build_scene(root);
 }
 
-ObjectPtr create_object(PluginKind kind, const std::string& type, const Properties& props_in,
+ObjectPtr create_object(PluginKind kind, const std::string& type, const Properties& props,
                         const LoadOptions& options) {
     detail::OptionsScope scope(options);
-    Properties props = props_in;
-    detail::XmlNode node;
-    node.tag = kind_tag(kind);
-    node.location = props.location();
-    detail::Instantiator inst(options);
-    const PluginDescriptor& desc =
-        detail::find_plugin(kind, type, options.plugin_dirs, props.location());
-    inst.check_schema(props, desc, node);
-    ObjectPtr obj = inst.construct(desc, props, node);
-    inst.report_unread(props, node);
-    return obj;
+    return detail::create_with(kind, type, props);
 }
 
 const PluginDescriptor& find_plugin(PluginKind kind, const std::string& type,
@@ -744,6 +772,10 @@ const char* version() { return FEMTO_VERSION; }
 ObjectPtr create_default_object(PluginKind kind, const std::string& type,
                                 const SourceLocation& loc) {
     return detail::create_default(kind, type, loc);
+}
+
+ObjectPtr create_child_object(PluginKind kind, const std::string& type, const Properties& props) {
+    return detail::create_with(kind, type, props);
 }
 
 }  // namespace femto

@@ -53,6 +53,21 @@ struct TypeRename {
 constexpr TypeRename kTypeRenames[] = {
     {"sampler", "sobol", "ldsampler"},
 };
+// Parameters a 0.x file implies where Mitsuba 3 changed what an object means without changing
+// its name: added to the object in 0.x files unless the file gives them.
+struct ImpliedParameter {
+    const char* tag;
+    const char* type;
+    const char* property_tag;
+    const char* name;
+    const char* value;
+};
+constexpr ImpliedParameter kImpliedParameters[] = {
+    // 0.6's gridvolume spans the box stored in the file with its first and last data points on
+    // the box's faces; Mitsuba 3's fills the unit cube with cells whose centres hold the data.
+    {"volume", "gridvolume", "boolean", "use_grid_bbox", "true"},
+    {"volume", "gridvolume", "string", "lattice", "vertex"},
+};
 
 std::string read_file(const std::string& path, const SourceLocation& from) {
     const std::string problem = input_file_problem(path);
@@ -118,6 +133,26 @@ std::pair<int, int> parse_version(const XmlNode& scene) {
     return {major, minor};
 }
 
+void add_implied_parameters(XmlNode& node) {
+    const std::string* type = node.attribute("type");
+    if (!type) return;
+    for (const auto& p : kImpliedParameters) {
+        if (node.tag != p.tag || *type != p.type) continue;
+        bool given = false;
+        for (const auto& c : node.children) {
+            const std::string* name = c.attribute("name");
+            given = given || (name && *name == p.name);
+        }
+        if (given) continue;
+        XmlNode implied;
+        implied.tag = p.property_tag;
+        implied.attributes = {{"name", p.name}, {"value", p.value}};
+        implied.location = node.location;
+        implied.base_dir = node.base_dir;
+        node.children.push_back(std::move(implied));
+    }
+}
+
 // A <default> keeps its name: it names a $parameter and a -D, not a plugin parameter, and
 // `$maxDepth` in the same file must still find it (Mitsuba 3 skips defaults too). The 0.x
 // transform operation <lookAt> is <lookat>.
@@ -127,6 +162,7 @@ void upgrade_tree(XmlNode& node) {
         if (std::string* name = node.attribute("name")) *name = upgrade_parameter_name(*name);
     if (std::string* type = node.attribute("type")) *type = upgrade_plugin_type(node.tag, *type);
     for (auto& c : node.children) upgrade_tree(c);
+    add_implied_parameters(node);
 }
 
 void set_root_dir(XmlNode& node, const std::string& root) {

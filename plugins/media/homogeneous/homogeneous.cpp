@@ -4,13 +4,16 @@
 //
 // Coefficients, as Mitsuba: either `sigma_a` and `sigma_s`, or `sigma_t` and `albedo`
 // (sigma_s = albedo * sigma_t; the default is Mitsuba 3's sigma_t = 1, albedo = 0.75), all
-// multiplied by `scale` (0.x's densityMultiplier).
+// multiplied by `scale` (0.x's densityMultiplier). Each may also be a nested constant
+// <volume type="constvolume"> (Mitsuba 3 reads albedo and sigma_t as volumes, and scenes write
+// them so); a volume that varies in space belongs in the heterogeneous medium.
 #include <fmt/format.h>
 
 #include <cmath>
 
 #include "femto/medium.h"
 #include "femto/plugin.h"
+#include "femto/volume.h"
 
 namespace {
 
@@ -34,7 +37,7 @@ public:
             sigma_t_ = (sa + ss) * float(scale);
         } else {
             const Color st = checked(props, "sigma_t", Color(1.f));
-            const Color albedo = props.get_color("albedo", Color(0.75f));
+            const Color albedo = constant(props, "albedo", Color(0.75f));
             for (int c = 0; c < 3; ++c)
                 if (!(albedo[c] >= 0.f && albedo[c] <= 1.f))
                     props.fail("albedo", "every channel of albedo must lie in [0, 1]");
@@ -55,8 +58,21 @@ public:
     }
 
 private:
+    // A colour, or a nested volume that is the same everywhere.
+    static Color constant(const Properties& props, const char* name, const Color& def) {
+        if (!props.has(name) || props.type(name) != Properties::Type::Object)
+            return props.get_color(name, def);
+        const std::shared_ptr<Volume> v = get_volume(props, name, def);
+        if (!v->is_constant())
+            props.fail(name, fmt::format("a homogeneous medium takes a constant {}, not a <volume "
+                                         "type=\"{}\"> that varies in space (use the "
+                                         "heterogeneous medium)",
+                                         name, v->type_name()));
+        return v->eval(Vec3(0.f));
+    }
+
     static Color checked(const Properties& props, const char* name, const Color& def) {
-        const Color v = props.get_color(name, def);
+        const Color v = constant(props, name, def);
         if (!v.is_finite() || v.r < 0.f || v.g < 0.f || v.b < 0.f)
             props.fail(name, fmt::format("{} must be finite and >= 0 in every channel", name));
         return v;
@@ -68,11 +84,11 @@ private:
 
 }  // namespace
 
-FEMTO_PLUGIN(Homogeneous, femto::PluginKind::Medium, "homogeneous",
-             "Homogeneous participating medium (constant coefficients, index of refraction eta)",
-             {{"sigma_a", "color", "", "absorption coefficient (1 / scene unit), with sigma_s"},
-              {"sigma_s", "color", "", "scattering coefficient (1 / scene unit), with sigma_a"},
-              {"sigma_t", "color", "1",
-               "extinction coefficient, with albedo (instead of the above)"},
-              {"albedo", "color", "0.75", "single-scattering albedo sigma_s / sigma_t"},
-              {"scale", "float", "1", "multiplies the coefficients (0.x: densityMultiplier)"}})
+FEMTO_PLUGIN(
+    Homogeneous, femto::PluginKind::Medium, "homogeneous",
+    "Homogeneous participating medium (constant coefficients, index of refraction eta)",
+    {{"sigma_a", "color|volume", "", "absorption coefficient (1 / scene unit), with sigma_s"},
+     {"sigma_s", "color|volume", "", "scattering coefficient (1 / scene unit), with sigma_a"},
+     {"sigma_t", "color|volume", "1", "extinction coefficient, with albedo (instead of the above)"},
+     {"albedo", "color|volume", "0.75", "single-scattering albedo sigma_s / sigma_t"},
+     {"scale", "float", "1", "multiplies the coefficients (0.x: densityMultiplier)"}})

@@ -183,7 +183,7 @@ public:
 
 FEMTO_PLUGIN(femto::ObjShape, femto::PluginKind::Shape, "obj",
              "Wavefront OBJ triangle mesh (polygons triangulated, materials ignored)",
-             {{"filename", "string", "", "path of the .obj file (relative to the scene file)"},
+             {{"filename", "filename", "", "path of the .obj file (relative to the scene file)"},
               {"face_normals", "boolean", "false",
                "ignore vertex normals and shade with the flat face normals"},
               {"flip_tex_coords", "boolean", "true", "use v -> 1 - v (Mitsuba's default)"}})

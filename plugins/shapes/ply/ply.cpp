@@ -515,6 +515,6 @@ public:
 
 FEMTO_PLUGIN(femto::PlyShape, femto::PluginKind::Shape, "ply",
              "Stanford PLY triangle mesh (ascii and binary; polygons triangulated)",
-             {{"filename", "string", "", "path of the .ply file (relative to the scene file)"},
+             {{"filename", "filename", "", "path of the .ply file (relative to the scene file)"},
               {"face_normals", "boolean", "false",
                "ignore vertex normals and shade with the flat face normals"}})

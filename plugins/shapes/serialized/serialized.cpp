@@ -256,7 +256,7 @@ public:
 
 FEMTO_PLUGIN(femto::SerializedShape, femto::PluginKind::Shape, "serialized",
              "Mitsuba's compressed triangle mesh (.serialized, versions 3 and 4)",
-             {{"filename", "string", "",
+             {{"filename", "filename", "",
                "path of the .serialized file (relative to the scene file)"},
               {"shape_index", "integer", "0", "which mesh of a file holding several (0-based)"},
               {"face_normals", "boolean", "false",

@@ -170,7 +170,7 @@ private:
 
 FEMTO_PLUGIN(Bitmap, femto::PluginKind::Texture, "bitmap",
              "Image texture (any format OpenImageIO reads; v = 0 is the bottom row)",
-             {{"filename", "string", "", "image file (relative names are resolved by the loader)"},
+             {{"filename", "filename", "", "image file (relative to the scene file)"},
               {"raw", "boolean", "false",
                "use 8-bit values as they are instead of decoding sRGB (float images are always "
                "linear)"},
