@@ -105,12 +105,9 @@ protected:
     int depth(int wanted) const {
         return GetParam().fixed_depth >= 0 ? GetParam().fixed_depth : wanted;
     }
-    /// Skips a check whose scene has no participating medium when the integrator needs one.
-    void skip_if_media_only() const {
-        if (GetParam().media_only)
-            GTEST_SKIP() << "renders only scenes with participating media; the check's scene has "
-                            "none";
-    }
+    /// True when a check whose scene has no participating medium must be skipped (the
+    /// integrator needs one): the check says `if (skips_media_free_scenes()) GTEST_SKIP()`.
+    bool skips_media_free_scenes() const { return GetParam().media_only; }
     /// True when the integrator cannot see through an orthographic camera.
     bool needs_connectable_sensor() const { return GetParam().connects_to_sensor; }
     std::string integrator() const {
@@ -190,7 +187,8 @@ inline std::string point_light(const std::string& position, double intensity) {
 
 TEST_P(IntegratorConformance, TimeIntegralIsTheSteadyImage) {
     using namespace conformance;
-    skip_if_media_only();
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
     // An open box (floor, back and red left wall), a glass sphere, a fluorescent sphere and an
     // area light. With the same seed a transient and a steady film see the same random numbers,
     // so their images agree to float rounding (the cube sums per bin in float, hdrfilm in
@@ -329,7 +327,8 @@ inline double tof_pixel_energy(const Cube& cube, int px, int py, std::pair<int, 
 
 TEST_P(IntegratorConformance, TofPlaneArrivalAndAmplitude) {
     using namespace conformance;
-    skip_if_media_only();
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
     // Every pixel's energy must lie in the bins its footprint spans (tof_bins(): camera and
     // world time); its time integral is the footprint's mean of rho / pi * I * H / d^3. The
     // third run, world time behind an index-matched boundary (a clear medium between null
@@ -413,7 +412,8 @@ TEST_P(IntegratorConformance, TofPlaneArrivalAndAmplitude) {
 
 TEST_P(IntegratorConformance, FurnaceIsAGeometricSeries) {
     using namespace conformance;
-    skip_if_media_only();
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
     // Inside a closed diffuse sphere of albedo a that emits Le everywhere, paths of at most D
     // segments gather L = Le (1 + a + ... + a^(D-1)).
     const int D = depth(6);
@@ -444,7 +444,8 @@ TEST_P(IntegratorConformance, FurnaceIsAGeometricSeries) {
 
 TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
     using namespace conformance;
-    skip_if_media_only();
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
     const bool pinhole = needs_connectable_sensor();
     // The tof plane, fluorescent: it absorbs the blue third of the white light and re-emits it
     // as green after an exponential delay of mean tau (efficiency 1, no elastic reflection).
@@ -501,7 +502,8 @@ TEST_P(IntegratorConformance, FluorescenceDelayAndColour) {
 
 TEST_P(IntegratorConformance, GlassSlabDelay) {
     using namespace conformance;
-    skip_if_media_only();
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
     if (needs_connectable_sensor())
         GTEST_SKIP() << "the emitter is seen only through glass, and no connection to the sensor "
                         "passes a specular surface (test_light_tracer.cpp checks the light "
@@ -554,7 +556,8 @@ TEST_P(IntegratorConformance, GlassSlabDelay) {
 
 TEST_P(IntegratorConformance, TimeOfFlightIsExactAtEveryScale) {
     using namespace conformance;
-    skip_if_media_only();
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
     if (needs_connectable_sensor())
         GTEST_SKIP() << "the wall is seen only through glass and a mirror, and no connection to "
                         "the sensor passes a specular surface";
