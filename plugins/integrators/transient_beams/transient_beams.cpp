@@ -35,13 +35,13 @@
 // time itself) and record camera time: a world-time film subtracts one sensor distance per
 // camera sample, while beams add light from every point of the camera ray. Steady films ignore
 // time (ordinary progressive photon beams).
-#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "beam_map.h"
+#include "femto/density_estimation.h"
 #include "femto/integrator.h"
 #include "femto/kernel.h"
 #include "femto/medium.h"
@@ -132,16 +132,9 @@ public:
                 props.fail("photons_per_pass", "photons_per_pass must lie in [1, 2^24]");
             requested_photons_ = uint64_t(photons);
         }
-        schedule_.alpha = props.get_float("alpha", schedule_.alpha);
-        if (!(schedule_.alpha > 0.0 && schedule_.alpha < 1.0))
-            props.fail("alpha",
-                       "alpha must lie in (0, 1): the share of each pass's bandwidth "
-                       "reduction kept (eq. 5.58)");
-        schedule_.beta_t = props.get_float("beta_t", schedule_.beta_t);
-        if (!(schedule_.beta_t >= 0.0 && schedule_.beta_t <= 1.0))
-            props.fail("beta_t", "beta_t must lie in [0, 1] (beta_R = 1 - beta_t, eq. 5.58)");
-        requested_radius_ = positive_or_default(props, "initial_radius");
-        requested_bandwidth_ = positive_or_default(props, "initial_bandwidth");
+        schedule_ = read_progressive_schedule(props, "", 2.0 / 3.0, 0.5, 1);
+        requested_radius_ = read_optional_bandwidth(props, "initial_radius");
+        requested_bandwidth_ = read_optional_bandwidth(props, "initial_bandwidth");
         spatial_ = read_kernel_shape(props, "spatial_kernel", "epanechnikov");
         temporal_ = read_kernel_shape(props, "temporal_kernel", "perlin");
         segment_integral_ = kernel_ball_integral(spatial_, 1);
@@ -168,14 +161,6 @@ public:
                 ContributionList& out) const override;
 
 private:
-    static double positive_or_default(const Properties& props, const char* name) {
-        if (!props.has(name)) return 0.0;
-        const double v = props.get_float(name);
-        if (!(v > 0.0) || !std::isfinite(v))
-            props.fail(name, fmt::format("{} must be positive and finite (scene units)", name));
-        return v;
-    }
-
     void trace_beams(const Scene& scene, const PassInfo& pass);
     bool medium_segment(Sampler& sampler, EyePath& eye, bool found, const Hit& hit) const;
     void gather(Sampler& sampler, const EyePath& eye, double length) const;
@@ -186,12 +171,11 @@ private:
                        const Bsdf& bsdf) const;
     bool continue_from_surface(Sampler& sampler, EyePath& eye, const Hit& hit,
                                const Bsdf& bsdf) const;
-    double default_radius(const Scene& scene) const;
     void check_film(const Scene& scene) const;
 
     SourceLocation location_;
     uint64_t requested_photons_ = 0, photons_per_pass_ = 0;
-    ProgressiveBandwidths schedule_{2.0 / 3.0, 0.5, 1};
+    ProgressiveBandwidths schedule_;
     double requested_radius_ = 0, requested_bandwidth_ = 0;  // 0: the defaults
     double radius_1_ = 0, bandwidth_1_ = 0;                  // R_1, T_1 in use
     double radius_ = 0, bandwidth_ = 0;                      // this pass's R_j, T_j
@@ -218,11 +202,9 @@ void TransientBeams::preprocess(const Scene& scene) {
         requested_photons_ > 0
             ? requested_photons_
             : std::max<uint64_t>(1024, uint64_t(film.width()) * uint64_t(film.height()));
-    radius_1_ = requested_radius_ > 0 ? requested_radius_ : default_radius(scene);
-    const auto* transient = dynamic_cast<const TimeResolvedFilm*>(&film);
-    bandwidth_1_ = requested_bandwidth_ > 0 ? requested_bandwidth_
-                   : transient              ? 2.0 * transient->grid().bin_width
-                                            : 1.0;
+    radius_1_ = requested_radius_ > 0 ? requested_radius_ : default_initial_radius(scene);
+    bandwidth_1_ =
+        requested_bandwidth_ > 0 ? requested_bandwidth_ : default_initial_bandwidth(scene);
 }
 
 // ---- camera paths ----------------------------------------------------------------------------
@@ -387,38 +369,11 @@ void TransientBeams::trace_beams(const Scene& scene, const PassInfo& pass) {
 
 // ---- defaults and checks ---------------------------------------------------------------------
 
-// R_1: three pixel footprints a mean free path into the sensor's medium (or where the image
-// centre's ray first meets a surface, if nearer), at most 1/50 of the scene's bounding radius;
-// 1/500 of that radius when the centre ray finds neither.
-double TransientBeams::default_radius(const Scene& scene) const {
-    const Film& film = scene.sensor().film();
-    const Vec2 centre{0.5f * float(film.width()), 0.5f * float(film.height())};
-    const Ray a = scene.sensor().sample_ray(centre, {0.5f, 0.5f});
-    const Ray b = scene.sensor().sample_ray(centre + Vec2{1.f, 0.f}, {0.5f, 0.5f});
-    const double extent = scene.bounds().radius();
-    const bool sized = extent > 0 && std::isfinite(extent);
-    Hit hit;
-    double distance = scene.intersect(a, hit) ? double(hit.t) : kInfinity;
-    if (const Medium* medium = scene.sensor().medium(); medium && medium->majorant() > 0.f)
-        distance = std::min(distance, 1.0 / double(medium->majorant()));
-    if (!std::isfinite(distance)) return sized ? extent / 500.0 : 1.0;
-    const double footprint = double(length(a.at(float(distance)) - b.at(float(distance))));
-    if (!sized) return 3.0 * footprint;
-    return std::clamp(3.0 * footprint, 1e-6 * extent, extent / 50.0);
-}
-
 // A time-resolved film must not smooth a second time, and must record camera time.
 void TransientBeams::check_film(const Scene& scene) const {
+    require_histogram_film(scene, "transient_beams");
     const auto* film = dynamic_cast<const TimeResolvedFilm*>(&scene.sensor().film());
-    if (!film) return;
-    if (!film->tfilter().is_histogram())
-        throw SceneError(film->tfilter().location(),
-                         fmt::format("transient_beams smooths time with its own kernel "
-                                     "(temporal_kernel, initial_bandwidth); the film must not "
-                                     "smooth a second time: use <tfilter type=\"histogram\"/> "
-                                     "instead of \"{}\"",
-                                     film->tfilter().type_name()));
-    if (film->world_time())
+    if (film && film->world_time())
         throw SceneError(location_,
                          "transient_beams adds light from every point along a camera ray, while "
                          "a world-time film removes one sensor distance per camera sample: use "

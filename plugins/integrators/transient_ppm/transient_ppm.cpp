@@ -29,13 +29,13 @@
 // Depth: a photon that reached its vertex after d_l segments joins an eye path of d_e segments
 // only when d_e + d_l <= max_depth, so max_depth means what it means for transient_path.
 // docs/photon-mapping.md derives the defaults of R_1 and T_1.
-#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
 
+#include "femto/density_estimation.h"
 #include "femto/integrator.h"
 #include "femto/kernel.h"
 #include "femto/medium.h"
@@ -141,11 +141,11 @@ public:
                 props.fail("photons_per_pass", "photons_per_pass must lie in [1, 2^24]");
             requested_photons_ = uint64_t(photons);
         }
-        surface_.schedule = read_schedule(props, "", 4.0 / 7.0, 1.0 / 3.0, 2);
-        volume_.schedule = read_schedule(props, "volume_", 0.5, 0.25, 3);
-        surface_.requested_radius = positive_or_default(props, "initial_radius");
-        volume_.requested_radius = positive_or_default(props, "volume_initial_radius");
-        initial_bandwidth_ = positive_or_default(props, "initial_bandwidth");
+        surface_.schedule = read_progressive_schedule(props, "", 4.0 / 7.0, 1.0 / 3.0, 2);
+        volume_.schedule = read_progressive_schedule(props, "volume_", 0.5, 0.25, 3);
+        surface_.requested_radius = read_optional_bandwidth(props, "initial_radius");
+        volume_.requested_radius = read_optional_bandwidth(props, "volume_initial_radius");
+        initial_bandwidth_ = read_optional_bandwidth(props, "initial_bandwidth");
         spatial_ = read_kernel_shape(props, "spatial_kernel", "epanechnikov");
         temporal_ = read_kernel_shape(props, "temporal_kernel", "perlin");
         surface_.ball = kernel_ball_integral(spatial_, 2);
@@ -158,7 +158,7 @@ public:
     void preprocess(const Scene& scene) override {
         MonteCarloIntegrator::preprocess(scene);
         starts_.prepare(scene, "transient_ppm");
-        require_histogram(scene);
+        require_histogram_film(scene, "transient_ppm");
         // By default one photon path per pixel, so that a pass's photon and camera halves cost
         // about the same (bench/README.md: more, shorter passes beat fewer, richer ones).
         const Film& film = scene.sensor().film();
@@ -166,10 +166,11 @@ public:
             requested_photons_ > 0
                 ? requested_photons_
                 : std::max<uint64_t>(1024, uint64_t(film.width()) * uint64_t(film.height()));
-        const double radius = default_radius(scene);
+        const double radius = default_initial_radius(scene);
         for (PhotonMap* map : {&surface_, &volume_})
             map->radius_1 = map->requested_radius > 0 ? map->requested_radius : radius;
-        bandwidth_1_ = initial_bandwidth_ > 0 ? initial_bandwidth_ : default_bandwidth(scene);
+        bandwidth_1_ =
+            initial_bandwidth_ > 0 ? initial_bandwidth_ : default_initial_bandwidth(scene);
     }
 
     void begin_pass(const Scene& scene, const PassInfo& pass) override {
@@ -182,19 +183,6 @@ public:
                 ContributionList& out) const override;
 
 private:
-    static double positive_or_default(const Properties& props, const char* name) {
-        if (!props.has(name)) return 0.0;
-        const double v = props.get_float(name);
-        if (!(v > 0.0) || !std::isfinite(v))
-            props.fail(name, fmt::format("{} must be positive and finite (scene units)", name));
-        return v;
-    }
-    static ProgressiveBandwidths read_schedule(const Properties& props, const std::string& prefix,
-                                               double alpha, double beta_t, int dims);
-
-    double default_radius(const Scene& scene) const;
-    double default_bandwidth(const Scene& scene) const;
-    static void require_histogram(const Scene& scene);
     void trace_photons(const Scene& scene, const PassInfo& pass);
     bool eye_continues(Sampler& sampler, EyePath& eye, const Hit& hit, const Bsdf& bsdf) const;
     SegmentEnd eye_in_medium(Sampler& sampler, EyePath& eye, bool found, const Hit& hit) const;
@@ -216,21 +204,6 @@ private:
     PhotonMap surface_, volume_;       // this pass's photons, read by sample()
     std::vector<PhotonChunk> chunks_;  // per chunk of photon paths, appended in order, freed
 };
-
-ProgressiveBandwidths TransientPpm::read_schedule(const Properties& props,
-                                                  const std::string& prefix, double alpha,
-                                                  double beta_t, int dims) {
-    ProgressiveBandwidths schedule{alpha, beta_t, dims};
-    const std::string a = prefix + "alpha", b = prefix + "beta_t";
-    schedule.alpha = props.get_float(a, alpha);
-    if (!(schedule.alpha > 0.0 && schedule.alpha < 1.0))
-        props.fail(a, a + " must lie in (0, 1): the share of each pass's bandwidth reduction "
-                          "kept (eq. 5.58)");
-    schedule.beta_t = props.get_float(b, beta_t);
-    if (!(schedule.beta_t >= 0.0 && schedule.beta_t <= 1.0))
-        props.fail(b, b + " must lie in [0, 1] (beta_R = 1 - beta_t, eq. 5.58)");
-    return schedule;
-}
 
 // ---- camera paths ----------------------------------------------------------------------------
 
@@ -381,48 +354,6 @@ void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
         volume_.photons.append(chunk.volume);
         chunk = PhotonChunk{};
     }
-}
-
-// ---- defaults --------------------------------------------------------------------------------
-
-// R_1: three pixel footprints where the image centre's camera ray meets the scene (the
-// distance between it and the next pixel's ray there), or a mean free path away when the
-// sensor sits in a medium and that is nearer; at most 1/50 of the scene's bounding radius.
-// 1/500 of that radius when the centre ray finds neither (one scene unit in an empty scene).
-double TransientPpm::default_radius(const Scene& scene) const {
-    const Film& film = scene.sensor().film();
-    const Vec2 centre{0.5f * float(film.width()), 0.5f * float(film.height())};
-    const Ray a = scene.sensor().sample_ray(centre, {0.5f, 0.5f});
-    const Ray b = scene.sensor().sample_ray(centre + Vec2{1.f, 0.f}, {0.5f, 0.5f});
-    const double extent = scene.bounds().radius();
-    const bool sized = extent > 0 && std::isfinite(extent);
-    Ray probe = a;
-    Hit hit;
-    double distance = scene.intersect(probe, hit) ? double(hit.t) : kInfinity;
-    if (const Medium* medium = scene.sensor().medium(); medium && medium->majorant() > 0.f)
-        distance = std::min(distance, 1.0 / double(medium->majorant()));
-    if (!std::isfinite(distance)) return sized ? extent / 500.0 : 1.0;
-    const double footprint = double(length(a.at(float(distance)) - b.at(float(distance))));
-    if (!sized) return 3.0 * footprint;
-    return std::clamp(3.0 * footprint, 1e-6 * extent, extent / 50.0);
-}
-
-// The estimate smooths time itself: a time-resolved film must not smooth a second time.
-void TransientPpm::require_histogram(const Scene& scene) {
-    const auto* film = dynamic_cast<const TimeResolvedFilm*>(&scene.sensor().film());
-    if (film && !film->tfilter().is_histogram())
-        throw SceneError(film->tfilter().location(),
-                         fmt::format("transient_ppm smooths time with its own kernel "
-                                     "(temporal_kernel, initial_bandwidth); the film must not "
-                                     "smooth a second time: use <tfilter type=\"histogram\"/> "
-                                     "instead of \"{}\"",
-                                     film->tfilter().type_name()));
-}
-
-// T_1: two film bins (a steady film: the value does not matter, the kernel is ignored).
-double TransientPpm::default_bandwidth(const Scene& scene) const {
-    const auto* film = dynamic_cast<const TimeResolvedFilm*>(&scene.sensor().film());
-    return film ? 2.0 * film->grid().bin_width : 1.0;
 }
 
 }  // namespace
