@@ -4,10 +4,14 @@
 #pragma once
 
 #include <cmath>
+#include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "femto/host.h"
 #include "femto/testing/media.h"
+#include "femto/testing/render.h"
 #include "scene_util.h"
 
 namespace femto::test {
@@ -71,6 +75,36 @@ inline double fitted_slope(const std::vector<double>& x, const std::vector<doubl
     for (size_t i = 0; i < x.size(); ++i)
         sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
     return (k * sxy - sx * sy) / (k * sxx - sx * sx);
+}
+
+/// The pulsed fog's error against its closed form at 64, 128, ..., 1024 passes of
+/// `integrator` (an <integrator> element): the profile's summed squared
+/// error averaged over seeds 1..`seeds`, and the least-squares slope of its log against log
+/// passes. Prints and records the slope; returns it with the errors as text.
+inline std::pair<double, std::string> pulsed_fog_error_slope(const std::string& integrator,
+                                                             int seeds) {
+    const std::vector<double> exact = exact_pulsed_fog();
+    std::vector<double> log_n, log_mse;
+    std::string points;
+    for (int n = 64; n <= 1024; n *= 2) {
+        double mse = 0;
+        for (int seed = 1; seed <= seeds; ++seed) {
+            auto scene = load_scene_string(pulsed_fog_scene(integrator, n));
+            const femto::testing::Cube cube =
+                femto::testing::render_cube(*scene, uint64_t(seed), "fog-rate");
+            for (size_t b = 0; b < exact.size(); ++b) {
+                const double e = cube.data[b * 3] - exact[b];
+                mse += e * e / seeds;
+            }
+        }
+        log_n.push_back(std::log(double(n)));
+        log_mse.push_back(std::log(mse));
+        points += " " + std::to_string(n) + ":" + std::to_string(mse);
+    }
+    const double slope = fitted_slope(log_n, log_mse);
+    ::testing::Test::RecordProperty("mse_slope", std::to_string(slope));
+    std::printf("MSE slope %.3f; MSE by passes:%s\n", slope, points.c_str());
+    return {slope, points};
 }
 
 }  // namespace femto::test

@@ -20,13 +20,10 @@ using namespace femto;
 
 namespace {
 
-std::string pulsed_fog_beams(int passes) {
-    return test::pulsed_fog_scene(
-        "<integrator type=\"transient_beams\"><integer name=\"max_depth\" value=\"2\"/><integer "
-        "name=\"photons_per_pass\" value=\"500\"/><float name=\"initial_radius\" "
-        "value=\"0.3\"/><float name=\"initial_bandwidth\" value=\"0.1\"/></integrator>",
-        passes);
-}
+const std::string pulsed_fog_beams =
+    "<integrator type=\"transient_beams\"><integer name=\"max_depth\" value=\"2\"/><integer "
+    "name=\"photons_per_pass\" value=\"500\"/><float name=\"initial_radius\" "
+    "value=\"0.3\"/><float name=\"initial_bandwidth\" value=\"0.1\"/></integrator>";
 
 }  // namespace
 
@@ -41,29 +38,7 @@ TEST(TransientBeams, ErrorFallsAtTheRateOfItsDerivation) {
     // squared bias weighs more, and over these passes it falls as n^-0.88 (from the seeds'
     // mean), faster than its asymptotic n^-2/3, since R_1 = 0.3 and T_1 = 0.1 are not small
     // against the pulse's 0.15 (fourth-order terms). docs/photon-beams.md has the figures.
-    const std::vector<double> exact = test::exact_pulsed_fog();
-    std::vector<double> log_n, log_mse;
-    std::string points;
-    const int seeds = 16;
-    for (int n = 64; n <= 1024; n *= 2) {
-        double mse = 0;
-        for (uint64_t seed = 1; seed <= seeds; ++seed) {
-            auto scene = load_scene_string(pulsed_fog_beams(n));
-            const femto::testing::Cube cube =
-                femto::testing::render_cube(*scene, seed, "beams-rate");
-            for (size_t b = 0; b < exact.size(); ++b) {
-                const double e = cube.data[b * 3] - exact[b];
-                mse += e * e / seeds;
-            }
-        }
-        log_n.push_back(std::log(double(n)));
-        log_mse.push_back(std::log(mse));
-        points += " " + std::to_string(n) + ":" + std::to_string(mse);
-    }
-    const double slope = test::fitted_slope(log_n, log_mse);
-    ::testing::Test::RecordProperty("mse_slope", std::to_string(slope));
-    std::printf("transient_beams MSE slope %.3f (predicted -0.667); MSE by passes:%s\n", slope,
-                points.c_str());
+    const auto [slope, points] = test::pulsed_fog_error_slope(pulsed_fog_beams, 16);
     EXPECT_NEAR(slope, -2.0 / 3.0, 0.1) << "MSE by passes:" << points;
 }
 

@@ -214,13 +214,10 @@ TEST(TransientPpm, ErrorFallsAtTheRateOfAppendix5B) {
 
 namespace {
 
-std::string pulsed_fog_ppm(int passes) {
-    return test::pulsed_fog_scene(
-        "<integrator type=\"transient_ppm\"><integer name=\"max_depth\" value=\"2\"/><integer "
-        "name=\"photons_per_pass\" value=\"2000\"/><float name=\"volume_initial_radius\" "
-        "value=\"0.3\"/><float name=\"initial_bandwidth\" value=\"0.1\"/></integrator>",
-        passes);
-}
+const std::string pulsed_fog_ppm =
+    "<integrator type=\"transient_ppm\"><integer name=\"max_depth\" value=\"2\"/><integer "
+    "name=\"photons_per_pass\" value=\"2000\"/><float name=\"volume_initial_radius\" "
+    "value=\"0.3\"/><float name=\"initial_bandwidth\" value=\"0.1\"/></integrator>";
 
 }  // namespace
 
@@ -230,28 +227,7 @@ TEST(TransientPpm, VolumeErrorFallsAtTheRateOfItsDerivation) {
     // error against the closed form, averaged over 16 seeds at n = 64 ... 1024 passes (2000
     // photons each), must fall with a fitted log-log slope within 0.1 of -1/2. (Over 8 seeds
     // the fit scatters by about 0.06: -0.46, -0.50, -0.44, -0.59 for seeds 1-8 ... 25-32.)
-    const std::vector<double> exact = test::exact_pulsed_fog();
-    std::vector<double> log_n, log_mse;
-    std::string points;
-    const int seeds = 16;
-    for (int n = 64; n <= 1024; n *= 2) {
-        double mse = 0;
-        for (uint64_t seed = 1; seed <= seeds; ++seed) {
-            auto scene = load_scene_string(pulsed_fog_ppm(n));
-            const femto::testing::Cube cube = femto::testing::render_cube(*scene, seed, "fog-rate");
-            for (size_t b = 0; b < exact.size(); ++b) {
-                const double e = cube.data[b * 3] - exact[b];
-                mse += e * e / seeds;
-            }
-        }
-        log_n.push_back(std::log(double(n)));
-        log_mse.push_back(std::log(mse));
-        points += " " + std::to_string(n) + ":" + std::to_string(mse);
-    }
-    const double slope = test::fitted_slope(log_n, log_mse);
-    ::testing::Test::RecordProperty("mse_slope", std::to_string(slope));
-    std::printf("transient_ppm volume MSE slope %.3f (predicted -0.5); MSE by passes:%s\n", slope,
-                points.c_str());
+    const auto [slope, points] = test::pulsed_fog_error_slope(pulsed_fog_ppm, 16);
     EXPECT_NEAR(slope, -0.5, 0.1) << "MSE by passes:" << points;
 }
 
