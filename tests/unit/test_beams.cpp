@@ -71,47 +71,6 @@ double time_share(double bandwidth, int bins, double bin_width) {
     return 2 * bandwidth / (bins * bin_width);
 }
 
-// Cells of beams (`a`) and the reference (`b`) agree: the sum over resolved cells of z^2,
-// z = max(0, |difference| - allowance) / sqrt(sum of variances), allowance = share x the
-// reference's cell, is at most the bound of expect_agree() (agreement_util.h): without the
-// allowance z^2 would follow a squared t distribution of nu = runs - 1 degrees of freedom;
-// taking off a bound of the bias leaves one that is no larger. The totals over the cube agree
-// within 4 standard errors plus their allowance.
-void expect_agree_up_to_bias(const test::Cells& a, const test::Cells& b, int runs,
-                             const std::string& what, double cell_share, double total_share,
-                             double resolved, double min_share) {
-    const double brightest = *std::max_element(b.mean.begin(), b.mean.end());
-    const double nu = runs - 1;
-    const double m = nu / (nu - 2), v = 2 * nu * nu * (nu - 1) / ((nu - 2) * (nu - 2) * (nu - 4));
-    double chi2 = 0, chi2_plain = 0, total_a = 0, total_b = 0, total_var = 0;
-    int n = 0;
-    for (size_t i = 0; i < a.mean.size(); ++i) {
-        total_a += a.mean[i], total_b += b.mean[i], total_var += a.var[i] + b.var[i];
-        const double var = a.var[i] + b.var[i];
-        if (!(var > 0) || !(std::sqrt(a.var[i]) < resolved * a.mean[i]) ||
-            !(std::sqrt(b.var[i]) < resolved * b.mean[i]) || b.mean[i] < min_share * brightest)
-            continue;
-        const double d = std::abs(a.mean[i] - b.mean[i]);
-        const double z = std::max(0.0, d - cell_share * b.mean[i]) / std::sqrt(var);
-        chi2 += z * z;
-        chi2_plain += d * d / var;
-        ++n;
-    }
-    ASSERT_GT(n, 20) << what << ": too few resolved cells";
-    const double bound = n * m + 3.72 * std::sqrt(n * v);
-    const double se_total = std::sqrt(total_var);
-    std::printf(
-        "%s: chi2 %.1f (%.1f without the bias allowance of %.3f) over %d cells, bound %.1f; "
-        "totals %.5g vs %.5g (z %.2f, standard error %.3f, allowance %.3f relative)\n",
-        what.c_str(), chi2, chi2_plain, cell_share, n, bound, total_a, total_b,
-        (total_a - total_b) / se_total, se_total / total_b, total_share);
-    EXPECT_LT(chi2, bound) << what << ": chi2 over " << n << " cells (mean " << n * m << ")";
-    EXPECT_LT(std::abs(total_a - total_b), 4 * se_total + total_share * total_b)
-        << what << ": totals " << total_a << " vs " << total_b << ", standard error " << se_total;
-    ::testing::Test::RecordProperty(what + "_chi2",
-                                    std::to_string(chi2) + " / bound " + std::to_string(bound));
-}
-
 void check_beams_agreement(const BeamsCase& c) {
     constexpr int kRuns = 8;
     LoadOptions reference_options, beams_options;
@@ -128,10 +87,11 @@ void check_beams_agreement(const BeamsCase& c) {
         test::with_integrator(c.scene, "transient_beams", 0, c.hide_emitters, kernels),
         beams_options, kRuns, 200, "beams");
     const int bins = beams[0].T;
-    expect_agree_up_to_bias(
-        test::cells_of(beams, c.block, c.group), test::cells_of(reference, c.block, c.group), kRuns,
-        c.scene, time_share(c.bandwidth, c.group, c.bin_width) + c.cell_space_share,
-        time_share(c.bandwidth, bins, c.bin_width) + c.total_space_share, c.resolved, c.min_share);
+    test::expect_agree(test::cells_of(beams, c.block, c.group),
+                       test::cells_of(reference, c.block, c.group), kRuns, c.scene, c.resolved,
+                       c.min_share,
+                       time_share(c.bandwidth, c.group, c.bin_width) + c.cell_space_share,
+                       time_share(c.bandwidth, bins, c.bin_width) + c.total_space_share);
 }
 
 // A pixel's footprint at distance s from a pinhole of field of view `fov` (degrees) over
@@ -317,10 +277,9 @@ double slab_space_share(const SlabCase& c) {
 
 void expect_slab_agreement(const test::Cells& beams, const test::Cells& reference,
                            const SlabCase& c, const std::string& what) {
-    expect_agree_up_to_bias(beams, reference, kSlabRuns, what,
-                            time_share(c.bandwidth, c.group, kSlabBinWidth) + slab_space_share(c),
-                            time_share(c.bandwidth, kSlabBins, kSlabBinWidth) + slab_space_share(c),
-                            0.3, 0.0);
+    test::expect_agree(beams, reference, kSlabRuns, what, 0.3, 0.0,
+                       time_share(c.bandwidth, c.group, kSlabBinWidth) + slab_space_share(c),
+                       time_share(c.bandwidth, kSlabBins, kSlabBinWidth) + slab_space_share(c));
 }
 
 }  // namespace

@@ -70,6 +70,22 @@ inline std::vector<double> single_scattering(const Fog& fog, const Point3& o, co
     return out;
 }
 
+/// Adds `value` spread uniformly over [t - half_width, t + half_width) to the bins
+/// [start + i width, ...) of `out`: each bin gets its overlap (a box time kernel, integrated
+/// over the bins exactly).
+inline void add_box_in_time(std::vector<double>& out, double value, double t, double half_width,
+                            double start, double width) {
+    const double lo = t - half_width, hi = t + half_width;
+    const int bins = int(out.size());
+    const int first = std::max(0, int(std::floor((lo - start) / width)));
+    const int last = std::min(bins - 1, int(std::floor((hi - start) / width)));
+    for (int b = first; b <= last; ++b) {
+        const double a = std::max(lo, start + b * width);
+        const double e = std::min(hi, start + (b + 1) * width);
+        if (e > a) out[size_t(b)] += value * (e - a) / (hi - lo);
+    }
+}
+
 /// single_scattering() as a volumetric density estimate with box kernels sees it (photon
 /// mapping): the light scattered at x is counted by every camera point within `radius` of x,
 /// so each camera point sees the average over the ball of radius `radius` around it, and each
@@ -103,15 +119,7 @@ inline std::vector<double> single_scattering_smoothed(const Fog& fog, const Poin
             const double cos_theta = (to.x * d.x + to.y * d.y + to.z * d.z) / r;
             const double value = camera * per_point * fog.sigma_s * fog.phase(cos_theta) *
                                  intensity * std::exp(-fog.sigma_t() * r) / (r * r);
-            // Uniform over [t - half_width, t + half_width): each bin gets its overlap.
-            const double t = fog.eta * (s + r), lo = t - half_width, hi = t + half_width;
-            const int first = std::max(0, int(std::floor((lo - start) / width)));
-            const int last = std::min(bins - 1, int(std::floor((hi - start) / width)));
-            for (int b = first; b <= last; ++b) {
-                const double a = std::max(lo, start + b * width);
-                const double e = std::min(hi, start + (b + 1) * width);
-                if (e > a) out[size_t(b)] += value * (e - a) / (hi - lo);
-            }
+            add_box_in_time(out, value, fog.eta * (s + r), half_width, start, width);
         }
     }
     return out;
@@ -171,14 +179,7 @@ inline std::vector<double> single_scattering_beams(const Fog& fog, const Point3&
             const double value = h * du / (2 * radius) * J * intensity *
                                  std::exp(-fog.sigma_t() * (r + s)) * fog.sigma_s *
                                  fog.phase(-w.dot(D)) / sin_dw;
-            const double t = fog.eta * (s + r), lo = t - half_width, hi = t + half_width;
-            const int first = std::max(0, int(std::floor((lo - start) / width)));
-            const int last = std::min(bins - 1, int(std::floor((hi - start) / width)));
-            for (int b = first; b <= last; ++b) {
-                const double a = std::max(lo, start + b * width);
-                const double e = std::min(hi, start + (b + 1) * width);
-                if (e > a) out[size_t(b)] += value * (e - a) / (hi - lo);
-            }
+            add_box_in_time(out, value, fog.eta * (s + r), half_width, start, width);
         }
     }
     return out;
