@@ -8,8 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "femto/integrator.h"
 #include "femto/scene.h"
 #include "femto/sensor.h"
+#include "femto/tfilter.h"
 #include "scene_util.h"
 
 using namespace femto;
@@ -145,6 +147,21 @@ TEST(PeerTransient, MitransientDefaults) {
                      native_film(2048, 0.003, 0.0, kHistogram, "<rfilter type=\"tent\"/>")),
                "native");
     expect_same_cube(peer, native);
+    // The defaults are mitransient's, not femto's own (no depth limit, no roulette), which this
+    // open scene could not tell apart by its cube.
+    auto loaded = load_scene_string(
+        scene("3.0.0", "<integrator type=\"transient_path\"/>", mitransient_film("")), {}, ".");
+    const auto& integ = dynamic_cast<const MonteCarloIntegrator&>(loaded->integrator());
+    EXPECT_EQ(integ.max_depth(), 6);
+    EXPECT_EQ(integ.rr_depth(), 5);
+    const auto& film = dynamic_cast<const TimeResolvedFilm&>(loaded->sensor().film());
+    EXPECT_EQ(film.grid().bins, 2048);
+    EXPECT_EQ(film.grid().bin_width, 0.003);
+    EXPECT_EQ(film.grid().start, 0.0);
+    auto volumetric = load_scene_string(
+        scene("3.0.0", "<integrator type=\"transient_prbvolpath\"/>", mitransient_film("")), {},
+        ".");
+    EXPECT_EQ(dynamic_cast<const MonteCarloIntegrator&>(volumetric->integrator()).max_depth(), -1);
 }
 
 // camera_unwarp removes the camera segment: femto's world_time. Off, the film records camera
@@ -225,14 +242,28 @@ TEST(PeerTransient, Mitsuba2TransientpathAndStreakhdrfilm) {
                                   param("integer", "time", "40") +
                                   param("float", "exposure_time", "0.1") +
                                   param("float", "time_offset", "2") + filters + "</film>";
-    const std::string new_names =
-        "<film type=\"streakhdrfilm\">" + size + param("integer", "num_bins", "40") +
-        param("float", "bin_width_opl", "0.1") + param("float", "start_opl", "2") +
-        param("string", "pixel_format", "rgba") + filters + "</film>";
+    // The peer's sensor takes its film whatever its name.
+    const std::string new_names = "<film type=\"streakhdrfilm\" name=\"streakfilm\">" + size +
+                                  param("integer", "num_bins", "40") +
+                                  param("float", "bin_width_opl", "0.1") +
+                                  param("float", "start_opl", "2") +
+                                  param("string", "pixel_format", "rgba") + filters + "</film>";
     const Cube native =
         render(scene("3.0.0", native_path(4, 0), native_film(40, 0.1, 2.0, kHistogram)), "native");
     expect_same_cube(render(scene("2.0.0", integrator, old_names), "m2-old"), native);
     expect_same_cube(render(scene("2.0.0", integrator, new_names), "m2-new"), native);
+
+    // Mitsuba 2's defaults: 1000 bins of 1 from 0, max_depth -1; no roulette.
+    auto loaded = load_scene_string(scene("2.0.0", "<integrator type=\"transientpath\"/>",
+                                          "<film type=\"streakhdrfilm\">" + size + "</film>"),
+                                    {}, ".");
+    const auto& integ = dynamic_cast<const MonteCarloIntegrator&>(loaded->integrator());
+    EXPECT_EQ(integ.max_depth(), -1);
+    EXPECT_EQ(integ.rr_depth(), 0);
+    const auto& film = dynamic_cast<const TimeResolvedFilm&>(loaded->sensor().film());
+    EXPECT_EQ(film.grid().bins, 1000);
+    EXPECT_EQ(film.grid().bin_width, 1.0);
+    EXPECT_EQ(film.grid().start, 0.0);
 }
 
 // A femto scene's transient_path is femto's: mitransient's parameters are unknown to it unless

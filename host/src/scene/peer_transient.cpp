@@ -160,6 +160,13 @@ bool contains_tag(const XmlNode& node, const std::string& tag,
     return false;
 }
 
+// The peers' sensors take their film whatever its name (a scene may write
+// <film type="streakhdrfilm" name="streakfilm">), while in femto a nested object's name is the
+// parameter it binds to: the rewritten film is left unnamed, which femto's sensors take.
+void drop_name(XmlNode& film) {
+    std::erase_if(film.attributes, [](const XmlAttribute& a) { return a.name == "name"; });
+}
+
 void collect(XmlNode& node, const std::string& tag, const std::string& type,
              std::vector<XmlNode*>& out) {
     if (node.tag == tag && type_of(node) == type) out.push_back(&node);
@@ -361,6 +368,7 @@ void translate_transient_hdr_film(XmlNode& film, const TimeAxis& axis) {
     kept.push_back(time_filter(axis, bin_width, film));
     film.children = std::move(kept);
     *film.attribute("type") = "transient";
+    drop_name(film);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -538,6 +546,7 @@ void translate_streakhdrfilm(XmlNode& film, std::vector<XmlNode>& checked) {
     kept.push_back(element("tfilter", {{"type", "histogram"}}, film));
     film.children = std::move(kept);
     *film.attribute("type") = "transient";
+    drop_name(film);
 }
 
 XmlNode* top_level_integrator(XmlNode& root) {
