@@ -183,6 +183,9 @@ constexpr Refused kRefused[] = {
     {"integrator", "transient_nlos_path",
      "mitransient's NLOS integrator (confocal and exhaustive relay-wall captures) has no femto "
      "counterpart"},
+    {"integrator", "transient_stokes",
+     "mitransient's polarised integrator (Stokes vectors) has no femto counterpart: femto renders "
+     "unpolarised RGB"},
     {"sensor", "nlos_capture_meter",
      "mitransient's NLOS capture meter (a relay-wall sensor) has no femto counterpart"},
     {"film", "phasor_hdr_film",
