@@ -742,7 +742,8 @@ ObjectPtr create_with(PluginKind kind, const std::string& type, const Properties
 std::unique_ptr<Scene> load_scene(const std::string& path, const LoadOptions& options) {
     detail::OptionsScope scope(options);
     detail::XmlNode root = detail::parse_scene_file(path, options.defines, options.lenient);
-    const std::vector<detail::XmlNode> checked = detail::translate_peer_transient(root);
+    const std::vector<detail::XmlNode> checked =
+        detail::translate_peer_transient(root, options.lenient);
     return detail::Instantiator(options).build_scene(root, checked);
 }
 
@@ -751,7 +752,8 @@ std::unique_ptr<Scene> load_scene_string(const std::string& xml, const LoadOptio
     detail::OptionsScope scope(options);
     detail::XmlNode root =
         detail::parse_scene_string(xml, base_dir, options.defines, options.lenient);
-    const std::vector<detail::XmlNode> checked = detail::translate_peer_transient(root);
+    const std::vector<detail::XmlNode> checked =
+        detail::translate_peer_transient(root, options.lenient);
     return detail::Instantiator(options).build_scene(root, checked);
 }
 

@@ -23,6 +23,7 @@
 #include <string>
 
 #include "femto/log.h"
+#include "util/lenient.h"
 #include "util/strings.h"
 
 namespace femto::detail {
@@ -56,13 +57,17 @@ std::string what(const XmlNode& obj, const std::string& type, const char* peer) 
     throw SceneError(at.location, message);
 }
 
-// A parameter the peer's object does not read: an error naming the ones it does.
-[[noreturn]] void unknown(const XmlNode& c, const std::string& object,
-                          const std::vector<std::string>& valid) {
-    if (!is_property(c)) fail(c, fmt::format("{} takes no nested <{}>", object, c.tag));
+// A parameter the peer's object does not read: an error naming the ones it does (under
+// --lenient a warning, and the caller drops it).
+thread_local bool t_lenient = false;
+void unknown(const XmlNode& c, const std::string& object, const std::vector<std::string>& valid) {
+    if (!is_property(c))
+        return reject_unless_lenient(t_lenient, c.location,
+                                     fmt::format("{} takes no nested <{}>", object, c.tag));
     const std::string name = name_of(c);
-    fail(c, fmt::format("{} has no parameter \"{}\"{}; valid: {}", object, name,
-                        did_you_mean(name, valid), join(valid)));
+    reject_unless_lenient(t_lenient, c.location,
+                          fmt::format("{} has no parameter \"{}\"{}; valid: {}", object, name,
+                                      did_you_mean(name, valid), join(valid)));
 }
 
 const std::string& value_of(const XmlNode& c) {
@@ -560,7 +565,8 @@ XmlNode* top_level_integrator(XmlNode& root) {
 
 }  // namespace
 
-std::vector<XmlNode> translate_peer_transient(XmlNode& root) {
+std::vector<XmlNode> translate_peer_transient(XmlNode& root, bool lenient) {
+    t_lenient = lenient;
     refuse_unsupported(root);
     std::vector<XmlNode*> mi_films, m2_films;
     collect(root, "film", "transient_hdr_film", mi_films);

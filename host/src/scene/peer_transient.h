@@ -14,7 +14,8 @@ namespace femto::detail {
 /// `transient_prbvolpath`, `transientpath`) into femto's `transient_path`, checking every
 /// parameter under the peer's name (located SceneErrors). Objects of femto's own scenes are left
 /// alone. Returns the elements that are only to be checked by building them: the time filters of
-/// `streakhdrfilm`, which mitsuba2-transient reads but never applies.
-std::vector<XmlNode> translate_peer_transient(XmlNode& root);
+/// `streakhdrfilm`, which mitsuba2-transient reads but never applies. Under `lenient`, a
+/// parameter the peer does not know is a warning and dropped, as femto's unknown parameters are.
+std::vector<XmlNode> translate_peer_transient(XmlNode& root, bool lenient);
 
 }  // namespace femto::detail
