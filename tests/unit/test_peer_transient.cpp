@@ -183,6 +183,16 @@ TEST(PeerTransient, CameraUnwarpIsWorldTime) {
         off, render(scene("3.0.0", native_path(6, 5), native_film(60, 0.1, 0.0, kHistogram)),
                     "native-off"));
     EXPECT_FALSE(on.data == off.data);  // unwarped light arrives 2.5 to 2.9 earlier
+    // As in mitransient, the emitter the camera sees directly arrives at 0 once unwarped (bin
+    // 0), and about 2 later in camera time.
+    double first_bin_on = 0, first_bin_off = 0;
+    for (int y = 0; y < on.H; ++y)
+        for (int x = 0; x < on.W; ++x) {
+            first_bin_on += on.energy(y, x, 0);
+            first_bin_off += off.energy(y, x, 0);
+        }
+    EXPECT_GT(first_bin_on, 0.0);
+    EXPECT_EQ(first_bin_off, 0.0);
 }
 
 // temporal_filter="gaussian" with gaussian_stddev (bins) is a fixed Gaussian kernel in time:
