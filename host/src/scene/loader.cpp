@@ -16,6 +16,7 @@
 #include "femto/sensor.h"
 #include "femto/shape.h"
 #include "plugin/registry.h"
+#include "scene/peer_transient.h"
 #include "scene/spectrum_tags.h"
 #include "util/lenient.h"
 #include "util/strings.h"
@@ -550,7 +551,8 @@ public:
         }
     }
 
-    std::unique_ptr<Scene> build_scene(const XmlNode& root) {
+    /// `checked`: elements built only to check them (translate_peer_transient()).
+    std::unique_ptr<Scene> build_scene(const XmlNode& root, const std::vector<XmlNode>& checked) {
         check_attributes(root, {"version"});
         search_dirs_ = root.search_dirs;
         std::shared_ptr<Integrator> integrator;
@@ -559,6 +561,12 @@ public:
         std::vector<std::shared_ptr<Emitter>> emitters;
         root_ = &root;
         index_ids(root);
+        // Before the objects they were taken from: their errors come first, before a film
+        // allocates its cube.
+        for (const XmlNode& c : checked) {
+            PluginKind kind;
+            if (kind_from_tag(c.tag, kind)) build(c, kind);
+        }
         Properties scene_props("scene", root.location);
         std::map<std::string, SourceLocation> object_names;
         int arg_index = 0;
@@ -733,16 +741,20 @@ ObjectPtr create_with(PluginKind kind, const std::string& type, const Properties
 
 std::unique_ptr<Scene> load_scene(const std::string& path, const LoadOptions& options) {
     detail::OptionsScope scope(options);
-    const detail::XmlNode root = detail::parse_scene_file(path, options.defines, options.lenient);
-    return detail::Instantiator(options).build_scene(root);
+    detail::XmlNode root = detail::parse_scene_file(path, options.defines, options.lenient);
+    const std::vector<detail::XmlNode> checked =
+        detail::translate_peer_transient(root, options.lenient);
+    return detail::Instantiator(options).build_scene(root, checked);
 }
 
 std::unique_ptr<Scene> load_scene_string(const std::string& xml, const LoadOptions& options,
                                          const std::string& base_dir) {
     detail::OptionsScope scope(options);
-    const detail::XmlNode root =
+    detail::XmlNode root =
         detail::parse_scene_string(xml, base_dir, options.defines, options.lenient);
-    return detail::Instantiator(options).build_scene(root);
+    const std::vector<detail::XmlNode> checked =
+        detail::translate_peer_transient(root, options.lenient);
+    return detail::Instantiator(options).build_scene(root, checked);
 }
 
 ObjectPtr create_object(PluginKind kind, const std::string& type, const Properties& props,
