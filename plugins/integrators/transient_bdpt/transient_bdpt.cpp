@@ -33,8 +33,12 @@
 // next vertex is in the medium; the weights take the density at the segment's own length
 // everywhere (angular_densities()), the exact one where the next vertex is a medium vertex and
 // a deterministic stand-in elsewhere, which keeps them a partition of unity.
-// Delta lights: a point or spot light is never hit (no s = 0); a collimated beam is never hit
-// either, and its vertex's position density moves to the next vertex (pdf_light()).
+// Delta lights: a point or spot light is never hit (no s = 0); a collimated beam (and a
+// directional light) is never hit either, and its vertex's position density moves to the next
+// vertex (pdf_light()). Environments (constant, envmap) are light vertices of a direction
+// (pbrt-v3's infinite lights): their densities are the direction's, the next vertex takes the
+// start disk's area density, a camera subpath that leaves the scene adds s = 0
+// (environment_hit()), and the light vertex never joins the camera directly.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -82,6 +86,10 @@ struct Vertex {
     double segment_optical = 0;          // its optical length
     bool segment_single_medium = false;  // it lies in one medium, with no boundary on it
     bool delta = false;                  // scattered by a delta lobe: no connection can use it
+    // A light vertex of an environment (constant, envmap): light from direction -n, from the
+    // start plane of its plane wave (SceneSphere). Its densities are those of a direction,
+    // and the next vertex takes the start disk's area density (pdf_light()).
+    bool environment = false;
 
     bool on_surface() const {
         return kind == Kind::Surface || (kind == Kind::Light && n != Vec3());
@@ -127,6 +135,7 @@ struct Subpaths {
 // pdf_dir (solid angle at `from`) as a density of `to`: area measure on a surface, volume
 // measure in a medium.
 double to_area(double pdf_dir, const Vertex& from, const Vertex& to) {
+    if (to.environment) return pdf_dir;  // a direction toward an environment stays one
     const Vec3 d = to.p - from.p;
     const double d2 = double(squared_length(d));
     if (!(d2 > 0)) return 0;
@@ -219,13 +228,6 @@ public:
                             scene.sensor().ray_weight());
         }
         distance_->prepare({window_end_});
-        // Environments need a light vertex at infinity in the MIS weights, which this
-        // estimator does not have yet; a directional light is a collimated beam to it.
-        if (!scene.environment().empty())
-            throw SceneError(scene.environment()[0]->location(),
-                             type_name() + " does not render environment emitters (\"" +
-                                 scene.environment()[0]->type_name() +
-                                 "\") yet; render this scene with path or transient_path");
         starts_.prepare(scene, type_name());
     }
 
@@ -319,7 +321,10 @@ private:
                     return !clock.expired();
                 });
             paths.camera_out.back().first_end = walk.first_end;
-            if (!found) return;
+            if (!found) {
+                if (walk.escaped) environment_hit(scene, sampler, walk, paths, beta, clock, out);
+                return;
+            }
             v.segment_optical = clock.time() - before;
             beta *= weight;
             // A vertex on top of the previous one (a distance that rounds to 0) has no direction
@@ -353,14 +358,14 @@ private:
         if (!start) return;
         const Emitter* emitter = start.emitter;
         const EmissionSample& es = start.emission;
-        const float pmf = start.pmf;
         Vertex light;
         light.kind = Vertex::Kind::Light;
         light.p = es.p;
         light.n = es.n;
         light.emitter = emitter;
         light.emission = es;
-        light.pdf_fwd = es.delta_direction ? pmf : es.pdf_position * pmf;  // pdf_light()
+        light.environment = emitter->is_infinite() && !emitter->is_delta();
+        light.pdf_fwd = pdf_light_origin(scene, light);
         light.medium = starts_.medium(*emitter, es, es.d);
         LightClock clock(scene, *emitter, es.p, sampler);
         paths.emission_time = clock.time();
@@ -416,6 +421,7 @@ private:
         double pdf_dir = 0;            // density of ray.d at the walk's last vertex
         SegmentDensities segment;      // the media of the segment being walked
         double first_end = kInfinity;  // where the ray's first piece ends (its first surface)
+        bool escaped = false;          // the walk left the scene in vacuum
         // Time-angular sampling: the point the walk aims at, and the next distance's uniform
         // number when drawn before the direction (-1 when not).
         bool has_target = false;
@@ -471,6 +477,7 @@ private:
                 if (!found || weight.is_black()) return false;
             } else {
                 walk.segment.add_vacuum();
+                walk.escaped = !found;
             }
             if (!found || !travel(hit.p, walk.medium.eta())) return false;
             const Bsdf& bsdf = *hit.shape->bsdf();
@@ -575,6 +582,39 @@ private:
         images_.add(0, t, out.film_position(), value);
     }
 
+    // s = 0 with an environment: the camera subpath left the scene in vacuum along walk.ray.
+    // Each environment is the path's light vertex for a moment (a direction, at its plane
+    // wave's start), for the MIS weight.
+    void environment_hit(const Scene& scene, Sampler& sampler, const Walk& walk, Subpaths& paths,
+                         const Throughput& beta, const PathClock& clock,
+                         const ContributionList& out) const {
+        const int t = int(paths.camera.size()) + 1;
+        if (!wanted(0, t) || (t == 2 && hide_emitters())) return;
+        const Vec3 d = walk.ray.d;
+        const double eta = walk.medium.eta();
+        for (const Emitter* env : scene.environment()) {
+            Vertex v;
+            v.kind = Vertex::Kind::Light;
+            v.environment = true;
+            v.emitter = env;
+            v.p = scene.sphere().plane_wave_start(clock.position(), d);
+            v.n = -d;
+            v.wi = -d;
+            v.medium = walk.medium;
+            set_forward_density(walk, paths.camera.back(), v);
+            paths.camera.push_back(v);
+            Join join;
+            join.path_time =
+                clock.time() + scene.sphere().plane_wave_distance(clock.position(), d) * eta;
+            const float w =
+                unweighted() ? 1.f : mis_weight(scene, paths, 0, t, join, nullptr, nullptr);
+            paths.camera.pop_back();
+            const Color value = beta(env->eval_environment(d) * w);
+            clock.record_distant(value, *env, sampler, d, eta);
+            images_.add(0, t, out.film_position(), value);
+        }
+    }
+
     // Joins the first s light vertices and the first t camera vertices (s, t >= 1).
     void connect(const Scene& scene, Sampler& sampler, const Subpaths& paths, int s, int t,
                  ContributionList& out) const {
@@ -633,6 +673,7 @@ private:
         light.emission.n = ls.n;
         light.emission.delta_position = ls.emitter->is_delta();  // no camera path hits it
         light.emission.delta_direction = starts_.delta_direction(*ls.emitter);
+        light.environment = ls.emitter->is_infinite() && !ls.emitter->is_delta();
         light.pdf_fwd = pdf_light_origin(scene, light);
         const Join join{segment.forward(false), segment.backward(cv.kind == Vertex::Kind::Medium),
                         c.optical_length, segment.single_medium(), clock.time() + c.optical_length};
@@ -816,7 +857,7 @@ private:
         at.n = v.n;
         float pos = 0.f, dir = 0.f;
         v.emitter->pdf_emission(at, towards(v, next), pos, dir);
-        if (!v.emission.delta_direction) return to_area(dir, v, next);
+        if (!v.emission.delta_direction && !v.environment) return to_area(dir, v, next);
         if (!next.on_surface()) return pos;
         return pos * std::abs(dot(next.n, towards(v, next)));
     }
@@ -824,6 +865,7 @@ private:
     static double pdf_light_origin(const Scene& scene, const Vertex& v) {
         const double pmf = scene.select_emitter_pmf(*v.emitter);
         if (v.emission.delta_direction) return pmf;  // the next vertex has the position's
+        if (v.environment) return pmf * v.emitter->pdf_environment(-v.n);  // and here too
         EmissionSample at;
         at.p = v.p;
         at.n = v.n;
@@ -950,7 +992,9 @@ private:
             const bool start_delta = k > 0 ? x[size_t(k) - 1].delta : delta_light;
             const bool joins = k == s || (k > s ? !x[size_t(k) - 1].delta && !x[size_t(k)].delta
                                                 : !x[size_t(k)].delta && !start_delta);
-            if (!joins || (k == 0 && hit_excluded)) continue;
+            // An environment's light vertex lies on no surface the camera could connect to.
+            const bool environment_to_camera = k == 1 && n == 2 && path[0].environment;
+            if (!joins || (k == 0 && hit_excluded) || environment_to_camera) continue;
             sum += h(x[size_t(k)].rel);
             if (const double c = placement_factor(scene, path, k); c > 0)
                 sum += h(x[size_t(k)].rel * c);
