@@ -34,7 +34,8 @@ namespace femto {
 ///  RejectedContributions, Film::rejected()/add_rejected(), TimeResolvedBlock::rejected().)
 /// (15: file-name parameters are declared in the schema (type "filename", see ParamSpec) and
 ///  only those are resolved by the loader; Volume (femto/volume.h); create_child_object().)
-inline constexpr uint32_t kPluginAbiVersion = 15;
+/// (16: analytic cylinders: Shape::set_cylinder() and its members change Shape's layout.)
+inline constexpr uint32_t kPluginAbiVersion = 16;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -1,6 +1,8 @@
 // The Embree scene over a femto scene's shapes (see embree_scene.h).
 #include "accel/embree_scene.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -21,7 +23,76 @@ void ignore_in_shadow_rays(const RTCFilterFunctionNArguments* args) {
     for (unsigned i = 0; i < args->N; ++i) args->valid[i] = 0;
 }
 
+// -- analytic cylinders: Embree user geometry over Shape::intersect_cylinder ------------------
+
+void cylinder_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* shape = static_cast<const Shape*>(args->geometryUserPtr);
+    const Bounds3 b = cylinder_box(*shape);
+    RTCBounds* out = args->bounds_o;
+    out->lower_x = b.min.x, out->lower_y = b.min.y, out->lower_z = b.min.z;
+    out->upper_x = b.max.x, out->upper_y = b.max.y, out->upper_z = b.max.z;
+}
+
+Ray user_ray(RTCRayN* rays, unsigned n, unsigned i) {
+    Ray r;
+    r.o = {RTCRayN_org_x(rays, n, i), RTCRayN_org_y(rays, n, i), RTCRayN_org_z(rays, n, i)};
+    r.d = {RTCRayN_dir_x(rays, n, i), RTCRayN_dir_y(rays, n, i), RTCRayN_dir_z(rays, n, i)};
+    r.tmin = RTCRayN_tnear(rays, n, i);
+    r.tmax = RTCRayN_tfar(rays, n, i);
+    return r;
+}
+
+void cylinder_intersect(const RTCIntersectFunctionNArguments* args) {
+    const auto* shape = static_cast<const Shape*>(args->geometryUserPtr);
+    RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
+    RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, args->N);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i]) continue;
+        float t;
+        if (!shape->intersect_cylinder(user_ray(rays, args->N, i), t)) continue;
+        RTCRayN_tfar(rays, args->N, i) = t;
+        RTCHitN_u(hits, args->N, i) = 0.f;
+        RTCHitN_v(hits, args->N, i) = 0.f;
+        RTCHitN_Ng_x(hits, args->N, i) = 0.f;
+        RTCHitN_Ng_y(hits, args->N, i) = 0.f;
+        RTCHitN_Ng_z(hits, args->N, i) = 1.f;
+        RTCHitN_primID(hits, args->N, i) = args->primID;
+        RTCHitN_geomID(hits, args->N, i) = args->geomID;
+        for (unsigned l = 0; l < RTC_MAX_INSTANCE_LEVEL_COUNT; ++l)
+            RTCHitN_instID(hits, args->N, i, l) = args->context->instID[l];
+    }
+}
+
+void cylinder_occluded(const RTCOccludedFunctionNArguments* args) {
+    const auto* shape = static_cast<const Shape*>(args->geometryUserPtr);
+    if (shape->bsdf() && shape->bsdf()->is_null()) return;  // null surfaces never block
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i]) continue;
+        float t;
+        if (shape->intersect_cylinder(user_ray(args->ray, args->N, i), t))
+            RTCRayN_tfar(args->ray, args->N, i) = -kInfinity;
+    }
+}
+
 }  // namespace
+
+Bounds3 cylinder_box(const Shape& shape) {
+    // The two end circles bound the tube: along world axis i a circle of radius r
+    // perpendicular to n reaches r sqrt(1 - n_i^2) from its centre. Padded by the hit's
+    // offset scale so that rays spawned just outside still find the surface.
+    const Frame& f = shape.cylinder_frame();
+    const Vec3 a = shape.cylinder_base(), b = a + f.n * shape.cylinder_length();
+    const float r = shape.cylinder_radius();
+    const float pad =
+        2.f * kRayOffsetScale * (std::max(max_abs_component(a), max_abs_component(b)) + r);
+    Bounds3 box;
+    for (int i = 0; i < 3; ++i) {
+        const float reach = r * std::sqrt(std::max(0.f, 1.f - f.n[i] * f.n[i])) + pad;
+        box.min[i] = std::min(a[i], b[i]) - reach;
+        box.max[i] = std::max(a[i], b[i]) + reach;
+    }
+    return box;
+}
 
 RTCDevice embree_device() {
     static RTCDevice dev = [] {
@@ -45,7 +116,18 @@ EmbreeScene::EmbreeScene(const std::vector<std::shared_ptr<Shape>>& shapes, bool
         if (null_surface && !shape.emitter() && !shape.has_media())
             continue;  // invisible: nothing to see, block or enter
         RTCGeometry geom;
-        if (shape.is_sphere()) {
+        if (shape.is_cylinder()) {
+            geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
+            rtcSetGeometryUserPrimitiveCount(geom, 1);
+            rtcSetGeometryUserData(geom, const_cast<Shape*>(&shape));
+            rtcSetGeometryBoundsFunction(geom, cylinder_bounds, nullptr);
+            rtcSetGeometryIntersectFunction(geom, cylinder_intersect);
+            rtcSetGeometryOccludedFunction(geom, cylinder_occluded);
+            const Bounds3 box = cylinder_box(shape);
+            bounds_.expand(box.min);
+            bounds_.expand(box.max);
+            ++cylinders_;
+        } else if (shape.is_sphere()) {
             geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
             auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
                 geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));

@@ -20,8 +20,9 @@ namespace femto::detail {
 RTCDevice embree_device();
 
 /// A committed Embree scene (RTC_BUILD_QUALITY_MEDIUM) holding one geometry per visible
-/// shape, with geometry ID = the shape's index in `shapes`: world-space triangle meshes, and
-/// spheres as RTC_GEOMETRY_TYPE_SPHERE_POINT. A shape whose material is a pure `null` with no
+/// shape, with geometry ID = the shape's index in `shapes`: world-space triangle meshes,
+/// spheres as RTC_GEOMETRY_TYPE_SPHERE_POINT and cylinders as user geometry
+/// (Shape::intersect_cylinder). A shape whose material is a pure `null` with no
 /// emitter and no media is left out (nothing to see, block or enter); a `null` surface that is
 /// kept lets shadow rays through (an occlusion filter).
 class EmbreeScene {
@@ -40,13 +41,17 @@ public:
     const Bounds3& bounds() const { return bounds_; }
     size_t triangles() const { return triangles_; }
     size_t spheres() const { return spheres_; }
+    size_t cylinders() const { return cylinders_; }
 
 private:
     RTCScene scene_ = nullptr;
     std::vector<const Shape*> by_geom_id_;
     Bounds3 bounds_;
-    size_t triangles_ = 0, spheres_ = 0;
+    size_t triangles_ = 0, spheres_ = 0, cylinders_ = 0;
 };
+
+/// A box around an analytic cylinder (the shape's is_cylinder()).
+Bounds3 cylinder_box(const Shape& shape);
 
 /// An RTCRayHit for rtcIntersect1, every field Embree needs reset (tfar, mask, flags, geomID,
 /// instID).
