@@ -354,6 +354,9 @@ private:
         light.emitter = emitter;
         light.emission = es;
         light.pdf_fwd = es.delta_direction ? pmf : es.pdf_position * pmf;  // pdf_light()
+        // A single ray (an infinitely thin collimated beam): no strategy can connect to its
+        // start, so those that would (s = 1) leave the MIS weights, as a delta lobe's do.
+        light.delta = es.delta_position && es.delta_direction;
         light.medium = starts_.medium(*emitter, es, es.d);
         LightClock clock(scene, *emitter, es.p, sampler);
         paths.emission_time = clock.time();
