@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "femto/bsdf.h"
+#include "scene/instancing.h"
 
 namespace femto::detail {
 
@@ -104,65 +105,143 @@ RTCDevice embree_device() {
     return dev;
 }
 
-EmbreeScene::EmbreeScene(const std::vector<std::shared_ptr<Shape>>& shapes, bool robust) {
+// One shape's geometry, attached to `scene` as `id`; false for a shape left out (invisible).
+bool EmbreeScene::attach(RTCScene scene, const Shape& shape, unsigned id, Bounds3& bounds) {
+    RTCDevice dev = embree_device();
+    const bool null_surface = shape.bsdf() && shape.bsdf()->is_null();
+    if (null_surface && !shape.emitter() && !shape.has_media())
+        return false;  // invisible: nothing to see, block or enter
+    RTCGeometry geom;
+    if (const auto* inst = dynamic_cast<const ShapeInstance*>(&shape)) {
+        const Group& group = group_scene(inst->group());
+        geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(geom, group.scene);
+        const auto& m = inst->transform().matrix();
+        float xfm[12];  // 3x4, column major
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 3; ++r) xfm[3 * c + r] = float(m[r][c]);
+        rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+        if (group.bounds.valid())
+            for (int corner = 0; corner < 8; ++corner)
+                bounds.expand(inst->transform().point(
+                    {(corner & 1 ? group.bounds.max : group.bounds.min).x,
+                     (corner & 2 ? group.bounds.max : group.bounds.min).y,
+                     (corner & 4 ? group.bounds.max : group.bounds.min).z}));
+        ++instances_;
+    } else if (shape.is_cylinder()) {
+        geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(geom, 1);
+        rtcSetGeometryUserData(geom, const_cast<Shape*>(&shape));
+        rtcSetGeometryBoundsFunction(geom, cylinder_bounds, nullptr);
+        rtcSetGeometryIntersectFunction(geom, cylinder_intersect);
+        rtcSetGeometryOccludedFunction(geom, cylinder_occluded);
+        const Bounds3 box = cylinder_box(shape);
+        bounds.expand(box.min);
+        bounds.expand(box.max);
+        ++cylinders_;
+    } else if (shape.is_sphere()) {
+        geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+        const Vec3 c = shape.sphere_center();
+        v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = shape.sphere_radius();
+        bounds.expand(c - Vec3(shape.sphere_radius()));
+        bounds.expand(c + Vec3(shape.sphere_radius()));
+        ++spheres_;
+    } else {
+        const TriangleMesh& m = shape.mesh();
+        geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                              RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                              m.positions.size()));
+        std::memcpy(v, m.positions.data(), m.positions.size() * sizeof(Vec3));
+        auto* idx = static_cast<uint32_t*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                    3 * sizeof(uint32_t), m.triangle_count()));
+        std::memcpy(idx, m.indices.data(), m.indices.size() * sizeof(uint32_t));
+        for (const Vec3& p : m.positions) bounds.expand(p);
+        triangles_ += m.triangle_count();
+    }
+    if (null_surface) rtcSetGeometryOccludedFilterFunction(geom, ignore_in_shadow_rays);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(scene, geom, id);
+    rtcReleaseGeometry(geom);
+    return true;
+}
+
+// A shapegroup's child scene, built once however many instances place it.
+const EmbreeScene::Group& EmbreeScene::group_scene(const ShapeGroup& group) {
+    if (auto it = groups_.find(&group); it != groups_.end()) return it->second;
+    Group g;
+    g.scene = rtcNewScene(embree_device());
+    rtcSetSceneBuildQuality(g.scene, RTC_BUILD_QUALITY_MEDIUM);
+    rtcSetSceneFlags(g.scene, robust_ ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    g.shapes.resize(group.shapes().size(), nullptr);
+    for (size_t i = 0; i < group.shapes().size(); ++i)
+        if (attach(g.scene, *group.shapes()[i], unsigned(i), g.bounds))
+            g.shapes[i] = group.shapes()[i].get();
+    rtcCommitScene(g.scene);
+    return groups_.emplace(&group, std::move(g)).first->second;
+}
+
+EmbreeScene::EmbreeScene(const std::vector<std::shared_ptr<Shape>>& shapes, bool robust)
+    : robust_(robust) {
     RTCDevice dev = embree_device();
     scene_ = rtcNewScene(dev);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
     rtcSetSceneFlags(scene_, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     by_geom_id_.resize(shapes.size(), nullptr);
+    instance_of_geom_id_.resize(shapes.size(), nullptr);
     for (size_t i = 0; i < shapes.size(); ++i) {
         const Shape& shape = *shapes[i];
-        const bool null_surface = shape.bsdf() && shape.bsdf()->is_null();
-        if (null_surface && !shape.emitter() && !shape.has_media())
-            continue;  // invisible: nothing to see, block or enter
-        RTCGeometry geom;
-        if (shape.is_cylinder()) {
-            geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
-            rtcSetGeometryUserPrimitiveCount(geom, 1);
-            rtcSetGeometryUserData(geom, const_cast<Shape*>(&shape));
-            rtcSetGeometryBoundsFunction(geom, cylinder_bounds, nullptr);
-            rtcSetGeometryIntersectFunction(geom, cylinder_intersect);
-            rtcSetGeometryOccludedFunction(geom, cylinder_occluded);
-            const Bounds3 box = cylinder_box(shape);
-            bounds_.expand(box.min);
-            bounds_.expand(box.max);
-            ++cylinders_;
-        } else if (shape.is_sphere()) {
-            geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-                geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
-            const Vec3 c = shape.sphere_center();
-            v[0] = c.x, v[1] = c.y, v[2] = c.z, v[3] = shape.sphere_radius();
-            bounds_.expand(c - Vec3(shape.sphere_radius()));
-            bounds_.expand(c + Vec3(shape.sphere_radius()));
-            ++spheres_;
-        } else {
-            const TriangleMesh& m = shape.mesh();
-            geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* v = static_cast<float*>(
-                rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                        3 * sizeof(float), m.positions.size()));
-            std::memcpy(v, m.positions.data(), m.positions.size() * sizeof(Vec3));
-            auto* idx = static_cast<uint32_t*>(
-                rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                        3 * sizeof(uint32_t), m.triangle_count()));
-            std::memcpy(idx, m.indices.data(), m.indices.size() * sizeof(uint32_t));
-            for (const Vec3& p : m.positions) bounds_.expand(p);
-            triangles_ += m.triangle_count();
-        }
-        if (null_surface) rtcSetGeometryOccludedFilterFunction(geom, ignore_in_shadow_rays);
-        rtcCommitGeometry(geom);
-        rtcAttachGeometryByID(scene_, geom, unsigned(i));
-        rtcReleaseGeometry(geom);
-        by_geom_id_[i] = &shape;
+        if (!attach(scene_, shape, unsigned(i), bounds_)) continue;
+        if (const auto* inst = dynamic_cast<const ShapeInstance*>(&shape))
+            instance_of_geom_id_[i] = inst;
+        else
+            by_geom_id_[i] = &shape;
     }
     rtcCommitScene(scene_);
     if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) {
-        rtcReleaseScene(scene_);
+        release();
         throw std::runtime_error("Embree failed to build the scene (see the message above)");
     }
 }
 
-EmbreeScene::~EmbreeScene() { rtcReleaseScene(scene_); }
+void EmbreeScene::release() {
+    for (auto& [group, g] : groups_) rtcReleaseScene(g.scene);
+    groups_.clear();
+    rtcReleaseScene(scene_);
+    scene_ = nullptr;
+}
+
+void EmbreeScene::fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const {
+    const unsigned inst_id = rh.hit.instID[0];
+    if (inst_id == RTC_INVALID_GEOMETRY_ID) {
+        by_geom_id_[rh.hit.geomID]->fill_hit(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v,
+                                             hit);
+        return;
+    }
+    // An instance: the shape's own hit in the group's space (Embree moved the ray there without
+    // normalizing its direction, so t is the same), then moved to the world.
+    const ShapeInstance& inst = *instance_of_geom_id_[inst_id];
+    const Transform& to_world = inst.transform();
+    const Transform to_local = to_world.inverse();
+    const Ray local{to_local.point(ray.o), to_local.vector(ray.d), ray.tmin, ray.tmax};
+    const Shape* shape = groups_.at(&inst.group()).shapes[rh.hit.geomID];
+    shape->fill_hit(local, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, hit);
+    hit.p = to_world.point(hit.p);
+    hit.ng = normalize(to_world.normal(hit.ng));
+    hit.sh = Frame(normalize(to_world.normal(hit.sh.n)));
+    hit.wi = hit.sh.to_local(-ray.d);
+    // The local offset scale, stretched by the transform (its largest column bounds it), and
+    // the rounding of the transform itself.
+    const auto& m = to_world.matrix();
+    double stretch = 0;
+    for (int c = 0; c < 3; ++c)
+        stretch =
+            std::max(stretch, std::sqrt(m[0][c] * m[0][c] + m[1][c] * m[1][c] + m[2][c] * m[2][c]));
+    hit.p_error = float(stretch * hit.p_error) + kRayOffsetScale * max_abs_component(hit.p);
+}
+EmbreeScene::~EmbreeScene() { release(); }
 
 }  // namespace femto::detail
