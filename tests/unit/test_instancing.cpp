@@ -160,6 +160,42 @@ TEST(Instancing, RendersLikeTheShapesWrittenDirectly) {
     EXPECT_LT(diff, 0.02 * total);
 }
 
+// A group's shape may bound a medium: instances of a fog ball render as fog balls written out
+// directly, and the scene knows it has media.
+TEST(Instancing, MediaInsideAGroup) {
+    const std::string fog =
+        "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_s\" value=\"1.5\"/>"
+        "<float name=\"sigma_a\" value=\"0.3\"/></medium>";
+    auto ball = [](const std::string& outer) {
+        return "<shape type=\"sphere\"><float name=\"radius\" value=\"0.4\"/><transform "
+               "name=\"to_world\"><translate z=\"0.5\"/>" +
+               outer +
+               "</transform><bsdf type=\"null\"/><ref name=\"interior\" id=\"fog\"/></shape>";
+    };
+    const std::string instanced = frame(
+        fog + "<shape type=\"shapegroup\" id=\"g\">" + ball("") +
+        "</shape><shape type=\"instance\"><ref id=\"g\"/><transform name=\"to_world\">" + kPlace1 +
+        "</transform></shape><shape type=\"instance\"><ref id=\"g\"/><transform "
+        "name=\"to_world\">" +
+        kPlace2 + "</transform></shape>");
+    const std::string direct = frame(fog + ball(kPlace1) + ball(kPlace2));
+    EXPECT_TRUE(load_scene_string(instanced)->has_media());
+    constexpr int kRuns = 16;
+    auto runs = [&](const std::string& xml, uint64_t seed) {
+        std::vector<testing::Cube> out;
+        for (int r = 0; r < kRuns; ++r) {
+            auto scene = load_scene_string(xml);
+            testing::Cube c;
+            c.H = c.W = 24, c.T = 1, c.C = 3;
+            c.data = testing::render_steady(*scene, seed + uint64_t(r));
+            out.push_back(std::move(c));
+        }
+        return out;
+    };
+    test::expect_agree(test::cells_of(runs(instanced, 1), 1, 1),
+                       test::cells_of(runs(direct, 1001), 1, 1), kRuns, "instanced vs direct fog");
+}
+
 // However many instances place a group, its geometry is in the Embree scene once.
 TEST(Instancing, GroupGeometryIsStoredOnce) {
     std::string body =
