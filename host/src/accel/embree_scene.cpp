@@ -191,12 +191,12 @@ EmbreeScene::EmbreeScene(const std::vector<std::shared_ptr<Shape>>& shapes, bool
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);
     rtcSetSceneFlags(scene_, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     by_geom_id_.resize(shapes.size(), nullptr);
-    instance_of_geom_id_.resize(shapes.size(), nullptr);
+    instance_of_geom_id_.resize(shapes.size());
     for (size_t i = 0; i < shapes.size(); ++i) {
         const Shape& shape = *shapes[i];
         if (!attach(scene_, shape, unsigned(i), bounds_)) continue;
         if (const auto* inst = dynamic_cast<const ShapeInstance*>(&shape))
-            instance_of_geom_id_[i] = inst;
+            instance_of_geom_id_[i] = {inst, &groups_.at(&inst->group())};
         else
             by_geom_id_[i] = &shape;
     }
@@ -223,11 +223,12 @@ void EmbreeScene::fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const 
     }
     // An instance: the shape's own hit in the group's space (Embree moved the ray there without
     // normalizing its direction, so t is the same), then moved to the world.
-    const ShapeInstance& inst = *instance_of_geom_id_[inst_id];
+    const Placed& placed = instance_of_geom_id_[inst_id];
+    const ShapeInstance& inst = *placed.instance;
     const Transform& to_world = inst.transform();
     const Transform to_local = to_world.inverse();
     const Ray local{to_local.point(ray.o), to_local.vector(ray.d), ray.tmin, ray.tmax};
-    const Shape* shape = groups_.at(&inst.group()).shapes[rh.hit.geomID];
+    const Shape* shape = placed.group->shapes[rh.hit.geomID];
     shape->fill_hit(local, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, hit);
     hit.p = to_world.point(hit.p);
     hit.ng = normalize(to_world.normal(hit.ng));

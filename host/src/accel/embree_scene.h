@@ -65,7 +65,11 @@ private:
     RTCScene scene_ = nullptr;
     bool robust_ = true;
     std::vector<const Shape*> by_geom_id_;
-    std::vector<const ShapeInstance*> instance_of_geom_id_;
+    struct Placed {  // an instance and its group's scene (std::map keeps it in place)
+        const ShapeInstance* instance = nullptr;
+        const Group* group = nullptr;
+    };
+    std::vector<Placed> instance_of_geom_id_;
     std::map<const ShapeGroup*, Group> groups_;
     Bounds3 bounds_;
     size_t triangles_ = 0, spheres_ = 0, cylinders_ = 0, instances_ = 0;
