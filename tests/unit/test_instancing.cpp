@@ -277,6 +277,12 @@ TEST(Instancing, ErrorsAreLocated) {
         scene("<shape type=\"shapegroup\" id=\"a\">\n  <bsdf type=\"diffuse\"/></shape>"));
     EXPECT_TRUE(contains(msg, "<string>:4:3")) << msg;
     EXPECT_TRUE(contains(msg, "only shapes")) << msg;
+    msg = test::load_error(scene(
+        "<shape type=\"shapegroup\" id=\"a\"><shape type=\"sphere\"/></shape>\n<shape "
+        "type=\"instance\"><ref id=\"a\"/>\n  <transform name=\"to_world\"><matrix value=\"1 0 0 0 "
+        "0 1 0 0 0 0 1 0 0 0 0.5 1\"/></transform></shape>"));
+    EXPECT_TRUE(contains(msg, "<string>:5:3")) << msg;
+    EXPECT_TRUE(contains(msg, "affine")) << msg;
     // A shapegroup takes no to_world (an instance places it).
     msg = test::load_error(
         scene("<shape type=\"shapegroup\" id=\"a\"><shape type=\"sphere\"/>\n  <transform "

@@ -234,15 +234,16 @@ void EmbreeScene::fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const 
     hit.ng = normalize(to_world.normal(hit.ng));
     hit.sh = Frame(normalize(to_world.normal(hit.sh.n)));
     hit.wi = hit.sh.to_local(-ray.d);
-    // The local offset scale, stretched by the transform (its largest column bounds it), and
-    // the rounding of the transform itself.
+    // The local offset scale (a bound on each coordinate's error) stretched by the transform
+    // (its largest row sum of magnitudes bounds each world coordinate's), and the rounding of
+    // the transform itself.
     const auto& m = to_world.matrix();
     double stretch = 0;
-    for (int c = 0; c < 3; ++c)
-        stretch =
-            std::max(stretch, std::sqrt(m[0][c] * m[0][c] + m[1][c] * m[1][c] + m[2][c] * m[2][c]));
+    for (int r = 0; r < 3; ++r)
+        stretch = std::max(stretch, std::abs(m[r][0]) + std::abs(m[r][1]) + std::abs(m[r][2]));
     hit.p_error = float(stretch * hit.p_error) + kRayOffsetScale * max_abs_component(hit.p);
 }
+
 EmbreeScene::~EmbreeScene() { release(); }
 
 }  // namespace femto::detail

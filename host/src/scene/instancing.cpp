@@ -51,6 +51,9 @@ ShapeGroup::ShapeGroup(const Properties& props) : Shape(props) {
 }
 
 ShapeInstance::ShapeInstance(const Properties& props) : Shape(props) {
+    const auto& m = to_world_.matrix();
+    if (m[3][0] != 0 || m[3][1] != 0 || m[3][2] != 0 || m[3][3] != 1)
+        props.fail("to_world", "an instance's to_world must be affine (no projective part)");
     const auto nested = nested_objects(props);
     if (nested.size() != 1)
         throw SceneError(props.location(),
