@@ -448,6 +448,42 @@ TEST(ShapeCylinder, RendersAsATessellatedTube) {
                               "cylinder vs tessellated tube");
 }
 
+// An emitting tube lighting a floor: the path tracer (emitter sampling and hits weighed by
+// MIS, through pdf_direct of a hit on the tube) and the light tracer (emission sampled on the
+// tube) render the same image to noise.
+TEST(ShapeCylinder, EmittingTubeRendersAlikeForPathAndLightTracers) {
+    auto xml = [](const std::string& integrator) {
+        return "<scene version=\"3.0.0\"><integrator type=\"" + integrator +
+               "\"><integer name=\"max_depth\" value=\"3\"/><boolean name=\"hide_emitters\" "
+               "value=\"true\"/></integrator><sensor type=\"perspective\"><float name=\"fov\" "
+               "value=\"45\"/><transform name=\"to_world\"><lookat origin=\"0, -4, 3\" "
+               "target=\"0, 0, 0\" up=\"0, 0, 1\"/></transform><sampler "
+               "type=\"independent\"><integer name=\"sample_count\" value=\"16\"/></sampler>"
+               "<film type=\"hdrfilm\"><integer name=\"width\" value=\"24\"/><integer "
+               "name=\"height\" value=\"24\"/><rfilter type=\"box\"/></film></sensor>"
+               "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/>"
+               "</transform></shape><shape type=\"cylinder\"><point name=\"p0\" x=\"-1\" "
+               "y=\"0.3\" z=\"0.6\"/><point name=\"p1\" x=\"1\" y=\"-0.2\" z=\"0.8\"/><float "
+               "name=\"radius\" value=\"0.2\"/><emitter type=\"area\"><rgb name=\"radiance\" "
+               "value=\"2\"/></emitter></shape></scene>";
+    };
+    constexpr int kRuns = 16;
+    auto runs = [&](const std::string& scene_xml, uint64_t seed) {
+        std::vector<femto::testing::Cube> out;
+        for (int r = 0; r < kRuns; ++r) {
+            auto scene = femto::load_scene_string(scene_xml);
+            femto::testing::Cube c;
+            c.H = c.W = 24, c.T = 1, c.C = 3;
+            c.data = femto::testing::render_steady(*scene, seed + uint64_t(r));
+            out.push_back(std::move(c));
+        }
+        return out;
+    };
+    femto::test::expect_agree(femto::test::cells_of(runs(xml("transient_light"), 1), 1, 1),
+                              femto::test::cells_of(runs(xml("path"), 101), 1, 1), kRuns,
+                              "emitting tube: light tracer vs path tracer");
+}
+
 // -- bad input --------------------------------------------------------------------------------
 
 TEST(ShapeCylinder, BadParametersAreLocatedErrors) {
