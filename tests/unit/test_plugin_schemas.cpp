@@ -99,6 +99,8 @@ struct Inputs {
                                           "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
         std::ofstream(dir / "pixel.ppm", std::ios::binary) << "P6\n1 1\n255\n"
                                                            << std::string("\x80\x80\x80", 3);
+        std::ofstream(dir / "env.ppm", std::ios::binary) << "P6\n2 3\n255\n"
+                                                         << std::string(18, '\x40');
         write_serialized_triangle(dir / "tri.serialized");
         femto::test::VolFile vol;
         vol.data = {1.f};
@@ -134,6 +136,7 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
         {"shape serialized",
          [&](Properties& p) { p.set_string("filename", in("tri.serialized")); }},
         {"texture bitmap", [&](Properties& p) { p.set_string("filename", in("pixel.ppm")); }},
+        {"emitter envmap", [&](Properties& p) { p.set_string("filename", in("env.ppm")); }},
         {"volume gridvolume", [&](Properties& p) { p.set_string("filename", in("density.vol")); }},
         {"emitter collimated", [](Properties& p) { p.set_float("radius", 1.0); }},
         {"film transient", time_window},

@@ -1,6 +1,9 @@
 // femto public API: light sources.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
 #include "femto/color.h"
 #include "femto/math.h"
 #include "femto/object.h"
@@ -28,12 +31,47 @@ struct PulseProfile {
     bool is_delta() const { return shape == Shape::Delta; }
 };
 
+/// The sphere around the scene (its shapes and the sensor position) that distant emitters
+/// (directional, constant, envmap) measure their light from; Scene::sphere() holds it.
+///
+/// femto's time convention for distant light (docs/distant-light.md): the light arriving from
+/// direction `wi` (pointing away from the scene) is a plane wave that crosses the plane tangent
+/// to this sphere on the side it comes from, {x : dot(x - center, wi) = radius}, at its
+/// emission time. It reaches a point x after the optical length radius - dot(x - center, wi)
+/// (vacuum), which is >= 0 inside the sphere. Light paths from distant emitters start on that
+/// plane; camera paths that leave the scene meet the wave there.
+struct SceneSphere {
+    Vec3 center;
+    float radius = 1.f;
+
+    /// Length from x to the plane wave's start plane along wi (clamped at a tiny positive
+    /// length for points outside the sphere, e.g. an orthographic camera's ray origins).
+    double plane_wave_distance(const Vec3& x, const Vec3& wi) const {
+        const double along = double(x.x - center.x) * wi.x + double(x.y - center.y) * wi.y +
+                             double(x.z - center.z) * wi.z;
+        return std::max(double(radius) - along, 1e-6 * double(radius));
+    }
+    /// Where the light arriving at x from wi starts: x + wi * plane_wave_distance(x, wi), a
+    /// point outside the scene's geometry (shadow rays toward it test the whole way out).
+    Vec3 plane_wave_start(const Vec3& x, const Vec3& wi) const {
+        return x + wi * float(plane_wave_distance(x, wi));
+    }
+    /// A point of the disk of radius `radius` on the start plane of direction wi, centred on
+    /// the sphere's axis along wi, from a point `disk` of the unit disk: where light paths of
+    /// a distant emitter start (area density 1 / (pi radius^2)).
+    Vec3 plane_wave_disk(const Vec3& wi, Vec2 disk) const {
+        return center + wi * radius + Frame(wi).to_world(Vec3(disk.x, disk.y, 0.f)) * radius;
+    }
+    /// Area density of plane_wave_disk()'s points.
+    float disk_pdf() const { return float(1.0 / (M_PI * double(radius) * double(radius))); }
+};
+
 /// Result of sampling an emitter for direct lighting of a reference point.
 struct EmitterSample {
     Vec3 p;              ///< point on the emitter
     Vec3 n;              ///< its normal (zero for point-like emitters)
     Vec3 wi;             ///< unit direction from the reference point toward the emitter
-    float distance = 0;  ///< distance to p (infinite for distant emitters)
+    float distance = 0;  ///< distance to p (distant emitters: to their plane wave's start)
     float pdf = 0;       ///< solid-angle pdf (1 for delta emitters); 0 = no contribution
     Color weight;        ///< incident radiance / pdf (irradiance for delta emitters)
     bool delta = false;  ///< true when no BSDF sample can hit this emitter (MIS weight 1)
@@ -83,8 +121,22 @@ public:
     virtual float pdf_direct(const Vec3& /*ref*/, const Hit& /*hit*/) const { return 0.f; }
     /// Radiance leaving the emitter's surface at `hit` toward world direction `w`.
     virtual Color eval(const Hit& /*hit*/, const Vec3& /*w*/) const { return {}; }
-    /// True for point, spot and collimated emitters (cannot be hit by a ray).
+    /// True for point, spot, collimated and directional emitters (cannot be hit by a ray).
     virtual bool is_delta() const = 0;
+
+    /// True for distant emitters (directional, constant, envmap): their light comes from
+    /// outside the scene as plane waves (SceneSphere). Those that are not delta are
+    /// environments: every ray that leaves the scene sees them (eval_environment()).
+    virtual bool is_infinite() const { return false; }
+    /// Environments: the radiance arriving from world direction `wi` (pointing away from the
+    /// scene) along a ray that leaves the scene.
+    virtual Color eval_environment(const Vec3& /*wi*/) const { return {}; }
+    /// Environments: the solid-angle density with which sample_direct() picks direction `wi`
+    /// (it does not depend on the reference point).
+    virtual float pdf_environment(const Vec3& /*wi*/) const { return 0.f; }
+    /// Called by the scene once its extent is known, before rendering: distant emitters place
+    /// their plane waves and light-path starts by it.
+    virtual void set_scene_sphere(const SceneSphere& /*sphere*/) {}
 
     /// Area emitters are attached to the shape that holds them, by the host.
     void set_shape(const Shape* shape) { shape_ = shape; }

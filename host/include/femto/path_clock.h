@@ -36,7 +36,7 @@ public:
     /// Starts a camera path at the sensor point `origin` (the camera ray's origin) at time 0;
     /// contributions go to `out`.
     PathClock(const Scene& scene, ContributionList& out, const Vec3& origin)
-        : window_(scene.time_window()), out_(out), position_(origin) {}
+        : window_(scene.time_window()), sphere_(&scene.sphere()), out_(out), position_(origin) {}
 
     /// Optical length travelled so far plus the vertices' delays (scene units).
     double time() const { return time_; }
@@ -73,6 +73,13 @@ public:
         const double emitted = emission_time(emitter, sampler);
         out_.add(radiance, time_ + extra + emitted);
     }
+    /// Adds radiance `radiance` of a distant emitter arriving at the current vertex from
+    /// direction `wi` through a medium of refractive index `eta` (a ray that left the scene):
+    /// the light travelled from its plane wave's start (SceneSphere::plane_wave_distance).
+    void record_distant(const Color& radiance, const Emitter& emitter, Sampler& sampler,
+                        const Vec3& wi, double eta) const {
+        record(radiance, emitter, sampler, sphere_->plane_wave_distance(position_, wi) * eta);
+    }
     /// Whether light that a light subpath brought to its vertex (`light`, its clock) can join
     /// this path over a connection of at least `distance` and still arrive within the window
     /// (check it before tracing the connection: bidirectional integrators).
@@ -100,6 +107,7 @@ private:
     double cut() const { return window_.path_cut(out_.sensor_distance()); }
 
     TimeWindow window_;
+    const SceneSphere* sphere_;
     ContributionList& out_;
     Vec3 position_;
     double time_ = 0.0;

@@ -34,8 +34,11 @@ namespace femto {
 ///  RejectedContributions, Film::rejected()/add_rejected(), TimeResolvedBlock::rejected().)
 /// (15: file-name parameters are declared in the schema (type "filename", see ParamSpec) and
 ///  only those are resolved by the loader; Volume (femto/volume.h); create_child_object().)
-/// (16: analytic cylinders: Shape::set_cylinder() and its members change Shape's layout.)
-inline constexpr uint32_t kPluginAbiVersion = 16;
+/// (16: distant emitters: Emitter::is_infinite()/eval_environment()/pdf_environment()/
+///  set_scene_sphere(), SceneSphere, Scene::sphere()/environment()/pdf_environment(),
+///  PathClock::record_distant().)
+/// (17: analytic cylinders: Shape::set_cylinder() and its members change Shape's layout.)
+inline constexpr uint32_t kPluginAbiVersion = 17;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -45,6 +45,14 @@ public:
 
     /// All emitters (area emitters included).
     const std::vector<const Emitter*>& emitters() const { return emitter_list_; }
+    /// The environment emitters (distant and not delta: constant, envmap), which rays that
+    /// leave the scene see.
+    const std::vector<const Emitter*>& environment() const { return environment_; }
+    /// Density of sample_emitter() choosing direction `wi` on environment `emitter`, with the
+    /// selection probability (MIS of rays that leave the scene).
+    float pdf_environment(const Emitter& emitter, const Vec3& wi) const;
+    /// The sphere around the shapes and the sensor that distant light is measured from.
+    const SceneSphere& sphere() const { return sphere_; }
     /// Picks an emitter uniformly (u_select) and samples it for `ref`; the pdf and weight
     /// include the selection probability.
     EmitterSample sample_emitter(const Vec3& ref, float u_select, Vec2 u) const;
@@ -77,6 +85,8 @@ public:
     bool has_media() const { return has_media_; }
 
 private:
+    void place_distant_emitters();
+
     struct Accel;
     std::unique_ptr<Accel> accel_;
     std::shared_ptr<Integrator> integrator_;
@@ -84,7 +94,9 @@ private:
     std::vector<std::shared_ptr<Shape>> shapes_;
     std::vector<std::shared_ptr<Emitter>> emitters_;
     std::vector<const Emitter*> emitter_list_;
+    std::vector<const Emitter*> environment_;
     Bounds3 bounds_;
+    SceneSphere sphere_;
     double earliest_emission_ = 0.0;
     TimeWindow time_window_;
     bool has_media_ = false;

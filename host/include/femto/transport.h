@@ -30,6 +30,7 @@
 #include "femto/color.h"
 #include "femto/emitter.h"
 #include "femto/medium.h"
+#include "femto/mis.h"
 #include "femto/path_clock.h"
 #include "femto/sampler.h"
 #include "femto/scene.h"
@@ -175,6 +176,23 @@ ShadowConnection connect_to_light(const Scene& scene, const Hit& from, const Emi
 ShadowConnection connect_to_light(const Scene& scene, const Vec3& x, const EmitterSample& light,
                                   const MediumTracker& medium, Sampler& sampler,
                                   MediumPieces* pieces = nullptr);
+
+/// A camera path's ray `d` left the scene from the clock's vertex, in vacuum or a medium of
+/// index `eta` (in a medium with no surface ahead nothing comes through; do not call it
+/// then): records the light of every environment emitter arriving along it, at its time
+/// (PathClock::record_distant), times `throughput`. Each is weighted by MIS (power heuristic)
+/// against the light sample that could have picked the same direction at the previous vertex,
+/// which chose d with solid-angle density `prev_pdf`; after a delta choice (`prev_delta`) the
+/// weight is 1. `share` scales the weights (the part of the direct light this strategy keeps).
+inline void record_environment(const Scene& scene, Sampler& sampler, const PathClock& clock,
+                               const Throughput& throughput, const Vec3& d, double eta,
+                               float prev_pdf, bool prev_delta, float share = 1.f) {
+    for (const Emitter* env : scene.environment()) {
+        const float w =
+            prev_delta ? 1.f : share * power_heuristic(prev_pdf, scene.pdf_environment(*env, d));
+        clock.record_distant(throughput(env->eval_environment(d) * w), *env, sampler, d, eta);
+    }
+}
 
 // ---- light paths -----------------------------------------------------------------------------
 

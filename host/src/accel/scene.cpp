@@ -58,6 +58,24 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
 
     accel_ = std::make_unique<Accel>(shapes_);
     bounds_ = accel_->embree.bounds();
+    place_distant_emitters();
+}
+
+// Distant emitters measure their light from a sphere around everything paths start from (the
+// shapes and the sensor), a little larger so that their plane waves start clear of the
+// geometry and shadow rays toward them test the whole way out.
+void Scene::place_distant_emitters() {
+    Bounds3 extent = bounds_;
+    extent.expand(sensor_->to_world().point(Vec3(0.f)));
+    sphere_.center = extent.center();
+    const float scale = std::max({1.f, std::abs(sphere_.center.x), std::abs(sphere_.center.y),
+                                  std::abs(sphere_.center.z), extent.radius()});
+    sphere_.radius = extent.radius() * (1.f + 1e-3f) + 1e-4f * scale;
+    for (const auto& e : emitters_)
+        if (e->is_infinite()) {
+            e->set_scene_sphere(sphere_);
+            if (!e->is_delta()) environment_.push_back(e.get());
+        }
 }
 
 Scene::~Scene() = default;
@@ -108,6 +126,11 @@ float Scene::select_emitter_pmf(const Emitter&) const {
 float Scene::pdf_emitter(const Emitter& emitter, const Vec3& ref, const Hit& hit) const {
     const size_t n = emitter_list_.size();
     return n ? emitter.pdf_direct(ref, hit) / float(n) : 0.f;
+}
+
+float Scene::pdf_environment(const Emitter& emitter, const Vec3& wi) const {
+    const size_t n = emitter_list_.size();
+    return n ? emitter.pdf_environment(wi) / float(n) : 0.f;
 }
 
 uint64_t Scene::rays_traced() const {

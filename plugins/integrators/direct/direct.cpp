@@ -68,12 +68,22 @@ public:
             if (!bs.valid() || bs.weight.is_black()) continue;
             Hit lit;
             const Ray next = hit.spawn(hit.to_world(bs.wo));
-            if (!scene.intersect(next, lit)) continue;
+            const bool delta = (bs.sampled_lobe & kBsdfDelta) != 0;
+            if (!scene.intersect(next, lit)) {  // the environment, seen from the vertex
+                for (const Emitter* env : scene.environment()) {
+                    const float w = delta ? 1.f
+                                          : power_heuristic(nb, bs.pdf, ne,
+                                                            scene.pdf_environment(*env, next.d));
+                    clock.record_distant(
+                        throughput(bs.weight * env->eval_environment(next.d) * (w / nb)), *env,
+                        sampler, next.d, 1.0);
+                }
+                continue;
+            }
             const Emitter* em = lit.shape->emitter();
             if (!em) continue;
             const Color Le = em->eval(lit, -next.d);
             if (Le.is_black()) continue;
-            const bool delta = (bs.sampled_lobe & kBsdfDelta) != 0;
             const float w =
                 delta ? 1.f : power_heuristic(nb, bs.pdf, ne, scene.pdf_emitter(*em, hit.p, lit));
             clock.record(throughput(bs.weight * Le * (w / nb)), *em, sampler,
@@ -88,7 +98,12 @@ private:
                       Hit& hit) const {
         Ray r = ray;
         for (int crossings = 0; crossings < 64; ++crossings) {
-            if (!scene.intersect(r, hit)) return false;
+            if (!scene.intersect(r, hit)) {  // the camera sees the environment
+                if (!hide_emitters_)
+                    for (const Emitter* env : scene.environment())
+                        clock.record_distant(env->eval_environment(r.d), *env, sampler, r.d, 1.0);
+                return false;
+            }
             clock.travel_to(hit.p, 1.0);
             const bool scatters = !hit.shape->bsdf()->is_null();
             if (scatters) clock.reach_vertex();

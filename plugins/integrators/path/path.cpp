@@ -106,7 +106,14 @@ public:
                 if (end == SegmentEnd::Scattered) continue;
                 if (end == SegmentEnd::Stop) return;
             }
-            if (!found || !surface_vertex(scene, sampler, path, hit)) return;
+            if (!found) {  // the environment (MIS against the light samples)
+                if (path.depth > 1 || !hide_emitters())
+                    record_environment(scene, sampler, path.clock, path.throughput, path.ray.d,
+                                       path.medium.eta(), path.prev_pdf, path.prev_delta,
+                                       path.hit_share);
+                return;
+            }
+            if (!surface_vertex(scene, sampler, path, hit)) return;
         }
     }
 

@@ -219,6 +219,13 @@ public:
                             scene.sensor().ray_weight());
         }
         distance_->prepare({window_end_});
+        // Environments need a light vertex at infinity in the MIS weights, which this
+        // estimator does not have yet; a directional light is a collimated beam to it.
+        if (!scene.environment().empty())
+            throw SceneError(scene.environment()[0]->location(),
+                             type_name() + " does not render environment emitters (\"" +
+                                 scene.environment()[0]->type_name() +
+                                 "\") yet; render this scene with path or transient_path");
         starts_.prepare(scene, type_name());
     }
 

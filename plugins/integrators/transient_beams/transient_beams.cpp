@@ -222,7 +222,13 @@ void TransientBeams::sample(const Scene& scene, Sampler& sampler, const Ray& cam
         Hit hit;
         const bool found = scene.intersect(eye.ray, hit);
         if (eye.medium.medium && !medium_segment(sampler, eye, found, hit)) return;
-        if (!found || !surface_vertex(scene, sampler, eye, hit)) return;
+        if (!found) {  // the environment (MIS against the light samples)
+            if (eye.depth > 1 || !hide_emitters())
+                record_environment(scene, sampler, eye.clock, eye.throughput, eye.ray.d,
+                                   eye.medium.eta(), eye.prev_pdf, eye.prev_delta);
+            return;
+        }
+        if (!surface_vertex(scene, sampler, eye, hit)) return;
     }
 }
 

@@ -217,7 +217,12 @@ void TransientPpm::sample(const Scene& scene, Sampler& sampler, const Ray& camer
         const bool found = scene.intersect(eye.ray, hit);
         if (eye.medium.medium && eye_in_medium(sampler, eye, found, hit) != SegmentEnd::Surface)
             return;
-        if (!found) return;
+        if (!found) {  // the environment, seen through delta bounces only (as emitters are)
+            if (eye.depth > 1 || !hide_emitters())
+                record_environment(scene, sampler, eye.clock, eye.throughput, eye.ray.d,
+                                   eye.medium.eta(), 0.f, true);
+            return;
+        }
         const Bsdf& bsdf = *hit.shape->bsdf();
         eye.clock.travel_to(hit.p, eye.medium.eta());
         if (!bsdf.is_null()) eye.clock.reach_vertex();
