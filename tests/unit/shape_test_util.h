@@ -43,8 +43,16 @@ inline std::shared_ptr<femto::Emitter> make_emitter(const femto::Properties& pro
 
 /// Closest intersection of `ray` with `shape` by testing every triangle (Moller-Trumbore in
 /// double precision; Embree's barycentrics: p = (1-u-v) p0 + u p1 + v p2) or the analytic
-/// sphere, then Shape::fill_hit as the host's scene does. Returns false on a miss.
+/// sphere, then Shape::fill_hit as the host's scene does. Cylinders go through the host's own
+/// Shape::intersect_cylinder (what its Embree user geometry calls; test_cylinder.cpp checks it
+/// against closed forms). Returns false on a miss.
 inline bool brute_intersect(const femto::Shape& shape, const femto::Ray& ray, femto::Hit& hit) {
+    if (shape.is_cylinder()) {
+        float t = 0;
+        if (!shape.intersect_cylinder(ray, t) || !(t > ray.tmin)) return false;
+        shape.fill_hit(ray, t, 0, 0.f, 0.f, hit);
+        return true;
+    }
     double best_t = ray.tmax;
     uint32_t best_prim = 0;
     double best_u = 0, best_v = 0;

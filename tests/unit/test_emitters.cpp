@@ -238,15 +238,44 @@ TEST(EmitterCollimated, ToWorldAndPower) {
     EXPECT_EQ(e->sample_direct({0.9f, 2, 3}, {}).pdf, 0.f);
 }
 
-TEST(EmitterCollimated, RadiusIsRequired) {
-    const std::string msg = error_of(Properties("collimated", {}));
-    EXPECT_NE(msg.find("radius"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("path tracer"), std::string::npos) << msg;
-    for (const double r : {0.0, -1.0}) {
+// Without a radius the beam is Mitsuba 0.6's: one ray carrying `power`, a delta in position
+// and direction; nothing samples it directly.
+TEST(EmitterCollimated, WithoutRadiusIsAThinBeam) {
+    Properties props("collimated", {});
+    props.set_color("power", Color(1, 2, 3));
+    props.set_transform("to_world", Transform::translate({1, 2, 3}) *
+                                        Transform::rotate({0, 1, 0}, 90));  // +z -> +x
+    auto e = make_emitter(props);
+    ASSERT_TRUE(e);
+    EXPECT_TRUE(e->is_delta());
+    EXPECT_EQ(e->sample_direct({4, 2, 3}, {0.5f, 0.5f}).pdf, 0.f);  // even on the beam
+    for (const Vec2 u : {Vec2(0.1f, 0.9f), Vec2(0.7f, 0.3f)}) {
+        const femto::EmissionSample es = e->sample_emission(u, {0.4f, 0.6f});
+        EXPECT_TRUE(es.valid());
+        EXPECT_TRUE(es.delta_position && es.delta_direction);
+        EXPECT_TRUE(vec_near(es.p, {1, 2, 3}, 1e-6));
+        EXPECT_TRUE(vec_near(es.d, {1, 0, 0}, 1e-6));
+        EXPECT_TRUE(color_near(es.weight, {1, 2, 3}, 0));
+        float pos = 0, dir = 0;
+        e->pdf_emission(es, es.d, pos, dir);
+        EXPECT_EQ(pos, 1.f);
+        EXPECT_EQ(dir, 1.f);
+    }
+    const femto::EmissionSample def =
+        make_emitter(Properties("collimated", {}))->sample_emission({}, {});
+    EXPECT_TRUE(color_near(def.weight, Color(1.f), 0));  // Mitsuba's default power
+}
+
+TEST(EmitterCollimated, BadRadiusAndIrradiance) {
+    for (const double r : {0.0, -1.0, std::nan("")}) {
         Properties props("collimated", {});
         props.set_float("radius", r);
         EXPECT_NE(error_of(props).find("radius"), std::string::npos);
     }
+    Properties thin("collimated", {});  // the irradiance of a thin beam is infinite
+    thin.set_color("irradiance", Color(1.f));
+    const std::string msg = error_of(thin);
+    EXPECT_NE(msg.find("infinitely thin"), std::string::npos) << msg;
     Properties both("collimated", {});
     both.set_float("radius", 1);
     both.set_color("irradiance", Color(1.f));

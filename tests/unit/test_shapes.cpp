@@ -88,7 +88,7 @@ std::string error_of(const Properties& props) {
 // -- every shape ------------------------------------------------------------------------------
 
 TEST(ShapeSchema, CommonShapeParametersAreDeclared) {
-    for (const char* type : {"rectangle", "cube", "sphere", "disk", "obj", "ply"}) {
+    for (const char* type : {"rectangle", "cube", "sphere", "disk", "cylinder", "obj", "ply"}) {
         const femto::PluginDescriptor& d = femto::find_plugin(PluginKind::Shape, type);
         EXPECT_EQ(d.kind, PluginKind::Shape);
         std::map<std::string, std::string> params;

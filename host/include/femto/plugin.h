@@ -37,7 +37,8 @@ namespace femto {
 /// (16: distant emitters: Emitter::is_infinite()/eval_environment()/pdf_environment()/
 ///  set_scene_sphere(), SceneSphere, Scene::sphere()/environment()/pdf_environment(),
 ///  PathClock::record_distant().)
-inline constexpr uint32_t kPluginAbiVersion = 16;
+/// (17: analytic cylinders: Shape::set_cylinder() and its members change Shape's layout.)
+inline constexpr uint32_t kPluginAbiVersion = 17;
 
 struct PluginDescriptor {
     uint32_t abi_version;

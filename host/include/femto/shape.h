@@ -1,7 +1,8 @@
 // femto public API: shapes, surface hits and area sampling.
 //
-// A shape plugin only builds geometry in its constructor: a triangle mesh (set_mesh) or an
-// analytic sphere (set_sphere), already in world space. The host traces it with Embree and
+// A shape plugin only builds geometry in its constructor: a triangle mesh (set_mesh), an
+// analytic sphere (set_sphere) or an analytic open cylinder (set_cylinder), already in world
+// space. The host traces it with Embree and
 // implements hit records and area/solid-angle sampling for both representations.
 #pragma once
 
@@ -31,7 +32,7 @@ struct Hit {
     Vec2 uv;              ///< surface parameterization
     Vec3 wi;              ///< direction toward the ray origin, in the shading frame
     const Shape* shape = nullptr;
-    uint32_t prim = 0;  ///< triangle index (0 for spheres)
+    uint32_t prim = 0;  ///< triangle index (0 for spheres and cylinders)
     /// How far rays leaving this hit start off the surface: kRayOffsetScale times the largest
     /// coordinate p was computed from (the triangle's vertices, or the sphere's centre plus
     /// radius), which bounds p's rounding and Embree's (docs/precision.md).
@@ -75,6 +76,18 @@ public:
     const TriangleMesh& mesh() const { return mesh_; }
     Vec3 sphere_center() const { return center_; }
     float sphere_radius() const { return radius_; }
+    /// An analytic cylinder (set_cylinder): an open tube (no caps) of radius
+    /// cylinder_radius() around the axis from cylinder_base() along cylinder_frame().n, of
+    /// length cylinder_length(). As in Mitsuba, u = phi / 2pi with phi measured around the
+    /// axis from frame.s toward frame.t, and v = z / length along the axis.
+    bool is_cylinder() const { return is_cylinder_; }
+    Vec3 cylinder_base() const { return center_; }
+    const Frame& cylinder_frame() const { return cylinder_frame_; }
+    float cylinder_radius() const { return radius_; }
+    float cylinder_length() const { return length_; }
+    /// The nearest intersection of `ray` with this cylinder in [ray.tmin, ray.tmax], solved in
+    /// double precision (the host's Embree user geometry calls it); false on a miss.
+    bool intersect_cylinder(const Ray& ray, float& t) const;
     bool flip_normals() const { return flip_normals_; }
 
     const Bsdf* bsdf() const { return bsdf_.get(); }
@@ -114,6 +127,8 @@ protected:
     /// SceneError for empty or non-finite geometry.
     void set_mesh(TriangleMesh mesh);
     void set_sphere(const Vec3& center, float radius);
+    /// `frame` is orthonormal (it may be left-handed, as a mirroring to_world makes it).
+    void set_cylinder(const Vec3& base, const Frame& frame, float radius, float length);
 
     /// The shape's `to_world` (identity by default; never degenerate).
     Transform to_world_;
@@ -122,11 +137,14 @@ private:
     void finish_setup();
     SourceLocation location_;
     bool is_sphere_ = false;
+    bool is_cylinder_ = false;
     bool flip_normals_ = false;
     TriangleMesh mesh_;
     std::vector<float> triangle_cdf_;
     Vec3 center_;
     float radius_ = 0.f;
+    Frame cylinder_frame_;
+    float length_ = 0.f;
     float area_ = 0.f;
     std::shared_ptr<Bsdf> bsdf_;
     std::shared_ptr<Emitter> emitter_;

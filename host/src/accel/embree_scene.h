@@ -7,6 +7,7 @@
 #include <embree3/rtcore.h>
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -16,12 +17,17 @@
 
 namespace femto::detail {
 
+class ShapeGroup;
+class ShapeInstance;
+
 /// The process's Embree device, created on first use; Embree's errors go to stderr.
 RTCDevice embree_device();
 
 /// A committed Embree scene (RTC_BUILD_QUALITY_MEDIUM) holding one geometry per visible
-/// shape, with geometry ID = the shape's index in `shapes`: world-space triangle meshes, and
-/// spheres as RTC_GEOMETRY_TYPE_SPHERE_POINT. A shape whose material is a pure `null` with no
+/// shape, with geometry ID = the shape's index in `shapes`: world-space triangle meshes,
+/// spheres as RTC_GEOMETRY_TYPE_SPHERE_POINT and cylinders as user geometry
+/// (Shape::intersect_cylinder). An `instance` is an RTC_GEOMETRY_TYPE_INSTANCE of its
+/// shapegroup's child scene, built once per group. A shape whose material is a pure `null` with no
 /// emitter and no media is left out (nothing to see, block or enter); a `null` surface that is
 /// kept lets shadow rays through (an occlusion filter).
 class EmbreeScene {
@@ -34,19 +40,43 @@ public:
     EmbreeScene& operator=(const EmbreeScene&) = delete;
 
     RTCScene get() const { return scene_; }
-    /// The shape of each geometry ID; nullptr for shapes left out.
+    /// The hit record of an Embree hit of `ray` (in an instance: on the group's shape, moved to
+    /// the world).
+    void fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const;
+    /// The shape of each geometry ID; nullptr for shapes left out and for instances.
     const std::vector<const Shape*>& shapes() const { return by_geom_id_; }
     /// Bounds of the geometry in the scene.
     const Bounds3& bounds() const { return bounds_; }
     size_t triangles() const { return triangles_; }
     size_t spheres() const { return spheres_; }
+    size_t cylinders() const { return cylinders_; }
+    size_t instances() const { return instances_; }
 
 private:
+    struct Group {
+        RTCScene scene = nullptr;
+        std::vector<const Shape*> shapes;  // by geometry ID in `scene`
+        Bounds3 bounds;                    // in the group's space
+    };
+    bool attach(RTCScene scene, const Shape& shape, unsigned id, Bounds3& bounds);
+    const Group& group_scene(const ShapeGroup& group);
+    void release();
+
     RTCScene scene_ = nullptr;
+    bool robust_ = true;
     std::vector<const Shape*> by_geom_id_;
+    struct Placed {  // an instance and its group's scene (std::map keeps it in place)
+        const ShapeInstance* instance = nullptr;
+        const Group* group = nullptr;
+    };
+    std::vector<Placed> instance_of_geom_id_;
+    std::map<const ShapeGroup*, Group> groups_;
     Bounds3 bounds_;
-    size_t triangles_ = 0, spheres_ = 0;
+    size_t triangles_ = 0, spheres_ = 0, cylinders_ = 0, instances_ = 0;
 };
+
+/// A box around an analytic cylinder (the shape's is_cylinder()).
+Bounds3 cylinder_box(const Shape& shape);
 
 /// An RTCRayHit for rtcIntersect1, every field Embree needs reset (tfar, mask, flags, geomID,
 /// instID).

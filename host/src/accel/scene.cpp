@@ -11,6 +11,7 @@
 #include "femto/integrator.h"
 #include "femto/medium.h"
 #include "femto/sensor.h"
+#include "scene/instancing.h"
 
 namespace femto {
 
@@ -46,7 +47,7 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
     for (const auto& s : shapes_)
         if (s->sensor_ptr() == sensor_) sensor_->attach(*s);
     has_media_ = sensor_->medium() != nullptr;
-    for (const auto& s : shapes_) has_media_ = has_media_ || s->has_media();
+    for (const auto& s : shapes_) has_media_ = has_media_ || detail::shape_has_media(*s);
     for (const Emitter* e : emitter_list_) has_media_ = has_media_ || e->medium() != nullptr;
     if (!emitter_list_.empty()) {
         earliest_emission_ = emitter_list_[0]->pulse().earliest();
@@ -87,8 +88,7 @@ bool Scene::intersect(const Ray& ray, Hit& hit) const {
     detail::init_rayhit(rh, ray.o, ray.d, ray.tmin, ray.tmax);
     rtcIntersect1(accel_->embree.get(), &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    accel_->embree.shapes()[rh.hit.geomID]->fill_hit(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u,
-                                                     rh.hit.v, hit);
+    accel_->embree.fill_hit(ray, rh, hit);
     return true;
 }
 

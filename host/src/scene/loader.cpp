@@ -16,6 +16,7 @@
 #include "femto/sensor.h"
 #include "femto/shape.h"
 #include "plugin/registry.h"
+#include "scene/instancing.h"
 #include "scene/peer_transient.h"
 #include "scene/spectrum_tags.h"
 #include "util/lenient.h"
@@ -277,7 +278,9 @@ public:
         int arg_index = 0;
         for (const auto& child : node.children) add_child(props, child, node.tag, arg_index);
 
-        const PluginDescriptor& desc = find_plugin(kind, type, options_.plugin_dirs, node.location);
+        const PluginDescriptor* builtin = kind == PluginKind::Shape ? builtin_shape(type) : nullptr;
+        const PluginDescriptor& desc =
+            builtin ? *builtin : find_plugin(kind, type, options_.plugin_dirs, node.location);
         resolve_file_names(props, desc, node);
         check_schema(props, desc, node);
         ObjectPtr obj = construct(desc, props, node);
@@ -612,6 +615,8 @@ public:
                                                      sensor->type_name()));
                     break;
                 case PluginKind::Shape:
+                    if (dynamic_cast<const ShapeGroup*>(obj.get()))
+                        break;  // rendered only where instances place it
                     shapes.push_back(std::static_pointer_cast<Shape>(obj));
                     if (auto nested = shapes.back()->sensor_ptr())
                         take_sensor(nested, nested->location(), sensor);

@@ -366,6 +366,9 @@ private:
         light.emission = es;
         light.environment = emitter->is_infinite() && !emitter->is_delta();
         light.pdf_fwd = pdf_light_origin(scene, light);
+        // A single ray (an infinitely thin collimated beam): no strategy can connect to its
+        // start, so those that would (s = 1) leave the MIS weights, as a delta lobe's do.
+        light.delta = es.delta_position && es.delta_direction;
         light.medium = starts_.medium(*emitter, es, es.d);
         LightClock clock(scene, *emitter, es.p, sampler);
         paths.emission_time = clock.time();
