@@ -13,6 +13,8 @@
 //                                  one lifetime later on average
 //   GlassSlabDelay                 a glass slab of index eta and thickness d delays light by
 //                                  (eta - 1) d and passes (1 - R)^2 of it at normal incidence
+//   MaskPassesWithoutDelay         an emitter seen through a `mask` of opacity alpha: 1 - alpha
+//                                  of its light, at the time it arrives without the mask
 //   TimeOfFlightIsExactAtEveryScale  through glass, off a mirror, to a lit wall: the arrival
 //                                  holds to 1e-6 relative and the amplitude stays the same at
 //                                  scales 1e-6 ... 1e6 (not for density estimators)
@@ -549,6 +551,55 @@ TEST_P(IntegratorConformance, GlassSlabDelay) {
     EXPECT_EQ(misplaced, 0);
     const double R = std::pow((eta - 1) / (eta + 1), 2), p = (1 - R) * (1 - R);
     const double n = double(res) * res * spp;
+    EXPECT_NEAR(through / (res * res), p, 4 * std::sqrt(p * (1 - p) / n) + 1e-6);
+}
+
+// ---- opacity masks --------------------------------------------------------------------------
+
+TEST_P(IntegratorConformance, MaskPassesWithoutDelay) {
+    using namespace conformance;
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
+    if (needs_connectable_sensor())
+        GTEST_SKIP() << "the emitter is seen only through a mask's transparent part, a delta lobe "
+                        "that no connection to the sensor passes (as Mitsuba 3's light tracer)";
+    // An emitting rectangle (radiance 1, black) at z = 0 seen from above at height 5 through a
+    // mask of opacity alpha at z = 2.5 over a diffuse material facing the camera (unlit: the
+    // emitter shines on its back). Every camera sample passes the mask straight (weight 1) with
+    // probability 1 - alpha and arrives at camera time 5, as without the mask: the arrival bin
+    // holds a binomial proportion of mean 1 - alpha, every other bin nothing. The pass-through
+    // counts as a bounce toward max_depth (Mitsuba 3's `path`): paths of 2 segments.
+    const int D = depth(3);
+    if (D >= 0 && D < 2) GTEST_SKIP() << "light through a mask needs paths of 2 segments";
+    const double alpha = 0.3, start = 4.905, width = 0.02;
+    const int bins = 20, res = 8, spp = 64;
+    auto scene = load(
+        camera_above(5, 1, spp, transient_film(res, start, width, bins)) +
+            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/>"
+            "</transform><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0\"/></bsdf>"
+            "<emitter type=\"area\"><float name=\"radiance\" value=\"1\"/></emitter></shape>"
+            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/>"
+            "<translate z=\"2.5\"/></transform><bsdf type=\"mask\"><float name=\"opacity\" "
+            "value=\"" +
+            num(alpha) +
+            "\"/><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.5\"/></bsdf>"
+            "</bsdf></shape>",
+        D);
+    const Cube cube = render_cube(*scene, 11, "mask");
+    ASSERT_EQ(cube.T, bins);
+    const int arrival = bin_of(start, width, bins, 5.0);
+    double through = 0;
+    int misplaced = 0;
+    for (int y = 0; y < res; ++y)
+        for (int x = 0; x < res; ++x) {
+            for (int t = 0; t < bins; ++t)
+                if (t != arrival && cube.energy(y, x, t) != 0 && ++misplaced <= 5)
+                    ADD_FAILURE() << "pixel " << x << "," << y << ": light in bin " << t
+                                  << "; without the mask it arrives in bin " << arrival;
+            through += cube.at(y, x, arrival, 0);
+        }
+    EXPECT_EQ(misplaced, 0);
+    const double p = 1 - alpha, n = double(res) * res * spp;
     EXPECT_NEAR(through / (res * res), p, 4 * std::sqrt(p * (1 - p) / n) + 1e-6);
 }
 
