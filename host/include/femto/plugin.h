@@ -34,7 +34,9 @@ namespace femto {
 ///  RejectedContributions, Film::rejected()/add_rejected(), TimeResolvedBlock::rejected().)
 /// (15: file-name parameters are declared in the schema (type "filename", see ParamSpec) and
 ///  only those are resolved by the loader; Volume (femto/volume.h); create_child_object().)
-inline constexpr uint32_t kPluginAbiVersion = 15;
+/// (16: integrator AOVs: Integrator::aov_names(), ContributionList::reset_aovs()/set_aov()/
+///  aovs(), Film::prepare_aovs(); io::write_exr_rgb() takes extra named channels.)
+inline constexpr uint32_t kPluginAbiVersion = 16;
 
 struct PluginDescriptor {
     uint32_t abi_version;
