@@ -35,7 +35,8 @@ namespace femto {
 /// (15: file-name parameters are declared in the schema (type "filename", see ParamSpec) and
 ///  only those are resolved by the loader; Volume (femto/volume.h); create_child_object().)
 /// (16: integrator AOVs: Integrator::aov_names(), ContributionList::reset_aovs()/set_aov()/
-///  aovs(), Film::prepare_aovs(); io::write_exr_rgb() takes extra named channels.)
+///  aovs(), Film::prepare_aovs(); io::write_exr_rgb() takes extra named channels;
+///  Bsdf::null_transmission(), trace_shadow()/connect_to_sensor() `through_masks`.)
 inline constexpr uint32_t kPluginAbiVersion = 16;
 
 struct PluginDescriptor {

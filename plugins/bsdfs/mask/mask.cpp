@@ -10,9 +10,10 @@
 // constant outside [0, 1] or not a number is a located error.
 //
 // How integrators see it: a mask is an ordinary surface with a delta lobe (as in Mitsuba 3's
-// `path`). Shadow rays (light samples, connections to the sensor) are blocked by it; light
-// through its transparent part is found by BSDF sampling, the pass-through counting as a
-// bounce toward max_depth. Time: the pass-through adds no optical length and no delay (the
+// `path`). Light samples are blocked by it; light through its transparent part is found by
+// BSDF sampling, the pass-through counting as a bounce toward max_depth. A light tracer, whose
+// only way to the camera is a connection, weighs its connections by null_transmission()
+// (1 - opacity) instead. Time: the pass-through adds no optical length and no delay (the
 // surface has no thickness), so light seen through a mask arrives when it would without it.
 // A nested material with a vertex event (fluorescence) is refused: its delay would also apply
 // to the light passing through.
@@ -87,6 +88,12 @@ public:
 
     float pdf(const Hit& hit, const Vec3& wi, const Vec3& wo) const override {
         return nested_->pdf(hit, wi, wo) * opacity(hit);
+    }
+
+    // What passes straight: the transparent part, and what the nested material lets through.
+    Color null_transmission(const Hit& hit) const override {
+        const float alpha = opacity(hit);
+        return Color(1.f - alpha) + nested_->null_transmission(hit) * alpha;
     }
 
 private:
