@@ -165,6 +165,17 @@ std::vector<BsdfChi2Case> make_cases() {
                      30.0,
                      0.7,
                      {diffuse(), rough("beckmann")}});
+    // mask: the nested lobes with probability `opacity` (pdf() integrates to it), the rest a
+    // delta pass-through that is conditioned away.
+    auto mask = [](double opacity) {
+        return [=] {
+            Properties p("mask", {});
+            p.set_float("opacity", opacity);
+            return p;
+        };
+    };
+    cases.push_back({"mask_diffuse_45deg", mask(0.35), 45.0, 0.7, {diffuse()}});
+    cases.push_back({"mask_ggx_30deg", mask(0.6), 30.0, 0.7, {rough("ggx")}});
     return cases;
 }
 

@@ -98,6 +98,14 @@ Properties roughplastic_props(const std::string& dist, double alpha, bool visibl
     return p;
 }
 
+/// A `mask` of opacity `alpha` over `nested`.
+std::shared_ptr<Bsdf> mask_over(double alpha, const std::shared_ptr<Bsdf>& nested) {
+    Properties p("mask", {});
+    p.set_float("opacity", alpha);
+    p.set_object("_arg_0", nested);
+    return make_bsdf(p);
+}
+
 Properties dielectric_props(double int_ior, double ext_ior) {
     Properties p("dielectric", {});
     p.set_float("int_ior", int_ior);
@@ -155,6 +163,20 @@ std::vector<Material> smooth_materials() {
                      return build(
                          Properties("twosided", {}),
                          {diffuse_props(Color(0.6f)), rough_props("ggx", 0.3, 0.3, true, "none")});
+                 },
+                 true});
+    // mask: its pass-through is a delta lobe from both sides, so only two-sided materials
+    // inside (a one-sided one would still "scatter" from below, straight through).
+    m.push_back({"mask_twosided_diffuse",
+                 [] {
+                     return mask_over(0.6, build(Properties("twosided", {}),
+                                                 {diffuse_props(Color(0.2f, 0.5f, 0.9f))}));
+                 },
+                 true});
+    m.push_back({"mask_twosided_ggx",
+                 [] {
+                     return mask_over(0.7, build(Properties("twosided", {}),
+                                                 {rough_props("ggx", 0.3, 0.3, true, "Cu")}));
                  },
                  true});
     return m;
@@ -347,6 +369,16 @@ std::vector<FurnaceCase> furnace_cases() {
                  true,
                  {10, 60, 120, 170}});
     c.push_back({"null", [] { return build(Properties("null", {})); }, true, {0, 60, 120}});
+    // A mask over a white material passes what the material does not take: all light.
+    c.push_back({"mask_white_diffuse",
+                 [] { return mask_over(0.4, build(diffuse_props(Color(1.f)))); }, true, front});
+    c.push_back({"mask_twosided_white_diffuse",
+                 [] {
+                     return mask_over(
+                         0.8, build(Properties("twosided", {}), {diffuse_props(Color(1.f))}));
+                 },
+                 true,
+                 {10, 60, 120, 170}});
     for (const char* dist : {"beckmann", "ggx"})
         for (bool visible : {true, false})
             for (double a : {0.05, 0.3, 1.0}) {

@@ -126,8 +126,8 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
         Properties film("hdrfilm", {});
         film.set_int("width", 1);
         film.set_int("height", 1);
-        film.set_object("rfilter", femto::create_default_object(PluginKind::ReconstructionFilter,
-                                                                "box", {}));
+        film.set_object("rfilter",
+                        femto::create_default_object(PluginKind::ReconstructionFilter, "box", {}));
         p.set_object("film", femto::create_object(PluginKind::Film, "hdrfilm", film));
     };
     return {
@@ -148,6 +148,14 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
         {"bsdf twosided",
          [](Properties& p) {
              p.set_object("bsdf", femto::create_default_object(PluginKind::Bsdf, "diffuse", {}));
+         }},
+        {"bsdf mask",
+         [](Properties& p) {
+             p.set_object("bsdf", femto::create_default_object(PluginKind::Bsdf, "diffuse", {}));
+         }},
+        {"integrator moment",
+         [](Properties& p) {
+             p.set_object("path", femto::create_default_object(PluginKind::Integrator, "path", {}));
          }},
         {"sensor radiancemeter", one_pixel_film},
         {"sensor irradiancemeter", one_pixel_film},

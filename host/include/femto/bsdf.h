@@ -76,6 +76,15 @@ public:
     /// continued path. Only called when has_vertex_event() is true.
     virtual VertexEvent sample_vertex_event(const Hit& /*hit*/, float /*u*/) const { return {}; }
 
+    /// The share of light that crosses the surface straight through without interacting: the
+    /// weight of its null lobe (1 for `null`, 1 - opacity for a `mask`, 0 for a material without
+    /// one). Light tracing weighs its connections to the sensor by it at every surface they
+    /// cross (trace_shadow()'s `through_masks`), the one way such an estimator sees light that
+    /// passed a partly transparent surface last.
+    virtual Color null_transmission(const Hit& /*hit*/) const {
+        return Color(is_null() ? 1.f : 0.f);
+    }
+
     bool has_delta_only() const { return (flags() & kBsdfSmooth) == 0; }
     bool is_null() const { return flags() == kBsdfNull; }
 };

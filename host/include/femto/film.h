@@ -92,6 +92,16 @@ public:
         items_.clear();
         sensor_distance_ = -1.0;
     }
+    /// Integrator AOVs (arbitrary output variables): one value per channel that the
+    /// integrator declares in Integrator::aov_names(), in that order, for this camera sample.
+    /// The renderer sizes the list to the declared count and sets every value to 0 before each
+    /// camera sample; the integrator sets the values it has (set_aov()). A film that records
+    /// AOVs (Film::prepare_aovs()) averages each channel per pixel with the same
+    /// reconstruction-filter weights as the radiance. AOVs are not scaled by scale() (not every
+    /// channel is a radiance) and splats carry none.
+    void reset_aovs(size_t count) { aovs_.assign(count, 0.f); }
+    void set_aov(size_t channel, float value) { aovs_[channel] = value; }
+    const std::vector<float>& aovs() const { return aovs_; }
     /// Multiplies every contribution by `k` (the renderer applies Sensor::ray_weight()).
     void scale(float k) {
         for (Contribution& c : items_) c.radiance *= k;
@@ -128,6 +138,7 @@ public:
 
 private:
     std::vector<Contribution> items_;
+    std::vector<float> aovs_;
     double sensor_distance_ = -1.0;
     uint32_t sample_index_ = 0;
     SplatList* splats_ = nullptr;
@@ -234,6 +245,12 @@ public:
     /// expectation (filter_weight_integral()), so that splats are normalised as camera samples
     /// are. The default throws: the film does not support light tracing.
     virtual void add_splat_weight(double samples_per_pixel);
+    /// Called once before rendering when the integrator declares AOV channels (`names`, from
+    /// Integrator::aov_names(); never empty): a film that records them keeps one more
+    /// filter-weighted average per channel and pixel, fed by ContributionList::aovs(), and
+    /// writes them beside its image (hdrfilm: extra named EXR channels). The default throws a
+    /// SceneError located at `integrator`: the film records no AOVs.
+    virtual void prepare_aovs(const std::vector<std::string>& names, const Object& integrator);
     /// The current image integrated over time: linear RGB, row-major, top row first, normalised
     /// by the reconstruction-filter weights (what name.exr holds for a steady film).
     virtual std::vector<float> steady_image() const = 0;

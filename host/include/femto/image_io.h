@@ -13,11 +13,21 @@ namespace femto::io {
 /// A string attribute stored in EXR headers (e.g. {"femto:samples", "64"}).
 using Attributes = std::vector<std::pair<std::string, std::string>>;
 
+/// Named float channels written beside R, G, B (integrator AOVs): channel `names[k]` of pixel
+/// p (row-major, top row first) is `data[p * names.size() + k]`. A name "layer.C" puts channel
+/// C in layer "layer", as OpenEXR tools group them.
+struct ExtraChannels {
+    std::vector<std::string> names;
+    const float* data = nullptr;
+};
+
 /// Writes an RGB float image (row-major, top row first) as a single-part OpenEXR file. With
 /// `depth` ([height][width] floats) the file has a fourth float channel Z holding it (the
-/// streak film's per-pixel sensor distance, femto/viz.h write_streak_exr).
+/// streak film's per-pixel sensor distance, femto/viz.h write_streak_exr); `extra` adds named
+/// channels (an error when one is named R, G, B or Z, or twice).
 void write_exr_rgb(const std::string& path, int width, int height, const float* rgb,
-                   const Attributes& attributes, const float* depth = nullptr);
+                   const Attributes& attributes, const float* depth = nullptr,
+                   const ExtraChannels& extra = {});
 /// Tone-maps linear RGB through the OpenColorIO display transform (linear -> sRGB) of the
 /// config shipped with femto and writes an 8-bit PNG. `exposure` is in stops.
 void write_png_preview(const std::string& path, int width, int height, const float* rgb,

@@ -60,6 +60,12 @@ public:
     /// Scene::time_window() extends the film's window by it, so that light arriving just after
     /// the window's end is still traced and spread into the last bins. Read before each pass.
     virtual double time_reach() const { return 0.0; }
+    /// Names of the extra per-sample channels (AOVs) this integrator reports through
+    /// ContributionList::set_aov(), in order; empty (the default) for none. The renderer asks
+    /// the film to record them (Film::prepare_aovs()), which fails for films without AOVs;
+    /// hdrfilm writes each as a named EXR channel ("layer.X" names group into layers). Only
+    /// camera samples carry AOVs: an integrator that declares them must not splat.
+    virtual std::vector<std::string> aov_names() const { return {}; }
     /// Estimates the radiance arriving along the camera ray `ray` (unit direction). Camera
     /// integrators implement it; the default throws std::logic_error.
     virtual void sample(const Scene& scene, Sampler& sampler, const Ray& ray,

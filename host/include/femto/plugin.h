@@ -38,7 +38,10 @@ namespace femto {
 ///  set_scene_sphere(), SceneSphere, Scene::sphere()/environment()/pdf_environment(),
 ///  PathClock::record_distant().)
 /// (17: analytic cylinders: Shape::set_cylinder() and its members change Shape's layout.)
-inline constexpr uint32_t kPluginAbiVersion = 17;
+/// (18: integrator AOVs: Integrator::aov_names(), ContributionList::reset_aovs()/set_aov()/
+///  aovs(), Film::prepare_aovs(); io::write_exr_rgb() takes extra named channels;
+///  Bsdf::null_transmission(), trace_shadow()/connect_to_sensor() `through_masks`.)
+inline constexpr uint32_t kPluginAbiVersion = 18;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -161,9 +161,14 @@ struct ShadowConnection {
 /// end points (the ray starts off a surface and stops short of the light): the optical length
 /// is measured between them and the boundaries crossed. `pieces`, when given, hears of every
 /// medium piece of the connection (of all of it, so it is only meaningful when not blocked).
+/// With `through_masks` the ray also crosses every other surface, its transmittance multiplied
+/// by the surface's Bsdf::null_transmission() (0 blocks it): for estimators whose connections
+/// are the only way light crosses that segment (light tracing). Estimators that also sample
+/// a `mask`'s null lobe along the same segment (path tracing with light samples, BDPT) must
+/// leave it false, or they would count that light twice.
 ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, const Vec3& to,
                               MediumTracker medium, Sampler& sampler,
-                              MediumPieces* pieces = nullptr);
+                              MediumPieces* pieces = nullptr, bool through_masks = false);
 
 /// The shadow connection from surface vertex `from` to light sample `light`. Without media in
 /// the scene it is an occlusion test and light crosses `light.distance` in vacuum (a shadow
@@ -254,15 +259,17 @@ inline Ray emission_ray(const EmissionSample& es) {
 /// The connection from surface vertex `from` to the sensor point of `sensor` (a light path
 /// seen by the camera), as connect_to_light() traces it: its transmittance and optical length
 /// (the splat's sensor distance).
+/// `through_masks`: as trace_shadow()'s (a light tracer's connections pass partly transparent
+/// surfaces, weighted by their null transmission).
 ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,
                                    const MediumTracker& medium, Sampler& sampler,
-                                   MediumPieces* pieces = nullptr);
+                                   MediumPieces* pieces = nullptr, bool through_masks = false);
 /// The same from a point `x` inside `medium.medium` or, with p_error > 0, on a surface of
 /// geometric normal `n` (an emitter's point: EmissionSample::n and p_error).
 ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const SensorSample& sensor,
                                    const MediumTracker& medium, Sampler& sampler,
                                    const Vec3& n = Vec3(), float p_error = 0.f,
-                                   MediumPieces* pieces = nullptr);
+                                   MediumPieces* pieces = nullptr, bool through_masks = false);
 
 /// Light paths see shading normals differently from camera paths (Veach 1997, sec. 5.3.2):
 /// a BSDF weight (eval() or a sample's weight, which use the shading cosine of `wo`) for light

@@ -130,13 +130,26 @@ std::string ocio_config_path() {
 }
 
 void write_exr_rgb(const std::string& path, int width, int height, const float* rgb,
-                   const Attributes& attributes, const float* depth) {
+                   const Attributes& attributes, const float* depth, const ExtraChannels& extra) {
+    for (size_t k = 0; k < extra.names.size(); ++k) {
+        const std::string& n = extra.names[k];
+        const bool taken = n == "R" || n == "G" || n == "B" || (depth && n == "Z") ||
+                           std::find(extra.names.begin(), extra.names.begin() + long(k), n) !=
+                               extra.names.begin() + long(k);
+        if (n.empty() || taken)
+            throw SceneError(
+                fmt::format("cannot write \"{}\": EXR channel name \"{}\" is empty "
+                            "or used twice",
+                            path, n));
+    }
     const std::string tmp = temp_path_for(path);
     try {
         Imf::Header header(width, height);
         header.compression() = Imf::ZIP_COMPRESSION;
         for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
         if (depth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+        for (const std::string& n : extra.names)
+            header.channels().insert(n, Imf::Channel(Imf::FLOAT));
         for (const auto& [k, v] : attributes) insert_attribute(header, k, v);
         Imf::FrameBuffer fb;
         const size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
@@ -148,6 +161,12 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
             fb.insert("Z",
                       Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(depth)),
                                  sizeof(float), sizeof(float) * size_t(width)));
+        const size_t n_extra = extra.names.size();
+        char* extra_base = reinterpret_cast<char*>(const_cast<float*>(extra.data));
+        for (size_t k = 0; k < n_extra; ++k)
+            fb.insert(extra.names[k],
+                      Imf::Slice(Imf::FLOAT, extra_base + k * sizeof(float),
+                                 n_extra * sizeof(float), n_extra * sizeof(float) * size_t(width)));
         Imf::OutputFile file(tmp.c_str(), header);
         file.setFrameBuffer(fb);
         file.writePixels(height);

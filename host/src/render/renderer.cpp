@@ -134,6 +134,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
     const Integrator& integrator = scene.integrator();
     auto block = film.make_block(tile.x0, tile.y0, tile.w, tile.h);
     const float ray_weight = sensor.ray_weight();
+    const size_t aov_count = integrator.aov_names().size();
     list.set_splat_list(splats);
     uint64_t taken = 0;
     for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
@@ -151,6 +152,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
                 const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
                 const Ray ray = sensor.sample_ray(pos, sampler.next_2d());
                 list.clear();
+                list.reset_aovs(aov_count);
                 list.set_sample_index(s);
                 list.set_film_position(pos);
                 if (splats) splats->set_sample_index(s);
@@ -263,6 +265,13 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     const bool from_lights = integrator.source() == SampleSource::Light;
     const bool splatting = from_lights || integrator.splats();
     if (splatting) film.prepare_splats(from_lights);
+    if (const std::vector<std::string> aovs = integrator.aov_names(); !aovs.empty()) {
+        if (splatting)
+            throw SceneError(integrator.location(),
+                             integrator.type_name() +
+                                 " declares AOV channels but splats: AOVs are per camera sample");
+        film.prepare_aovs(aovs, integrator);
+    }
 
     const int W = film.width(), H = film.height();
     const int tile = tile_size_for(film);

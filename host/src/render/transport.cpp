@@ -27,7 +27,8 @@ double light_distance(const Vec3& from, const EmitterSample& light) {
 }  // namespace
 
 ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, const Vec3& to,
-                              MediumTracker medium, Sampler& sampler, MediumPieces* pieces) {
+                              MediumTracker medium, Sampler& sampler, MediumPieces* pieces,
+                              bool through_masks) {
     ShadowConnection c;
     Vec3 last = from;  // the latest actual point: lengths are measured between these
     for (int crossings = 0; crossings < 256; ++crossings) {
@@ -43,7 +44,11 @@ ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, con
         c.optical_length += length * medium.eta();
         last = next;
         if (!found) return c;
-        if (!hit.shape->bsdf()->is_null() || c.blocked()) return {Color(0.f), 0.0};
+        if (const Bsdf& bsdf = *hit.shape->bsdf(); !bsdf.is_null()) {
+            if (!through_masks) return {Color(0.f), 0.0};
+            c.transmittance *= bsdf.null_transmission(hit);
+        }
+        if (c.blocked()) return {Color(0.f), 0.0};
         medium.cross(hit, ray.d);
         const float left = ray.tmax - hit.t;
         ray = hit.spawn(ray.d);
@@ -143,26 +148,26 @@ bool LightPathStarts::delta_direction(const Emitter& emitter) const {
 
 ShadowConnection connect_to_sensor(const Scene& scene, const Hit& from, const SensorSample& sensor,
                                    const MediumTracker& medium, Sampler& sampler,
-                                   MediumPieces* pieces) {
+                                   MediumPieces* pieces, bool through_masks) {
     const Ray ray = from.spawn_to(sensor.p);
-    if (!scene.has_media()) {
+    if (!scene.has_media() && !through_masks) {
         if (scene.occluded(ray)) return {Color(0.f), 0.0};
         return {Color(1.f), distance_between(from.p, sensor.p)};
     }
     MediumTracker beyond = medium;
     beyond.medium = medium.beyond(from, sensor.wi);
-    return trace_shadow(scene, ray, from.p, sensor.p, beyond, sampler, pieces);
+    return trace_shadow(scene, ray, from.p, sensor.p, beyond, sampler, pieces, through_masks);
 }
 
 ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const SensorSample& sensor,
                                    const MediumTracker& medium, Sampler& sampler, const Vec3& n,
-                                   float p_error, MediumPieces* pieces) {
+                                   float p_error, MediumPieces* pieces, bool through_masks) {
     Ray ray{x, sensor.wi, 0.f, shadow_ray_length(float(sensor.distance), sensor.p)};
     if (p_error > 0) {
         ray.o = offset_origin(x, n, sensor.wi, p_error);
         ray.tmax = shadow_ray_length(length(sensor.p - ray.o), sensor.p);
     }
-    return trace_shadow(scene, ray, x, sensor.p, medium, sampler, pieces);
+    return trace_shadow(scene, ray, x, sensor.p, medium, sampler, pieces, through_masks);
 }
 
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,

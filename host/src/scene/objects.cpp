@@ -89,6 +89,15 @@ void Film::add_splat_weight(double) {
     throw SceneError(location(), type_name() + " does not accept splats from a light tracer");
 }
 
+void Film::prepare_aovs(const std::vector<std::string>& names, const Object& integrator) {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    throw SceneError(integrator.location(),
+                     fmt::format("the {} integrator writes AOV channels ({}), which the {} film "
+                                 "does not record; use a steady film (hdrfilm)",
+                                 integrator.type_name(), list, type_name()));
+}
+
 std::vector<double> Film::filter_weight_integrals(bool horizontal) const {
     // Midpoint rule over each pixel within the filter's reach, as camera samples jittered
     // uniformly within their pixels would weigh the pixel in expectation.

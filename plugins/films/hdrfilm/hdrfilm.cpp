@@ -1,5 +1,7 @@
 // Steady-state RGB film: filtered, weighted accumulation in double precision, written as an
-// OpenEXR file plus a tone-mapped PNG preview.
+// OpenEXR file plus a tone-mapped PNG preview. An integrator's AOV channels
+// (Integrator::aov_names()) are accumulated with the same filter weights and written as extra
+// named channels of the EXR.
 #include <fmt/format.h>
 
 #include <atomic>
@@ -24,14 +26,17 @@ struct PixelSum {
 
 class HdrBlock final : public FilmBlock {
 public:
-    HdrBlock(const ReconstructionFilter& filter, int x0, int y0, int w, int h, int border)
+    HdrBlock(const ReconstructionFilter& filter, int x0, int y0, int w, int h, int border,
+             size_t aovs)
         : filter_(filter),
           radius_(filter.radius()),
           x0_(x0 - border),
           y0_(y0 - border),
           w_(w + 2 * border),
           h_(h + 2 * border),
-          pixels_(size_t(w_) * size_t(h_)) {}
+          aov_count_(aovs),
+          pixels_(size_t(w_) * size_t(h_)),
+          aov_sums_(pixels_.size() * aovs) {}
 
     void put(Vec2 pos, const ContributionList& sample) override {
         if (!accept_sample(sample, rejected_)) return;
@@ -48,9 +53,13 @@ public:
             for (int x = std::max(xa, x0_); x <= std::min(xb, x0_ + w_ - 1); ++x) {
                 const float w = wy * filter_.eval(float(x) + 0.5f - pos.x);
                 if (w == 0) continue;
-                PixelSum& p = pixels_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
+                const size_t i = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
+                PixelSum& p = pixels_[i];
                 for (int c = 0; c < 3; ++c) p.rgb[c] += double(w) * double(L[c]);
                 if (!sample.is_splat()) p.weight += w;  // splats: add_splat_weight()
+                if (aov_count_ > 0 && sample.aovs().size() == aov_count_)
+                    for (size_t k = 0; k < aov_count_; ++k)
+                        aov_sums_[i * aov_count_ + k] += double(w) * double(sample.aovs()[k]);
             }
         }
     }
@@ -58,7 +67,9 @@ public:
     const ReconstructionFilter& filter_;
     float radius_;
     int x0_, y0_, w_, h_;
+    size_t aov_count_;
     std::vector<PixelSum> pixels_;
+    std::vector<double> aov_sums_;  // [pixel][aov]: sum(w * value)
     RejectedContributions rejected_;
 };
 
@@ -92,7 +103,7 @@ public:
     }
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
-        return std::make_unique<HdrBlock>(*rfilter_, x0, y0, w, h, border_);
+        return std::make_unique<HdrBlock>(*rfilter_, x0, y0, w, h, border_, aov_names_.size());
     }
 
     // The renderer never merges overlapping blocks concurrently, so no lock is needed here.
@@ -109,6 +120,9 @@ public:
                 PixelSum& dst = pixels_[size_t(y) * size_t(width_) + size_t(x)];
                 for (int c = 0; c < 3; ++c) dst.rgb[c] += src.rgb[c];
                 dst.weight += src.weight;
+                const size_t n = aov_names_.size(), si = size_t(by) * size_t(block.w_) + size_t(bx),
+                             di = size_t(y) * size_t(width_) + size_t(x);
+                for (size_t k = 0; k < n; ++k) aov_sums_[di * n + k] += block.aov_sums_[si * n + k];
             }
         }
     }
@@ -120,6 +134,23 @@ public:
             for (int x = 0; x < width_; ++x)
                 pixels_[size_t(y) * size_t(width_) + size_t(x)].weight +=
                     samples_per_pixel * wy[size_t(y)] * wx[size_t(x)];
+    }
+
+    void prepare_aovs(const std::vector<std::string>& names, const Object&) override {
+        if (names == aov_names_) return;
+        aov_names_ = names;
+        aov_sums_.assign(pixels_.size() * names.size(), 0.0);
+    }
+
+    // The AOV channels' per-pixel averages, [pixel][aov].
+    std::vector<float> aov_image() const {
+        const size_t n = aov_names_.size();
+        std::vector<float> out(pixels_.size() * n, 0.f);
+        for (size_t i = 0; i < pixels_.size(); ++i)
+            if (pixels_[i].weight > 0)
+                for (size_t k = 0; k < n; ++k)
+                    out[i * n + k] = float(aov_sums_[i * n + k] / pixels_[i].weight);
+        return out;
     }
 
     std::vector<float> steady_image() const override {
@@ -136,7 +167,9 @@ public:
         const std::vector<float> rgb = steady_image();
         const io::Attributes attrs = io::render_attributes(info);
         io::OutputSet files;
-        io::write_exr_rgb(files.add(out_base + ".exr"), width_, height_, rgb.data(), attrs);
+        const std::vector<float> aovs = aov_image();
+        io::write_exr_rgb(files.add(out_base + ".exr"), width_, height_, rgb.data(), attrs, nullptr,
+                          {aov_names_, aovs.data()});
         io::write_png_preview(files.add(out_base + ".png"), width_, height_, rgb.data(), exposure_);
         return files.commit();
     }
@@ -145,12 +178,15 @@ private:
     float exposure_ = 0;
     int border_ = 0;
     std::vector<PixelSum> pixels_;
+    std::vector<std::string> aov_names_;
+    std::vector<double> aov_sums_;  // [pixel][aov]: sum(w * value)
 };
 
 }  // namespace
 
 FEMTO_PLUGIN(HdrFilm, femto::PluginKind::Film, "hdrfilm",
-             "Steady-state RGB film: name.exr (float) plus a name.png preview",
+             "Steady-state RGB film: name.exr (float, with the integrator's AOV channels) plus a "
+             "name.png preview",
              {{"exposure", "float", "0", "exposure of the PNG preview, in stops"},
               {"pixel_format", "string", "rgb", "accepted for Mitsuba compatibility; only rgb"},
               {"file_format", "string", "openexr",

@@ -12,7 +12,9 @@
 //     transfer), a connection to the sensor (surface_to_sensor()), a BSDF sample to continue.
 // The emitter's own point is connected too (emitter_seen(): the emitters the camera sees,
 // unless hide_emitters), so a point light in view is a bright film point, which a path tracer
-// never finds.
+// never finds. Connections pass partly transparent surfaces (`mask`) weighted by their null
+// transmission (trace_shadow()'s through_masks): light seen through a mask has no other way to
+// the camera here.
 //
 // Normalisation: a render traces samples_per_pixel x pixels light paths; the sensor's
 // importance (SensorSample::weight) and Film::add_splat_weight() make each pixel estimate what
@@ -70,6 +72,12 @@ public:
                                  "orthographic camera's rays are parallel); use a perspective "
                                  "sensor or a camera-path integrator (transient_path)");
         starts_.prepare(scene, "transient_light");
+        // Partly transparent surfaces (`mask`): connections to the sensor pass them weighted by
+        // their null transmission, the only way this estimator sees light through them.
+        through_masks_ = false;
+        for (const auto& shape : scene.shapes())
+            if (const auto& b = shape->bsdf(); b && (b->flags() & kBsdfNull) && !b->is_null())
+                through_masks_ = true;
     }
 
     void sample_light(const Scene& scene, Sampler& sampler, SplatList& out) const override {
@@ -104,8 +112,9 @@ private:
         if (!ss.valid() || !path.clock.arrives_in_time(ss.distance)) return;
         const Color emitted = emitter.eval_direction(es, ss.wi);
         if (emitted.is_black()) return;
-        const ShadowConnection c = connect_to_sensor(
-            scene, es.p, ss, starts_.medium(emitter, es, ss.wi), sampler, es.n, es.p_error);
+        const ShadowConnection c =
+            connect_to_sensor(scene, es.p, ss, starts_.medium(emitter, es, ss.wi), sampler, es.n,
+                              es.p_error, nullptr, through_masks_);
         if (c.blocked()) return;
         const float scale = ss.weight / (pmf * es.pdf_position);
         path.clock.record(out, ss.pos, emitted * c.transmittance * scale, c.optical_length);
@@ -142,7 +151,8 @@ private:
         if (f.is_black()) return;
         const float adjoint = adjoint_shading_factor(hit, -path.ray.d, ss.wi);
         if (!(adjoint > 0)) return;
-        const ShadowConnection c = connect_to_sensor(scene, hit, ss, path.medium, sampler);
+        const ShadowConnection c =
+            connect_to_sensor(scene, hit, ss, path.medium, sampler, nullptr, through_masks_);
         if (c.blocked()) return;
         const Color light = leaving(event, f * path.power) * c.transmittance;
         path.clock.record(out, ss.pos, light * (adjoint * ss.weight), c.optical_length);
@@ -209,7 +219,8 @@ private:
         if (ss.valid() && path.clock.arrives_in_time(ss.distance)) {
             const float f = phase.eval(wi, ss.wi);
             if (f > 0) {
-                const ShadowConnection c = connect_to_sensor(scene, p, ss, path.medium, sampler);
+                const ShadowConnection c = connect_to_sensor(scene, p, ss, path.medium, sampler,
+                                                             Vec3(), 0.f, nullptr, through_masks_);
                 if (!c.blocked())
                     path.clock.record(out, ss.pos, path.power * c.transmittance * (f * ss.weight),
                                       c.optical_length);
@@ -219,7 +230,8 @@ private:
         return survives(sampler, path);
     }
 
-    LightPathStarts starts_;  // preprocess(): emitters checked, the media they sit in
+    LightPathStarts starts_;      // preprocess(): emitters checked, the media they sit in
+    bool through_masks_ = false;  // preprocess(): a surface is partly transparent
 };
 
 }  // namespace

@@ -13,6 +13,8 @@
 //                                  one lifetime later on average
 //   GlassSlabDelay                 a glass slab of index eta and thickness d delays light by
 //                                  (eta - 1) d and passes (1 - R)^2 of it at normal incidence
+//   MaskPassesWithoutDelay         an emitter seen through a `mask` of opacity alpha: 1 - alpha
+//                                  of its light, at the time it arrives without the mask
 //   TimeOfFlightIsExactAtEveryScale  through glass, off a mirror, to a lit wall: the arrival
 //                                  holds to 1e-6 relative and the amplitude stays the same at
 //                                  scales 1e-6 ... 1e6 (not for density estimators)
@@ -110,6 +112,9 @@ protected:
     bool skips_media_free_scenes() const { return GetParam().media_only; }
     /// True when the integrator cannot see through an orthographic camera.
     bool needs_connectable_sensor() const { return GetParam().connects_to_sensor; }
+    /// MaskPassesWithoutDelay through a pinhole (for integrators that connect to the sensor).
+    void mask_through_pinhole(double alpha, double start, double width, int bins, int res,
+                              int spp) const;
     std::string integrator() const {
         return "<integrator type=\"" + GetParam().type + "\">" + GetParam().parameters +
                "</integrator>";
@@ -549,6 +554,95 @@ TEST_P(IntegratorConformance, GlassSlabDelay) {
     EXPECT_EQ(misplaced, 0);
     const double R = std::pow((eta - 1) / (eta + 1), 2), p = (1 - R) * (1 - R);
     const double n = double(res) * res * spp;
+    EXPECT_NEAR(through / (res * res), p, 4 * std::sqrt(p * (1 - p) / n) + 1e-6);
+}
+
+// ---- opacity masks --------------------------------------------------------------------------
+
+namespace conformance {
+/// The scene of MaskPassesWithoutDelay but its camera: a mask of opacity `alpha` over an emitter.
+inline std::string mask_scene(double alpha) {
+    return "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/>"
+           "</transform><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0\"/></bsdf>"
+           "<emitter type=\"area\"><float name=\"radiance\" value=\"1\"/></emitter></shape>"
+           "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/>"
+           "<translate z=\"2.5\"/></transform><bsdf type=\"mask\"><float name=\"opacity\" "
+           "value=\"" +
+           num(alpha) +
+           "\"/><bsdf type=\"diffuse\"><float name=\"reflectance\" value=\"0.5\"/></bsdf>"
+           "</bsdf></shape>";
+}
+}  // namespace conformance
+
+/// MaskPassesWithoutDelay for an integrator that reaches the sensor by connections (a light
+/// tracer): through a pinhole at height 5 whose image covers [-1, 1]^2 of the emitter, pixel
+/// (px, py) sees the emitter points of its footprint at distances sqrt(r^2 + 25), r between the
+/// footprint's nearest and farthest points from the axis: every pixel's light lies in those
+/// bins, and its time integral is 1 - alpha (the emitter's radiance through the mask). Pixel
+/// estimates are independent with that expectation: their mean is compared within 4 standard
+/// errors of their spread.
+inline void IntegratorConformance::mask_through_pinhole(double alpha, double start, double width,
+                                                        int bins, int res, int spp) const {
+    using namespace conformance;
+    auto scene =
+        load(pinhole_above(5, 1, spp, transient_film(res, start, width, bins)) + mask_scene(alpha),
+             depth(3));
+    const Cube cube = render_cube(*scene, 11, "mask-pinhole");
+    ASSERT_EQ(cube.T, bins);
+    int failures = 0;
+    std::vector<double> seen;
+    const double w = 2.0 / res;
+    for (int py = 0; py < res; ++py)
+        for (int px = 0; px < res; ++px) {
+            const double xa = 1 - px * w, ya = 1 - py * w;
+            const Footprint f{xa - w, xa, ya - w, ya};
+            const std::pair<int, int> allowed{
+                bin_of(start, width, bins, std::hypot(f.r_min(), 5.0) - 1e-6),
+                bin_of(start, width, bins, std::hypot(f.r_max(), 5.0) + 1e-6)};
+            seen.push_back(tof_pixel_energy(cube, px, py, allowed, failures));
+        }
+    EXPECT_EQ(failures, 0);
+    const MeanAndError m = mean_and_error(seen);
+    EXPECT_NEAR(m.mean, 1 - alpha, 4 * m.standard_error)
+        << "the emitter seen through a mask of opacity " << alpha;
+}
+
+TEST_P(IntegratorConformance, MaskPassesWithoutDelay) {
+    using namespace conformance;
+    if (skips_media_free_scenes())
+        GTEST_SKIP() << "renders only scenes with participating media; this one has none";
+    // An emitting rectangle (radiance 1, black) at z = 0 seen from above at height 5 by an
+    // orthographic camera (a pinhole for light tracers: mask_through_pinhole()) through a
+    // mask of opacity alpha at z = 2.5 over a diffuse material facing the camera (unlit: the
+    // emitter shines on its back). Every camera sample passes the mask straight (weight 1) with
+    // probability 1 - alpha and arrives at camera time 5, as without the mask: the arrival bin
+    // holds a binomial proportion of mean 1 - alpha, every other bin nothing. The pass-through
+    // counts as a bounce toward max_depth (Mitsuba 3's `path`): paths of 2 segments.
+    const int D = depth(3);
+    if (D >= 0 && D < 2) GTEST_SKIP() << "light through a mask needs paths of 2 segments";
+    const double alpha = 0.3, start = 4.905, width = 0.02;
+    const int bins = 20, res = 8, spp = 64;
+    if (needs_connectable_sensor()) {  // through a pinhole instead
+        mask_through_pinhole(alpha, start, width, bins, res, spp);
+        return;
+    }
+    const std::string film = transient_film(res, start, width, bins);
+    auto scene = load(camera_above(5, 1, spp, film) + mask_scene(alpha), D);
+    const Cube cube = render_cube(*scene, 11, "mask");
+    ASSERT_EQ(cube.T, bins);
+    const int arrival = bin_of(start, width, bins, 5.0);
+    double through = 0;
+    int misplaced = 0;
+    for (int y = 0; y < res; ++y)
+        for (int x = 0; x < res; ++x) {
+            for (int t = 0; t < bins; ++t)
+                if (t != arrival && cube.energy(y, x, t) != 0 && ++misplaced <= 5)
+                    ADD_FAILURE() << "pixel " << x << "," << y << ": light in bin " << t
+                                  << "; without the mask it arrives in bin " << arrival;
+            through += cube.at(y, x, arrival, 0);
+        }
+    EXPECT_EQ(misplaced, 0);
+    const double p = 1 - alpha, n = double(res) * res * spp;
     EXPECT_NEAR(through / (res * res), p, 4 * std::sqrt(p * (1 - p) / n) + 1e-6);
 }
 
