@@ -178,6 +178,31 @@ TEST(MitsubaSyntax, PathAddsASearchFolder) {
     fs::remove_all(dir);
 }
 
+// Spectrum files are input files too: found through the <path> folders, wherever the <path>
+// stands, or a located error that lists the folders searched.
+TEST(MitsubaSyntax, PathFindsSpectrumFiles) {
+    const auto dir = femto::testing::temp_dir("mitsuba-path-spd");
+    fs::create_directories(dir / "assets");
+    write_text(dir / "assets" / "red.spd",
+               "# a red reflectance\n400 0.1\n550 0.2\n600 0.8\n700 0.9\n");
+    const auto with = [&](const std::string& path, const std::string& file) {
+        return scene(path + sensor_xml() + kLight +
+                     "<shape type=\"rectangle\"><bsdf type=\"diffuse\">\n<spectrum "
+                     "name=\"reflectance\" filename=\"" +
+                     file + "\"/></bsdf></shape>\n");
+    };
+    write_text(dir / "native.xml", with("", "assets/red.spd"));
+    write_text(dir / "path.xml", with("<path value=\"assets\"/>", "red.spd"));
+    expect_same_image(render_file(dir / "path.xml"), render_file(dir / "native.xml"),
+                      "<path> spectrum", "explicit folder");
+    write_text(dir / "missing.xml", with("<path value=\"assets\"/>", "blue.spd"));
+    const std::string msg = load_file_error(dir / "missing.xml");
+    EXPECT_TRUE(contains(msg, "missing.xml:5:1: spectrum file \"blue.spd\" not found (searched: " +
+                                  (dir / "assets").string() + ", " + dir.string() + ")"))
+        << msg;
+    fs::remove_all(dir);
+}
+
 // 5: $parameters in an <include>'s file name, from -D or an earlier <default>.
 TEST(MitsubaSyntax, ParametersInIncludeFileNames) {
     const auto dir = femto::testing::temp_dir("mitsuba-include-param");

@@ -507,8 +507,8 @@ public:
         refuse_duplicate(props, name, c);
         if (c.tag == "spectrum" || c.tag == "blackbody") {
             // Converted here: how a spectrum becomes RGB depends on the object it is in.
-            props.set(name, Properties::Type::Color, parse_spectrum_tag(c, parent_tag, name),
-                      c.location);
+            props.set(name, Properties::Type::Color,
+                      parse_spectrum_tag(c, parent_tag, name, search_dirs_), c.location);
             return;
         }
         if (c.tag != "transform") check_no_children(c);

@@ -1,6 +1,7 @@
 #include "scene/spectrum_tags.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <charconv>
 #include <cmath>
@@ -188,7 +189,7 @@ spectrum::Use spectrum_use(const std::string& parent_tag, const std::string& nam
 }
 
 Color parse_spectrum_tag(const XmlNode& node, const std::string& parent_tag,
-                         const std::string& name) {
+                         const std::string& name, const std::vector<std::string>& search_dirs) {
     const spectrum::Use use = spectrum_use(parent_tag, name);
     if (node.tag == "blackbody") return parse_blackbody(node, name, use);
     if (const std::string* type = node.attribute("type"))
@@ -206,7 +207,12 @@ Color parse_spectrum_tag(const XmlNode& node, const std::string& parent_tag,
                          "<spectrum> needs either a \"value\" or a \"filename\" attribute");
     if (filename) {
         if (filename->empty()) throw SceneError(node.location, "<spectrum> filename is empty");
-        const std::string path = resolve_path(node, *filename);
+        const FileSearch found = find_file(node, *filename, search_dirs);
+        if (!found.found && !found.searched.empty())
+            throw SceneError(node.location,
+                             fmt::format("spectrum file \"{}\" not found (searched: {})", *filename,
+                                         fmt::join(found.searched, ", ")));
+        const std::string& path = found.path;
         return convert_samples(node, name, read_spd_file(node, path), use,
                                fmt::format("spectrum file \"{}\"", path));
     }

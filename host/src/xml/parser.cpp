@@ -422,10 +422,6 @@ FileSearch find_file(const XmlNode& node, const std::string& name,
     return out;
 }
 
-std::string resolve_path(const XmlNode& node, const std::string& name) {
-    return find_file(node, name, {}).path;
-}
-
 std::string upgrade_parameter_name(const std::string& name) {
     if (auto it = kIrregularNames.find(name); it != kIrregularNames.end()) return it->second;
     std::string out;

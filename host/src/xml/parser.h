@@ -49,9 +49,6 @@ struct FileSearch {
 /// Mitsuba 3), next to the file that names it, then next to the top-level scene file.
 FileSearch find_file(const XmlNode& node, const std::string& name,
                      const std::vector<std::string>& search_dirs);
-/// find_file() without <path> folders: the file found, or the candidate next to the naming
-/// file (for files read while the tree is converted, before the <path>s are known).
-std::string resolve_path(const XmlNode& node, const std::string& name);
 
 /// camelCase -> snake_case with Mitsuba's irregular names (intIOR -> int_ior, ...).
 std::string upgrade_parameter_name(const std::string& name);
