@@ -10,13 +10,16 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
+#include <random>
 #include <string>
 
 #include "femto/emitter.h"
 #include "femto/host.h"
 #include "femto/math.h"
 #include "femto/properties.h"
+#include "femto/scene.h"
 #include "femto/shape.h"
 
 namespace femto_shape_test {
@@ -154,5 +157,52 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+/// The scales a ray-offset test runs at: sizes 1e-6 ... 1e6, centred at the origin and 1e3
+/// sizes away from it (up to 1e8). `run(size, centre)` is called under a SCOPED_TRACE.
+inline void for_each_scale(const std::function<void(double, const femto::Vec3&)>& run) {
+    for (int k = -6; k <= 6; k += 3)
+        for (const double away : {0.0, 1e3}) {
+            const double size = std::pow(10.0, k);
+            if (away * size > 1e8) continue;
+            SCOPED_TRACE("size 1e" + std::to_string(k) + ", " + std::to_string(away) + " away");
+            run(size, femto::Vec3(float(away * size), float(-0.5 * away * size),
+                                  float(0.25 * away * size)));
+        }
+}
+
+/// Rays leaving a surface at scale `size` around `centre`: 4000 rays from a sphere of radius
+/// 3 size aimed within 0.5 size of the centre; at each hit, a ray leaves outward (a random
+/// direction on the geometric normal's side) and must find nothing, and a ray leaves inward
+/// (its opposite), whose hit (if any) `inward(hit, again, in)` judges: true when it is the
+/// surface hitting itself. Returns the number of hits; self hits are test failures.
+inline int expect_rays_leave(
+    const femto::Scene& scene, const femto::Vec3& centre, double size,
+    const std::function<bool(const femto::Hit&, const femto::Hit*, const femto::Vec3&)>& inward) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    auto unit = [&] {
+        const float z = 2 * u(rng) - 1, phi = 2 * femto::kPi * u(rng), r = std::sqrt(1 - z * z);
+        return femto::Vec3(r * std::cos(phi), r * std::sin(phi), z);
+    };
+    int hits = 0, self_hits = 0;
+    for (int i = 0; i < 4000; ++i) {
+        const femto::Vec3 from = centre + unit() * float(3 * size);
+        const femto::Vec3 aim = centre + unit() * float(0.5 * size * u(rng));
+        femto::Hit hit;
+        if (!scene.intersect(femto::Ray{from, femto::normalize(aim - from), 0.f, femto::kInfinity},
+                             hit))
+            continue;
+        ++hits;
+        femto::Vec3 out = unit();
+        if (femto::dot(out, hit.ng) < 0) out = -out;
+        femto::Hit again;
+        if (scene.intersect(hit.spawn(out), again)) ++self_hits;
+        const bool found = scene.intersect(hit.spawn(-out), again);
+        if (inward(hit, found ? &again : nullptr, -out)) ++self_hits;
+    }
+    EXPECT_EQ(self_hits, 0);
+    return hits;
+}
 
 }  // namespace femto_shape_test
