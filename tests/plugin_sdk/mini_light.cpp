@@ -13,6 +13,10 @@ namespace {
 
 using namespace femto;
 
+// A light path reaches the camera only through connections, so they pass partly transparent
+// surfaces (`mask`), weighted by what those let through (c.transmittance); opaque ones block.
+constexpr bool kThroughMasks = true;
+
 class MiniLight final : public MonteCarloIntegrator {
 public:
     explicit MiniLight(const Properties& props) : MonteCarloIntegrator(props, 0) {
@@ -40,11 +44,12 @@ public:
         // The emitter seen by the camera: its emission toward the sensor, one segment.
         if (const SensorSample ss = scene.sensor().sample_direct(es.p, sampler.next_2d());
             ss.valid() && !hide_emitters() && clock.arrives_in_time(ss.distance)) {
-            const ShadowConnection c =
-                connect_to_sensor(scene, es.p, ss, index, sampler, es.n, es.p_error);
+            const ShadowConnection c = connect_to_sensor(scene, es.p, ss, index, sampler, es.n,
+                                                         es.p_error, nullptr, kThroughMasks);
             const float scale = ss.weight / (pmf * es.pdf_position);
             if (!c.blocked())
-                clock.record(out, ss.pos, emitter->eval_direction(es, ss.wi) * scale,
+                clock.record(out, ss.pos,
+                             emitter->eval_direction(es, ss.wi) * c.transmittance * scale,
                              c.optical_length);
         }
         Color power = es.weight / pmf;  // what the light path carries
@@ -68,9 +73,11 @@ public:
             if (ss.valid() && (bsdf.flags() & kBsdfSmooth) && clock.arrives_in_time(ss.distance)) {
                 const Color f = bsdf.eval(hit, hit.wi, hit.to_local(ss.wi)) *
                                 adjoint_shading_factor(hit, -ray.d, ss.wi);
-                const ShadowConnection c = connect_to_sensor(scene, hit, ss, index, sampler);
+                const ShadowConnection c =
+                    connect_to_sensor(scene, hit, ss, index, sampler, nullptr, kThroughMasks);
                 if (!f.is_black() && !c.blocked())
-                    clock.record(out, ss.pos, leaving(event, f * power) * (ss.weight),
+                    clock.record(out, ss.pos,
+                                 leaving(event, f * power) * c.transmittance * ss.weight,
                                  c.optical_length);
             }
             // Continue in a direction drawn from the BSDF.
