@@ -34,7 +34,12 @@ public:
         Vec3 from;
         for (int64_t depth = 1;; ++depth) {
             Hit hit;
-            if (!scene.intersect(ray, hit)) return;
+            if (!scene.intersect(ray, hit)) {  // the environment (constant, envmap), by MIS
+                if (!(depth == 1 && hide_emitters()))
+                    record_environment(scene, sampler, clock, beta, ray.d, index.eta(), bsdf_pdf,
+                                       !(bsdf_pdf > 0));
+                return;
+            }
             clock.travel_to(hit.p, index.eta());  // from the last vertex, not the ray origin
             const Bsdf& bsdf = *hit.shape->bsdf();
             if (!bsdf.is_null()) clock.reach_vertex();
