@@ -65,6 +65,7 @@ private:
     static constexpr int kGrid = 32;
 
     void build_lookup();
+    void fill_cell(int i, int j);
     int cell_of(double x, double y) const;
     Weights triangle_weights(uint32_t t, const double bary[3]) const;
     Weights edge_weights(double x, double y, uint32_t cell) const;

@@ -305,16 +305,14 @@ int DirectionMesh::cell_of(double x, double y) const {
     return j * kGrid + i;
 }
 
-// Fills each cell's lists: the triangles whose bounding box overlaps it, and the boundary edges
-// that may be nearest to some point of it. An edge farther from the cell's centre than the
-// nearest edge by more than the cell's diagonal is farther from every point of the cell.
+// Precomputes each triangle's barycentric frame and each boundary edge, and lists per cell of a
+// grid over the disk of all parabolic points the triangles and edges a query there may need.
 void DirectionMesh::build_lookup() {
     double radius = 1;
     for (size_t i = 0; i < size(); ++i) radius = std::max(radius, std::hypot(px_[i], py_[i]));
     radius *= 1 + 1e-6;
     grid_min_ = -radius;
     grid_scale_ = kGrid / (2 * radius);
-    const double cell = 1 / grid_scale_, slack = 1e-9;
     for (size_t t = 0; t < triangles_.size(); t += 3) {
         const Point a{px_[triangles_[t]], py_[triangles_[t]]};
         const Point b{px_[triangles_[t + 1]], py_[triangles_[t + 1]]};
@@ -332,31 +330,37 @@ void DirectionMesh::build_lookup() {
     cell_triangles_.start.assign(1, 0);
     cell_edges_.start.assign(1, 0);
     for (int j = 0; j < kGrid; ++j)
-        for (int i = 0; i < kGrid; ++i) {
-            const double x0 = grid_min_ + i * cell - slack, x1 = x0 + cell + 2 * slack;
-            const double y0 = grid_min_ + j * cell - slack, y1 = y0 + cell + 2 * slack;
-            for (uint32_t t = 0; t < triangles_.size() / 3; ++t) {
-                double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
-                for (int k = 0; k < 3; ++k) {
-                    const uint32_t v = triangles_[3 * t + k];
-                    lo_x = std::min(lo_x, px_[v]), hi_x = std::max(hi_x, px_[v]);
-                    lo_y = std::min(lo_y, py_[v]), hi_y = std::max(hi_y, py_[v]);
-                }
-                if (lo_x <= x1 && hi_x >= x0 && lo_y <= y1 && hi_y >= y0)
-                    cell_triangles_.items.push_back(t);
-            }
-            cell_triangles_.start.push_back(uint32_t(cell_triangles_.items.size()));
-            const double cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
-            std::vector<double> dist;
-            for (size_t e = 0; e < boundary_.size(); e += 2)
-                dist.push_back(distance_to_segment(cx, cy, {px_[boundary_[e]], py_[boundary_[e]]},
-                                                   {px_[boundary_[e + 1]], py_[boundary_[e + 1]]}));
-            const double nearest = *std::min_element(dist.begin(), dist.end());
-            for (uint32_t e = 0; e < dist.size(); ++e)
-                if (dist[e] <= nearest + std::sqrt(2.) * (cell + 2 * slack) + slack)
-                    cell_edges_.items.push_back(e);
-            cell_edges_.start.push_back(uint32_t(cell_edges_.items.size()));
-        }
+        for (int i = 0; i < kGrid; ++i) fill_cell(i, j);
+}
+
+// Lists for cell (i, j) the triangles whose bounding box overlaps it, and the boundary edges
+// that may be nearest to some point of it: an edge farther from the cell's centre than the
+// nearest edge by more than the cell's diagonal is farther from every point of the cell.
+void DirectionMesh::fill_cell(int i, int j) {
+    const double cell = 1 / grid_scale_, slack = 1e-9;
+    const double x0 = grid_min_ + i * cell - slack, x1 = x0 + cell + 2 * slack;
+    const double y0 = grid_min_ + j * cell - slack, y1 = y0 + cell + 2 * slack;
+    for (uint32_t t = 0; t < triangles_.size() / 3; ++t) {
+        const uint32_t* v = &triangles_[3 * t];
+        if (std::max({px_[v[0]], px_[v[1]], px_[v[2]]}) >= x0 &&
+            std::min({px_[v[0]], px_[v[1]], px_[v[2]]}) <= x1 &&
+            std::max({py_[v[0]], py_[v[1]], py_[v[2]]}) >= y0 &&
+            std::min({py_[v[0]], py_[v[1]], py_[v[2]]}) <= y1)
+            cell_triangles_.items.push_back(t);
+    }
+    cell_triangles_.start.push_back(uint32_t(cell_triangles_.items.size()));
+    const double cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
+    double nearest = std::numeric_limits<double>::infinity();
+    std::vector<double> distances;
+    for (size_t e = 0; e < boundary_.size(); e += 2) {
+        distances.push_back(distance_to_segment(cx, cy, {px_[boundary_[e]], py_[boundary_[e]]},
+                                                {px_[boundary_[e + 1]], py_[boundary_[e + 1]]}));
+        nearest = std::min(nearest, distances.back());
+    }
+    for (uint32_t e = 0; e < distances.size(); ++e)
+        if (distances[e] <= nearest + std::sqrt(2.) * (x1 - x0) + slack)
+            cell_edges_.items.push_back(e);
+    cell_edges_.start.push_back(uint32_t(cell_edges_.items.size()));
 }
 
 DirectionMesh::Weights DirectionMesh::triangle_weights(uint32_t t, const double bary[3]) const {
