@@ -13,6 +13,7 @@
 #include <map>
 
 #include "bench.h"
+#include "btf.h"
 #include "femto/host.h"
 #include "femto/integrator.h"
 #include "femto/log.h"
@@ -328,6 +329,7 @@ int main(int argc, char** argv) {
     plugins->add_flag("--markdown", markdown, "Print the reference in Markdown (docs/plugins.md)");
     CLI::App* viz = femto::cli::add_viz_command(app);
     CLI::App* bench = femto::cli::add_bench_command(app);
+    CLI::App* btf = femto::cli::add_btf_command(app);
     CLI::App* bench_run = femto::cli::add_bench_run_command(app);
 
     try {
@@ -346,6 +348,7 @@ int main(int argc, char** argv) {
             return cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet, npy, opts);
         if (plugins->parsed()) return cmd_plugins(plugin_name, markdown, opts);
         if (viz->parsed()) return femto::cli::run_viz_command();
+        if (btf->parsed()) return femto::cli::run_btf_command();
         if (bench->parsed()) {
             handle_stop_signals(true);  // Ctrl-C: stop after the current run, keep the rows
             const int code = femto::cli::run_bench_command(g_stop);
