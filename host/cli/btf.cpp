@@ -18,6 +18,7 @@ struct SynthArgs {
     std::string output, kind = "harmonic", format = "bdi", sampling = "ubo2003";
     uint32_t width = 64, height = 64;
     int color_model = 0;
+    double slope = 35;
     bool half = false, cosine_flag = false;
 } g_synth;
 std::string g_info_file;
@@ -31,7 +32,8 @@ btf::Format parse_format(const std::string& name) {
 
 int run_synth() {
     btf::synth::Options o;
-    o.kind = btf::synth::Kind::Harmonic;
+    o.kind = g_synth.kind == "vgroove" ? btf::synth::Kind::VGroove : btf::synth::Kind::Harmonic;
+    o.vgroove_slope_deg = g_synth.slope;
     o.format = parse_format(g_synth.format);
     o.width = g_synth.width;
     o.height = g_synth.height;
@@ -42,6 +44,9 @@ int run_synth() {
     o.cosine_flag = g_synth.cosine_flag;
     if (o.color_model == btf::kColorLogYuv && o.format != btf::Format::Dfmf)
         throw SceneError("--color-model 11 (log-YUV) is written for --format dfmf only");
+    if (o.kind == btf::synth::Kind::VGroove &&
+        (o.format == btf::Format::Fmf || o.color_model != btf::kColorRgb))
+        throw SceneError("--kind vgroove is written as --format bdi or dfmf, colour model 0");
     const uint64_t n = o.directions.size();
     const uint64_t bytes = uint64_t(o.width) * o.height * n * n * 3 * 2;
     if (o.format == btf::Format::Bdi && bytes > (uint64_t(4) << 30))
@@ -81,8 +86,12 @@ CLI::App* add_btf_command(CLI::App& app) {
     g_synth_cmd = g_btf->add_subcommand(
         "synth", "Write a synthetic BTF whose filtering has closed forms (docs/btf.md)");
     g_synth_cmd->add_option("-o,--output", g_synth.output, "Output file")->required();
-    g_synth_cmd->add_option("--kind", g_synth.kind, "harmonic: BTF A, rank 3 per channel")
-        ->check(CLI::IsMember({"harmonic"}));
+    g_synth_cmd
+        ->add_option("--kind", g_synth.kind,
+                     "harmonic: BTF A, rank 3 per channel; vgroove: BTF B, Lambertian V-grooves")
+        ->check(CLI::IsMember({"harmonic", "vgroove"}));
+    g_synth_cmd->add_option("--slope", g_synth.slope, "vgroove: facet slope in degrees")
+        ->check(CLI::Range(1.0, 89.0));
     g_synth_cmd->add_option("--format", g_synth.format, "bdi, dfmf or fmf")
         ->check(CLI::IsMember({"bdi", "dfmf", "fmf"}));
     g_synth_cmd

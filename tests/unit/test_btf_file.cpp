@@ -8,6 +8,7 @@
 #include <random>
 
 #include "btf/synth.h"
+#include "btf/vgroove.h"
 #include "femto/btf.h"
 #include "femto/error.h"
 #include "femto/testing/render.h"
@@ -128,6 +129,34 @@ TEST(BtfFile, CosineFlagIsDividedOut) {
         EXPECT_TRUE(data->header().cosine_flag);
         // BDI: half rounding of B cos, divided by cos >= cos 75 deg: 2^-11 relative of <= 1.
         expect_values(*data, o, format == btf::Format::Bdi ? 5e-4f : 2e-6f);
+    }
+}
+
+TEST(BtfFile, VGrooveTexelsAverageToTheClosedForm) {
+    // BTF B: every texel holds the exact mean of the groove over its column, so the mean of a
+    // row of texels (the coarsest filtered level) is the V-cavity's period average.
+    for (const btf::Format format : {btf::Format::Bdi, btf::Format::Dfmf}) {
+        auto o = small_options(format);
+        o.kind = btf::synth::Kind::VGroove;
+        o.width = 16;
+        o.height = 2;
+        const auto data = btf::read(write_synth(o, std::string("vg.") + btf::format_name(format)));
+        const btf::VGroove groove{o.vgroove_slope_deg * kPi / 180, 1.0};
+        double worst = 0;
+        for (uint32_t l = 0; l < 81; l += 4)
+            for (uint32_t v = 0; v < 81; v += 5) {
+                const double want =
+                    btf::vgroove_period_average(groove, o.directions[l], o.directions[v]);
+                for (int c = 0; c < 3; ++c) {
+                    double mean = 0;
+                    for (uint32_t x = 0; x < o.width; ++x) mean += data->value(x, 1, l, v)[c];
+                    mean /= o.width;
+                    worst = std::max(worst, std::abs(mean - want * o.vgroove_albedo[c]) /
+                                                (want * o.vgroove_albedo[c] + 1e-3));
+                }
+            }
+        // BDI: half floats, 2^-11 relative; DFMF: float factors, ~1e-7.
+        EXPECT_LE(worst, format == btf::Format::Bdi ? 5e-4 : 1e-6) << btf::format_name(format);
     }
 }
 

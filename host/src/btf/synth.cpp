@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "btf/vgroove.h"
+
 namespace femto::btf::synth {
 
 namespace {
@@ -89,7 +91,21 @@ Header header(const Options& o) {
     return h;
 }
 
+namespace {
+
+/// BTF B's W texel values (albedo 1) for one (light, view) pair: the groove shades no view
+/// below the horizon, and btf/vgroove.h needs v.z > 0.
+std::vector<double> vgroove_row(const Options& o, const Vec3& l, const Vec3& v) {
+    if (v.z <= 0.f) return std::vector<double>(o.width, 0.0);
+    const VGroove g{o.vgroove_slope_deg * kPi / 180, 1.0};
+    return vgroove_texels(g, int(o.width), l, v);
+}
+
+}  // namespace
+
 Color reference_value(const Options& o, uint32_t x, uint32_t y, uint32_t l, uint32_t v) {
+    if (o.kind == Kind::VGroove)
+        return o.vgroove_albedo * float(vgroove_row(o, o.directions[l], o.directions[v])[x]);
     return HarmonicBtf(o.width, o.height).value(x, y, o.directions[l], o.directions[v]);
 }
 
@@ -124,17 +140,43 @@ void encode_log_yuv(const Color& rgb, float out[3]) {
 }
 
 void write_bdi_file(const std::string& path, const Options& o) {
-    const size_t n = o.directions.size();
-    std::vector<float> values;
-    values.reserve(size_t(o.width) * o.height * n * n * 3);
-    for (uint32_t y = 0; y < o.height; ++y)
-        for (uint32_t x = 0; x < o.width; ++x)
-            for (uint32_t v = 0; v < n; ++v)
-                for (uint32_t l = 0; l < n; ++l) {
-                    const Color b = stored_value(o, x, y, l, v);
-                    values.insert(values.end(), {b.r, b.g, b.b});
+    const size_t n = o.directions.size(), abrdf = 3 * n * n;
+    std::vector<float> values(size_t(o.width) * o.height * abrdf);
+    for (uint32_t v = 0; v < n; ++v)
+        for (uint32_t l = 0; l < n; ++l) {
+            const std::vector<double> row = o.kind == Kind::VGroove
+                                                ? vgroove_row(o, o.directions[l], o.directions[v])
+                                                : std::vector<double>();
+            for (uint32_t y = 0; y < o.height; ++y)
+                for (uint32_t x = 0; x < o.width; ++x) {
+                    Color b = o.kind == Kind::VGroove ? o.vgroove_albedo * float(row[x])
+                                                      : reference_value(o, x, y, l, v);
+                    if (o.cosine_flag) b *= o.directions[l].z;
+                    float* out = &values[(size_t(y) * o.width + x) * abrdf + 3 * (l + n * v)];
+                    for (int c = 0; c < 3; ++c) out[c] = b[c];
                 }
+        }
     write_bdi(path, header(o), values);
+}
+
+/// BTF B as a DFMF of rank W per channel: U holds the columns' values (albedo 1, with the
+/// cosine under the flag), SxV picks texel (x, y)'s column x and the channel's albedo.
+Factorization vgroove_channel(const Options& o, int channel) {
+    const uint32_t n = uint32_t(o.directions.size()), w = o.width;
+    Factorization f{n * n, w * o.height, w, {}, {}};
+    f.u.resize(size_t(n) * n * w);
+    for (uint32_t v = 0; v < n; ++v)
+        for (uint32_t l = 0; l < n; ++l) {
+            const std::vector<double> row = vgroove_row(o, o.directions[l], o.directions[v]);
+            for (uint32_t x = 0; x < w; ++x)
+                f.u[size_t(l + n * v) * w + x] =
+                    float(o.cosine_flag ? row[x] * o.directions[l].z : row[x]);
+        }
+    f.sxv.assign(size_t(f.cols) * w, 0.f);
+    for (uint32_t x = 0; x < w; ++x)
+        for (uint32_t y = 0; y < o.height; ++y)
+            f.sxv[size_t(y + o.height * x) * w + x] = o.vgroove_albedo[channel];
+    return f;
 }
 
 /// One channel of model 11, factorized trivially: U = the whole matrix, SxV = identity.
@@ -198,6 +240,8 @@ void write(const std::string& path, const Options& o) {
         throw std::invalid_argument("btf synth: empty sampling or texture");
     if (o.color_model != kColorRgb && (o.format != Format::Dfmf || o.color_model != kColorLogYuv))
         throw std::invalid_argument("btf synth: colour model 11 is written for DFMF only");
+    if (o.kind == Kind::VGroove && (o.format == Format::Fmf || o.color_model != kColorRgb))
+        throw std::invalid_argument("btf synth: the V-groove BTF is written as BDI or RGB DFMF");
     switch (o.format) {
         case Format::Bdi:
             write_bdi_file(path, o);
@@ -208,8 +252,9 @@ void write(const std::string& path, const Options& o) {
         case Format::Dfmf: {
             std::array<Factorization, 3> ch;
             for (int c = 0; c < 3; ++c)
-                ch[c] =
-                    o.color_model == kColorLogYuv ? full_rank_channel(o, c) : rank3_channel(o, c);
+                ch[c] = o.kind == Kind::VGroove         ? vgroove_channel(o, c)
+                        : o.color_model == kColorLogYuv ? full_rank_channel(o, c)
+                                                        : rank3_channel(o, c);
             write_dfmf(path, header(o), ch, o.half);
             return;
         }

@@ -44,7 +44,11 @@ private:
     uint32_t width_, height_;
 };
 
-enum class Kind { Harmonic };
+/// BTF B: a Lambertian V-groove meso-structure (btf/vgroove.h) with grooves along the texture's
+/// y, one period across its width, albedo `vgroove_albedo` per channel: texel (x, y) holds the
+/// exact mean of the groove's reflectance factor over column x; the coarsest filtered level
+/// (the mean of all texels) is the V-cavity's closed-form period average.
+enum class Kind { Harmonic, VGroove };
 
 struct Options {
     Kind kind = Kind::Harmonic;
@@ -54,6 +58,8 @@ struct Options {
     int32_t color_model = kColorRgb;  ///< DFMF only: 0 or 11
     bool half = false;                ///< DFMF/FMF matrices as half floats (BDI always are)
     bool cosine_flag = false;         ///< store B cos(theta_l) and set the file's flag
+    double vgroove_slope_deg = 35;    ///< BTF B: facet slope angle
+    Color vgroove_albedo = Color(0.8f, 0.6f, 0.4f);
 };
 
 /// The header a synthetic BTF file gets.
