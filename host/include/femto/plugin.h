@@ -41,7 +41,8 @@ namespace femto {
 /// (18: integrator AOVs: Integrator::aov_names(), ContributionList::reset_aovs()/set_aov()/
 ///  aovs(), Film::prepare_aovs(); io::write_exr_rgb() takes extra named channels;
 ///  Bsdf::null_transmission(), trace_shadow()/connect_to_sensor() `through_masks`.)
-inline constexpr uint32_t kPluginAbiVersion = 18;
+/// (19: Hit::dpdu, the surface's u tangent, changes Hit's layout.)
+inline constexpr uint32_t kPluginAbiVersion = 19;
 
 struct PluginDescriptor {
     uint32_t abi_version;

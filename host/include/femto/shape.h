@@ -30,7 +30,12 @@ struct Hit {
     Vec3 ng;              ///< geometric normal (unit; points to the shape's "outside")
     Frame sh;             ///< shading frame (sh.n is the interpolated normal)
     Vec2 uv;              ///< surface parameterization
-    Vec3 wi;              ///< direction toward the ray origin, in the shading frame
+    /// World-space derivative of the position with respect to uv.x (u), not normalized: the
+    /// direction in which the texture's u grows, and by how much per unit u. Zero when the
+    /// shape's parameterization is degenerate at this point (a sphere's poles, a triangle with
+    /// degenerate uvs): materials then fall back to sh.s.
+    Vec3 dpdu;
+    Vec3 wi;  ///< direction toward the ray origin, in the shading frame
     const Shape* shape = nullptr;
     uint32_t prim = 0;  ///< triangle index (0 for spheres and cylinders)
     /// How far rays leaving this hit start off the surface: kRayOffsetScale times the largest

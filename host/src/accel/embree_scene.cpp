@@ -233,6 +233,7 @@ void EmbreeScene::fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const 
     hit.p = to_world.point(hit.p);
     hit.ng = normalize(to_world.normal(hit.ng));
     hit.sh = Frame(normalize(to_world.normal(hit.sh.n)));
+    hit.dpdu = to_world.vector(hit.dpdu);  // a derivative of p: moved by the linear part
     hit.wi = hit.sh.to_local(-ray.d);
     // The local offset scale (a bound on each coordinate's error) stretched by the transform
     // (its largest row sum of magnitudes bounds each world coordinate's), and the rounding of

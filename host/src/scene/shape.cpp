@@ -176,7 +176,8 @@ bool Shape::intersect_cylinder(const Ray& ray, float& t_hit) const {
 namespace {
 
 /// A hit on an analytic cylinder: the point projected onto the surface (as Mitsuba 0.6 does
-/// against round-off), the outward radial normal and Mitsuba's (phi / 2pi, z / length).
+/// against round-off), the outward radial normal, Mitsuba's (phi / 2pi, z / length) and the
+/// derivative of the point along that u: 2pi r times the circle's tangent.
 void fill_cylinder_hit(const Vec3& base, const Frame& f, float radius, float length, const Vec3& p,
                        Hit& hit, Vec3& normal) {
     const Vec3 rel = p - base;
@@ -187,9 +188,25 @@ void fill_cylinder_hit(const Vec3& base, const Frame& f, float radius, float len
     hit.p = base + f.n * z + normal * radius;
     const float phi = std::atan2(cy, cx);
     hit.uv = {(phi < 0 ? phi + 2 * kPi : phi) * kInvTwoPi, clamp(z / length, 0.f, 1.f)};
+    hit.dpdu = (f.t * cx - f.s * cy) * (2 * kPi * radius);
     hit.p_error =
         kRayOffsetScale *
         (std::max(max_abs_component(base), max_abs_component(base + f.n * length)) + radius);
+}
+
+/// dp/du on the triangle p0 p1 p2 with vertex uvs uv0 uv1 uv2: the solution of the 2x2 system
+/// dp_i2 = duv_i2.x dpdu + duv_i2.y dpdv (i = 0, 1), as in pbrt. Zero when the uvs do not span
+/// the plane: their determinant is tiny next to the product of the uv edges it is made of (the
+/// sine of the angle between them is below 1e-5, under a float's rounding of near-collinear
+/// uvs), or the result is not finite.
+Vec3 triangle_dpdu(const Vec3& p0, const Vec3& p1, const Vec3& p2, Vec2 uv0, Vec2 uv1, Vec2 uv2) {
+    const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
+    const float det = duv02.x * duv12.y - duv02.y * duv12.x;
+    const float edges = std::hypot(duv02.x, duv02.y) * std::hypot(duv12.x, duv12.y);
+    constexpr float kMinSine = 1e-5f;
+    if (!(std::abs(det) > kMinSine * edges)) return Vec3(0.f);
+    const Vec3 dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
+    return is_finite(dpdu) ? dpdu : Vec3(0.f);
 }
 
 }  // namespace
@@ -211,6 +228,9 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         const float phi = std::atan2(local.y, local.x);
         hit.uv = {(phi < 0 ? phi + 2 * kPi : phi) * kInvTwoPi,
                   std::acos(clamp(local.z, -1.f, 1.f)) * kInvPi};
+        // d/du of center + r (sin theta cos phi, sin theta sin phi, cos theta) with
+        // phi = 2pi u, in the world's axes as uv is (0 at the poles, where phi is undefined).
+        hit.dpdu = Vec3(-local.y, local.x, 0.f) * (2 * kPi * radius_);
     } else {
         const uint32_t i0 = mesh_.indices[3 * prim], i1 = mesh_.indices[3 * prim + 1],
                        i2 = mesh_.indices[3 * prim + 2];
@@ -228,12 +248,16 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
             const float ln = length(n);
             if (ln > 0) ns = n / ln;
         }
-        if (!mesh_.uvs.empty())
-            hit.uv = mesh_.uvs[i0] * w + mesh_.uvs[i1] * u + mesh_.uvs[i2] * v;
-        else
-            hit.uv = {u, v};
+        if (!mesh_.uvs.empty()) {
+            const Vec2 &uv0 = mesh_.uvs[i0], &uv1 = mesh_.uvs[i1], &uv2 = mesh_.uvs[i2];
+            hit.uv = uv0 * w + uv1 * u + uv2 * v;
+            hit.dpdu = triangle_dpdu(p0, p1, p2, uv0, uv1, uv2);
+        } else {
+            hit.uv = {u, v};  // the barycentrics of p = p0 w + p1 u + p2 v
+            hit.dpdu = p1 - p0;
+        }
     }
-    if (flip_normals_) {
+    if (flip_normals_) {  // the inside becomes the outside; the parameterization stays
         hit.ng = -hit.ng;
         ns = -ns;
     }
