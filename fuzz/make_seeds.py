@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,serialized,vol}.
+"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,serialized,vol,btf}.
 
 xml: every scenes/*/scene.xml of the repository (as <folder>.xml) with its film shrunk to 8 x 8
 pixels and 8 time bins (loading allocates the film: at the scenes' sizes, up to 200 MB, a load
 takes 0.5 s under AddressSanitizer), plus meshes.xml, a small scene that reads one seed of each
 binary kind (by names relative to the scene), so that mutated scenes reach those readers.
-ply, obj, vol: small valid files of each variant the readers handle (scenes/ holds none).
+ply, obj, vol, btf: small valid files of each variant the readers handle (scenes/ holds none;
+the BTFs are Bonn BDI, DFMF and FMF files of 3 directions and 2 x 2 texels, in the layout
+host/src/btf/btf_write.cpp writes).
 
 Usage: make_seeds.py REPO_DIR OUT_DIR
 """
@@ -129,6 +131,42 @@ MESHES_XML = """<scene version="3.0.0">
 """
 
 
+def btf_common(signature, width, height, dirs):
+    meta = struct.pack("<II", 291, 4) + bytes(240) + struct.pack("<f3fIII", 1.0, 1, 1, 1, 0, 0, 3)
+    meta += b"".join(struct.pack("<I", 1) + c for c in (b"R", b"G", b"B"))
+    out = signature + meta + struct.pack("<I", len(dirs))
+    for theta, phi in dirs:
+        out += struct.pack("<ffI", theta, phi, len(dirs))
+        out += b"".join(struct.pack("<ff", t, p) for t, p in dirs)
+    return out + struct.pack("<II", width, height)
+
+
+BTF_DIRS = [(0.0, 0.0), (0.5, 0.0), (0.5, 2.0)]
+
+
+def btf(kind):
+    n, w, h = len(BTF_DIRS), 2, 2
+    if kind == "bdi":
+        out = btf_common(b"!BDIF06R2!", w, h, BTF_DIRS) + struct.pack("<IB", 2, 2) + bytes([1] * (w * h))
+        out += struct.pack("<I", 0)  # rotations
+        values = [0.1 + 0.01 * i for i in range(w * 2 * n * n * 3)]
+        for _ in range(h // 2):  # chunks of 2 scan lines
+            out += struct.pack("<I", 2 * len(values)) + struct.pack(f"<{len(values)}e", *values)
+        return out
+    k = 2  # components
+    fmt, size = ("<{}f", 4) if kind == "dfmf" else ("<{}e", 2)
+    def matrix(rows):
+        return struct.pack(fmt.format(rows * k), *[0.3 + 0.05 * (i % 5) for i in range(rows * k)])
+    if kind == "dfmf":
+        out = btf_common(b"!DFMF08FCR", w, h, BTF_DIRS) + struct.pack("<IIi3f9f", 0, k, 0, 0, 0, 0,
+                                                                     1, 0, 0, 0, 1, 0, 0, 0, 1)
+        for _ in range(3):
+            out += struct.pack("<BIII", size, k, n * n, w * h) + matrix(1) + matrix(n * n) + matrix(w * h)
+        return out
+    out = btf_common(b"!FMF06FCR", w, h, BTF_DIRS) + struct.pack("<II", 0, k)
+    return out + struct.pack("<BIII", size, k, 3 * n * n, w * h) + matrix(1) + matrix(3 * n * n) + matrix(w * h)
+
+
 def main():
     repo, out = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     files = {
@@ -147,6 +185,9 @@ def main():
         "vol/ramp.vol": vol((2, 2, 2), [0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7], (-1, -1, -1, 1, 1, 1)),
         "vol/slab.vol": vol((3, 1, 2), [1, 2, 3, 0, 0, 0], (0, 0, 0, 2, 0.5, 1)),
         "xml/meshes.xml": MESHES_XML.encode(),
+        "btf/a.bdi": btf("bdi"),
+        "btf/a.dfmf": btf("dfmf"),
+        "btf/a.fmf": btf("fmf"),
     }
     for scene in sorted(repo.glob("scenes/*/scene.xml")):
         text = re.sub(r'(<default name="(res|bins)" value=")[0-9]+"', r'\g<1>8"', scene.read_text())

@@ -2,7 +2,7 @@
 # Builds the libFuzzer harnesses (build-fuzz, clang, ASan + UBSan) and fuzzes each one for a
 # bounded time on a fresh copy of its seed corpus; see docs/fuzzing.md.
 #
-#   scripts/fuzz.sh [SECONDS_PER_TARGET] [--runs N] [--targets "xml ply obj serialized vol"]
+#   scripts/fuzz.sh [SECONDS_PER_TARGET] [--runs N] [--targets "xml ply obj serialized vol btf"]
 #   scripts/fuzz.sh --replay DIR [TARGET]    run TARGET's harness (default xml) once over every
 #                                            file in DIR and report the share of located errors
 #
@@ -16,7 +16,7 @@ ROOT=$PWD
 
 SECONDS_PER_TARGET=30
 RUNS=""
-TARGETS="xml ply obj serialized vol"
+TARGETS="xml ply obj serialized vol btf"
 REPLAY=""
 REPLAY_TARGET=xml
 while [ $# -gt 0 ]; do

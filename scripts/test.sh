@@ -11,7 +11,8 @@ cmake --build build -j "$JOBS"
 ctest --test-dir build --output-on-failure -j "$JOBS"
 # AddressSanitizer + UBSan build: the mutation test, the loader's bad-input tests, the PLY
 # reader's corruption tests, the image texture's and environment map's bad files, the peer
-# transient formats, instancing, the cylinder, the mask, the CLI's error cases, the
+# transient formats, instancing, the cylinder, the mask, the BTF reader's corrupt files and the
+# btf material, the direction triangulation, the surface tangents, the CLI's error cases, the
 # temporal filters (the kernel's pilot and bin arithmetic, the films' spill accounting) and the
 # media (the .vol reader's corrupt files, volumetric paths, the connection and angular
 # strategies' sampling routines), every plugin built with its defaults (the schema test) and
@@ -26,7 +27,7 @@ cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DFEMTO_TESTS=ON -DFEMTO_SANITIZE=ON
 cmake --build build-sanitize -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j "$JOBS" \
-  -R '^(Mutation|Loader|PeerTransient|Instancing|ShapeCylinder|MaskErrors|MaskRender|EmitterCollimated|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|MeasurementSensors|Stress|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^(LightTracer|Bdpt)\.(BadInput|BitIdentical|TofPlaneArrival|GlassSlab|SplatsConserve|EachStrategyAloneEstimatesTheSameImage$)|^DistantLight\.(BadInput|EnvmapMapsPixels|MitsubaFiles)|^StreakFilm\.EqualsTransientRowsKernel|^cli\.(bad|unknown|missing|unwritable|compat)' 
+  -R '^(Mutation|Loader|BtfFile|BtfMaterial|DirectionMesh|VGroove|HitTangent|PeerTransient|Instancing|ShapeCylinder|MaskErrors|MaskRender|EmitterCollimated|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|MeasurementSensors|Stress|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^(LightTracer|Bdpt)\.(BadInput|BitIdentical|TofPlaneArrival|GlassSlab|SplatsConserve|EachStrategyAloneEstimatesTheSameImage$)|^DistantLight\.(BadInput|EnvmapMapsPixels|MitsubaFiles)|^StreakFilm\.EqualsTransientRowsKernel|^cli\.(bad|unknown|missing|unwritable|compat)' 
 # Fuzzing (fuzz/, docs/fuzzing.md): each libFuzzer harness (the scene loader, the PLY, OBJ,
 # serialized and .vol readers) for 20 s on its seed corpus, clang with ASan + UBSan, in
 # build-fuzz.

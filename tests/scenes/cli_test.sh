@@ -387,6 +387,32 @@ viz_bad_input)
     expect_exit 2 "\"$f\": it is not a regular file" -- timeout 10 "$femto" viz peak-time $f -o out/p.png
   done
   [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;
+btf_synth)
+  # femto btf synth writes each format, femto btf info reads it back, and a scene renders it.
+  for f in bdi dfmf fmf; do
+    "$femto" btf synth -o a.$f --format $f --width 8 --height 4 2>synth.txt || fail "synth $f"
+    grep -q "^wrote a\.$f ($(echo $f | tr a-z A-Z) 8x4, 81 light x 81 view directions)" synth.txt || fail "synth message: $(cat synth.txt)"
+    "$femto" btf info a.$f > info.txt || fail "info $f"
+    grep -q "^texels: *8 x 4" info.txt && grep -q "^directions: *81 lights x 81 views" info.txt || fail "info $f: $(cat info.txt)"
+  done
+  "$femto" btf synth -o g.btf --kind vgroove --format dfmf --sampling ubo2014 --width 16 --height 2 2>/dev/null || fail "vgroove"
+  grep -q "151 lights" <("$femto" btf info g.btf) || fail "vgroove info"
+  printf '<scene version="3.0.0"><sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor><emitter type="point"><point name="position" x="1" y="1" z="2"/></emitter><shape type="rectangle"><bsdf type="btf"><string name="filename" value="a.dfmf"/></bsdf></shape></scene>' > b.xml
+  "$femto" render b.xml -o out/b --spp 4 -q || fail "render"
+  read -r lo hi <<< "$(pixel_range out/b.exr)"
+  awk -v h="$hi" 'BEGIN { exit !(h > 0) }' || fail "the BTF plane is black (range $lo $hi)";;
+bad_btf)
+  # Bad BTF files and options: located errors, exit code 2, nothing written.
+  expect_exit 2 '^femto: error: cannot open "none\.btf": no such file' -- "$femto" btf info none.btf
+  printf '!DFMF08FCR\001\002' > short.btf
+  expect_exit 2 'BTF "short\.btf": meta data size: needs' -- "$femto" btf info short.btf
+  printf '<scene version="3.0.0"><sensor type="perspective"/><shape type="rectangle"><bsdf type="btf"><string name="filename" value="short.btf"/></bsdf></shape></scene>' > s.xml
+  expect_exit 2 '^femto: error: s\.xml:1:[0-9]+: "btf": BTF "[^"]*short\.btf": meta data size' -- "$femto" render s.xml -o out/s -q
+  expect_exit 2 'color-model 11.*dfmf only' -- "$femto" btf synth -o x.btf --format bdi --color-model 11
+  expect_exit 2 'width' -- "$femto" btf synth -o x.btf --width 0
+  expect_exit 2 'vgroove is written as --format bdi or dfmf' -- "$femto" btf synth -o x.btf --kind vgroove --format fmf
+  expect_exit 2 'needs a btf command|subcommand' -- "$femto" btf
+  [ ! -e x.btf ] && [ ! -e out/s.exr ] || fail "output written";;
 streak_film)
   streak_scene > streak.xml
   "$femto" render streak.xml -o out/st -q || fail "render failed"

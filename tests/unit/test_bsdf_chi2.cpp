@@ -17,9 +17,11 @@
 #include <string>
 #include <vector>
 
+#include "btf/synth.h"
 #include "chi2.h"
 #include "femto/bsdf.h"
 #include "femto/properties.h"
+#include "femto/testing/render.h"
 
 namespace {
 
@@ -40,6 +42,21 @@ struct BsdfChi2Case {
 void PrintTo(const BsdfChi2Case& c, std::ostream* os) { *os << c.name; }
 
 std::string angle_name(double deg) { return std::to_string(static_cast<int>(deg)) + "deg"; }
+
+// A small synthetic BTF (BTF A, docs/btf.md), written once per process.
+std::string synthetic_btf_file() {
+    static const std::string path = [] {
+        femto::btf::synth::Options o;
+        o.format = femto::btf::Format::Dfmf;
+        o.width = 4;
+        o.height = 4;
+        o.directions = femto::btf::ubo2003_directions();
+        const std::string file = (femto::testing::temp_dir("chi2-btf") / "a.dfmf").string();
+        femto::btf::synth::write(file, o);
+        return file;
+    }();
+    return path;
+}
 
 std::vector<BsdfChi2Case> make_cases() {
     std::vector<BsdfChi2Case> cases;
@@ -176,6 +193,13 @@ std::vector<BsdfChi2Case> make_cases() {
     };
     cases.push_back({"mask_diffuse_45deg", mask(0.35), 45.0, 0.7, {diffuse()}});
     cases.push_back({"mask_ggx_30deg", mask(0.6), 30.0, 0.7, {rough("ggx")}});
+    cases.push_back({"btf_synthetic_40deg",
+                     [] {
+                         Properties p("btf", {});
+                         p.set_string("filename", synthetic_btf_file());
+                         return p;
+                     },
+                     40.0});
     return cases;
 }
 

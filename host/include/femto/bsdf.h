@@ -85,9 +85,35 @@ public:
         return Color(is_null() ? 1.f : 0.f);
     }
 
+    /// False for a material whose f(wi, wo) differs from f(wo, wi), such as a measured BTF (its
+    /// relief shadows the light and masks the view differently). eval() and sample() always
+    /// take the camera's side as wi; paths traced from the lights go through eval_adjoint() and
+    /// sample_adjoint() below, which swap the roles for such materials.
+    virtual bool reciprocal() const { return true; }
+
     bool has_delta_only() const { return (flags() & kBsdfSmooth) == 0; }
     bool is_null() const { return flags() == kBsdfNull; }
 };
+
+/// The weight of light that arrives at `hit` from local direction `wi` (toward the light) and
+/// leaves toward `wo` (toward the camera's side), as light paths need it: f(wo, wi) |cos wo|,
+/// the material evaluated with the camera's side first. eval(hit, wi, wo) for reciprocal
+/// materials.
+inline Color eval_adjoint(const Bsdf& bsdf, const Hit& hit, const Vec3& wi, const Vec3& wo) {
+    if (bsdf.reciprocal()) return bsdf.eval(hit, wi, wo);
+    const float cos_in = std::abs(wi.z);
+    return cos_in > 0.f ? bsdf.eval(hit, wo, wi) * (std::abs(wo.z) / cos_in) : Color(0.f);
+}
+
+/// sample() for a light path arriving from `wi`: the direction from sample(), its non-delta
+/// weight recomputed as eval_adjoint() / pdf for non-reciprocal materials.
+inline BsdfSample sample_adjoint(const Bsdf& bsdf, const Hit& hit, const Vec3& wi, float u_lobe,
+                                 Vec2 u) {
+    BsdfSample s = bsdf.sample(hit, wi, u_lobe, u);
+    if (!bsdf.reciprocal() && s.valid() && !(s.sampled_lobe & kBsdfDelta))
+        s.weight = eval_adjoint(bsdf, hit, wi, s.wo) / s.pdf;
+    return s;
+}
 
 /// Samples a Lambertian lobe of colour `albedo` (f = albedo / pi on the front side): a
 /// cosine-weighted direction, weight = albedo; invalid when wi is behind the surface.

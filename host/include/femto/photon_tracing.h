@@ -142,7 +142,7 @@ void trace_photon_path(const Scene& scene, const LightPathStarts& starts,
         if (!detail::photon_useful(rules, path.depth + 1)) return;
         const VertexEvent event = apply_vertex_event(bsdf, hit, sampler, path.clock);
         const float u_lobe = sampler.next_1d();
-        const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
+        const BsdfSample bs = sample_adjoint(bsdf, hit, hit.wi, u_lobe, sampler.next_2d());
         if (!bs.valid() || bs.weight.is_black()) return;
         const Vec3 wo = hit.to_world(bs.wo);
         path.power =

@@ -41,7 +41,8 @@ namespace femto {
 /// (18: integrator AOVs: Integrator::aov_names(), ContributionList::reset_aovs()/set_aov()/
 ///  aovs(), Film::prepare_aovs(); io::write_exr_rgb() takes extra named channels;
 ///  Bsdf::null_transmission(), trace_shadow()/connect_to_sensor() `through_masks`.)
-/// (19: Hit::dpdu, the surface's u tangent, changes Hit's layout.)
+/// (19: Hit::dpdu, the surface's u tangent, changes Hit's layout; Bsdf::reciprocal() and
+///  eval_adjoint()/sample_adjoint() for paths traced from the lights.)
 inline constexpr uint32_t kPluginAbiVersion = 19;
 
 struct PluginDescriptor {

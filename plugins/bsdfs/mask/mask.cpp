@@ -91,6 +91,8 @@ public:
     }
 
     // What passes straight: the transparent part, and what the nested material lets through.
+    bool reciprocal() const override { return nested_->reciprocal(); }
+
     Color null_transmission(const Hit& hit) const override {
         const float alpha = opacity(hit);
         return Color(1.f - alpha) + nested_->null_transmission(hit) * alpha;

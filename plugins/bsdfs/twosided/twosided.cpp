@@ -58,6 +58,8 @@ public:
         return 0.f;
     }
 
+    bool reciprocal() const override { return front_->reciprocal() && back_->reciprocal(); }
+
     // The side's vertex event (delay, colour transfer: e.g. a two-sided `fluorescent`), with
     // wi mirrored on the back side as for the other calls.
     bool has_vertex_event() const override {

@@ -526,7 +526,9 @@ private:
             walk.ray = Ray{v.p, wo, 0.f, kInfinity};
         } else {
             const float u_lobe = sampler.next_1d();
-            const BsdfSample bs = v.bsdf->sample(v.hit, v.hit.wi, u_lobe, sampler.next_2d());
+            const BsdfSample bs =
+                light ? sample_adjoint(*v.bsdf, v.hit, v.hit.wi, u_lobe, sampler.next_2d())
+                      : v.bsdf->sample(v.hit, v.hit.wi, u_lobe, sampler.next_2d());
             if (!bs.valid() || bs.weight.is_black()) return false;
             wo = v.hit.to_world(bs.wo);
             scatter = bs.weight;
@@ -810,9 +812,9 @@ private:
     static Color scattering(const Vertex& v, const Vec3& d, bool light) {
         if (v.kind == Vertex::Kind::Medium) return Color(v.phase->eval(v.wi, d));
         if (v.kind != Vertex::Kind::Surface) return Color(0.f);
-        Color f = v.bsdf->eval(v.hit, v.hit.wi, v.hit.to_local(d));
-        if (light) f *= adjoint_shading_factor(v.hit, v.wi, d);
-        return f;
+        if (!light) return v.bsdf->eval(v.hit, v.hit.wi, v.hit.to_local(d));
+        return eval_adjoint(*v.bsdf, v.hit, v.hit.wi, v.hit.to_local(d)) *
+               adjoint_shading_factor(v.hit, v.wi, d);
     }
 
     // The shadow connection from camera vertex cv toward point `to`; `segment` hears of its

@@ -147,7 +147,7 @@ private:
                            SplatList& out) const {
         const SensorSample ss = scene.sensor().sample_direct(hit.p, sampler.next_2d());
         if (!ss.valid() || !path.clock.arrives_in_time(ss.distance)) return;
-        const Color f = bsdf.eval(hit, hit.wi, hit.to_local(ss.wi));
+        const Color f = eval_adjoint(bsdf, hit, hit.wi, hit.to_local(ss.wi));
         if (f.is_black()) return;
         const float adjoint = adjoint_shading_factor(hit, -path.ray.d, ss.wi);
         if (!(adjoint > 0)) return;
@@ -163,7 +163,7 @@ private:
     bool continue_from_surface(Sampler& sampler, LightPath& path, const Hit& hit, const Bsdf& bsdf,
                                const VertexEvent& event) const {
         const float u_lobe = sampler.next_1d();
-        const BsdfSample bs = bsdf.sample(hit, hit.wi, u_lobe, sampler.next_2d());
+        const BsdfSample bs = sample_adjoint(bsdf, hit, hit.wi, u_lobe, sampler.next_2d());
         if (!bs.valid() || bs.weight.is_black()) return false;
         const Vec3 wo = hit.to_world(bs.wo);
         const float adjoint = adjoint_shading_factor(hit, -path.ray.d, wo);
