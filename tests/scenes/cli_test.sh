@@ -74,9 +74,9 @@ plugins_unknown)
   expect_exit 2 '^femto: error: no plugin named "nosuch" \(`femto plugins` lists them\)' -- "$femto" plugins nosuch
   expect_exit 2 '^femto: error: no plugin named "transient_pth"; did you mean "transient_path"\?' -- "$femto" plugins transient_pth;;
 unknown_command)
-  expect_exit 2 '^femto: error: unknown command "rendr"; did you mean "render"\? \(commands: render, plugins, viz, bench\)$' -- "$femto" rendr x.xml
-  expect_exit 2 '^femto: error: unknown command "scene\.xml" \(commands: render, plugins, viz, bench\)$' -- "$femto" scene.xml
-  expect_exit 2 '^femto: error: `femto` needs a command \(commands: render, plugins, viz, bench\)$' -- "$femto"
+  expect_exit 2 '^femto: error: unknown command "rendr"; did you mean "render"\? \(commands: render, plugins, viz, bench, btf\)$' -- "$femto" rendr x.xml
+  expect_exit 2 '^femto: error: unknown command "scene\.xml" \(commands: render, plugins, viz, bench, btf\)$' -- "$femto" scene.xml
+  expect_exit 2 '^femto: error: `femto` needs a command \(commands: render, plugins, viz, bench, btf\)$' -- "$femto"
   expect_exit 2 '^femto: error: unknown viz command "peaktime"; did you mean "peak-time"\? \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz peaktime x.exr -o p.png
   expect_exit 2 '^femto: error: `femto viz` needs a viz command \(viz commands: frames, peak-time, rainbow, streak, unwarp\)$' -- "$femto" viz
   # Help still works without a command.

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "btf/btf_format.h"
+#include "btf/prefilter.h"
 #include "femto/btf.h"
 #include "femto/error.h"
 #include "femto/log.h"
@@ -233,6 +234,7 @@ public:
         return finish(raw, l);
     }
     uint32_t components() const override { return channels_[0].components; }
+    const Oriented& channel(int c) const { return channels_[c]; }
     uint64_t memory_bytes() const override {
         uint64_t n = 0;
         for (const Oriented& o : channels_) n += (o.angular.size() + o.spatial.size()) * 4;
@@ -255,6 +257,7 @@ public:
         return finish(raw, l);
     }
     uint32_t components() const override { return m_.components; }
+    const Oriented& matrix() const { return m_; }
     uint64_t memory_bytes() const override { return (m_.angular.size() + m_.spatial.size()) * 4; }
 
 private:
@@ -294,7 +297,68 @@ std::shared_ptr<const Data> read_fmf(Reader& in, Header h, bool versioned) {
     return std::make_shared<FmfData>(std::move(h), std::move(m));
 }
 
+/// Spatial factor rows from the file's order (y + height x) to Factors' (x + width y).
+std::vector<float> spatial_rows(const std::vector<float>& s, const Header& h, uint32_t k) {
+    std::vector<float> out(s.size());
+    for (uint32_t x = 0; x < h.width; ++x)
+        for (uint32_t y = 0; y < h.height; ++y)
+            std::copy_n(&s[(y + size_t(h.height) * x) * k], k, &out[(x + size_t(h.width) * y) * k]);
+    return out;
+}
+
+/// Angular factor rows (l + lights v) of channel c, with `stride` channels per row in the
+/// source (3 for FMF) and the cosine flag divided out.
+std::vector<float> angular_rows(const std::vector<float>& a, const Header& h, uint32_t k, int c,
+                                int stride) {
+    const size_t rows = h.lights.size() * h.views.size();
+    std::vector<float> out(rows * k);
+    for (size_t r = 0; r < rows; ++r) {
+        const float cos_light = h.lights[r % h.lights.size()].z;
+        const float scale = h.cosine_flag ? (cos_light > 0.f ? 1.f / cos_light : 0.f) : 1.f;
+        for (uint32_t i = 0; i < k; ++i) out[r * k + i] = a[(r * stride + c) * k + i] * scale;
+    }
+    return out;
+}
+
 }  // namespace
+
+bool linear_factors(const Data& data, Factors& out) {
+    const Header& h = data.header();
+    if (h.color_model != kColorRgb || h.dynamic_range_method != 0) return false;
+    out.width = h.width;
+    out.height = h.height;
+    out.lights = uint32_t(h.lights.size());
+    out.views = uint32_t(h.views.size());
+    if (const auto* dfmf = dynamic_cast<const DfmfData*>(&data)) {
+        out.components = 0;
+        for (int c = 0; c < 3; ++c)
+            out.components = std::max(out.components, dfmf->channel(c).components);
+        for (int c = 0; c < 3; ++c) {
+            // Channels may keep different numbers of components: pad with zeros to the largest.
+            const Oriented& o = dfmf->channel(c);
+            const uint32_t k = o.components, kk = out.components;
+            const std::vector<float> a = angular_rows(o.angular, h, k, 0, 1);
+            const std::vector<float> s = spatial_rows(o.spatial, h, k);
+            out.angular[c].assign(a.size() / k * kk, 0.f);
+            out.spatial[c].assign(s.size() / k * kk, 0.f);
+            for (size_t r = 0; r < a.size() / k; ++r)
+                std::copy_n(&a[r * k], k, &out.angular[c][r * kk]);
+            for (size_t r = 0; r < s.size() / k; ++r)
+                std::copy_n(&s[r * k], k, &out.spatial[c][r * kk]);
+        }
+        return true;
+    }
+    if (const auto* fmf = dynamic_cast<const FmfData*>(&data)) {
+        const Oriented& m = fmf->matrix();
+        out.components = m.components;
+        for (int c = 0; c < 3; ++c) {
+            out.angular[c] = angular_rows(m.angular, h, m.components, c, 3);
+            out.spatial[c] = spatial_rows(m.spatial, h, m.components);
+        }
+        return true;
+    }
+    return false;
+}
 
 Color Data::finish(const float raw[3], uint32_t light) const {
     constexpr float kEps = 1e-5f;  // btflib's default offset of the logarithms
