@@ -7,14 +7,15 @@
 #include <cstdio>
 
 #include "btf/pca.h"
-#include "btf/prefilter.h"
 #include "btf/synth.h"
+#include "femto/btf_prefilter.h"
 #include "femto/testing/render.h"
 
 namespace {
 
 using namespace femto;
 using namespace femto::btf;
+constexpr double kPiD = 3.14159265358979323846;
 
 synth::Options btf_a(Format format) {
     synth::Options o;

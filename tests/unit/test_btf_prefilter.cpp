@@ -7,8 +7,8 @@
 #include <cmath>
 
 #include "btf/angular_filter.h"
-#include "btf/prefilter.h"
 #include "btf/synth.h"
+#include "femto/btf_prefilter.h"
 #include "femto/testing/render.h"
 
 namespace {
@@ -197,6 +197,59 @@ TEST(BtfPrefilter, FormatsAndCosineFlagGiveTheSameHierarchy) {
     const std::string bdi = (femto::testing::temp_dir("btf-prefilter") / "a.bdi").string();
     synth::write(bdi, btf_a(Format::Bdi));
     EXPECT_FALSE(linear_factors(*read(bdi), none));
+}
+
+}  // namespace
+
+namespace {
+
+DirectionMesh::Weights at_sample(uint32_t i) {
+    DirectionMesh::Weights w;
+    w.index[0] = i;
+    w.weight[0] = 1.f;
+    return w;
+}
+
+TEST(BtfPrefilter, LookupSelectsAndBlendsLevelsAndCones) {
+    const synth::Options o = btf_a(Format::Dfmf);
+    const Hierarchy h(factors_of(o, "lookup.dfmf"), o.directions, o.directions,
+                      PrefilterSettings{});
+    const double deg = kPiD / 180;
+    // Texel (1, 0) of level 1 (4 x 2): its centre in uv (row 0 is the top).
+    const Vec2 uv1 = {1.5f / 4, 1.f - 0.5f / 2};
+    const auto l = at_sample(12), v = at_sample(57);
+    auto near = [](const Color& a, const Color& b, float tol) {
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], tol);
+    };
+    near(h.lookup(uv1, 2.0, 30 * deg, 15 * deg, l, v), h.value(1, 1, 0, 2, 1, 12, 57), 1e-6f);
+    // Halfway between cones 15 and 30 (light) and between 30 and 45 (view).
+    const Color mid = h.lookup(uv1, 2.0, 22.5 * deg, 37.5 * deg, l, v);
+    Color want(0.f);
+    for (size_t i : {1u, 2u})
+        for (size_t j : {2u, 3u}) want += h.value(1, 1, 0, i, j, 12, 57) * 0.25f;
+    near(mid, want, 1e-6f);
+    // Between levels 1 and 2 (ratio 2^1.5): at a point that is a texel centre of neither,
+    // the blend of the two levels' bilinear lookups.
+    const Vec2 uv = {0.3f, 0.8f};
+    const Color a = h.lookup(uv, 2.0, 0, 0, l, v), b = h.lookup(uv, 4.0, 0, 0, l, v);
+    near(h.lookup(uv, std::pow(2.0, 1.5), 0, 0, l, v), (a + b) * 0.5f, 1e-6f);
+    // Below one texel per pixel: the finest level; beyond the coarsest: the coarsest.
+    near(h.lookup(uv, 0.25, 0, 0, l, v), h.lookup(uv, 1.0, 0, 0, l, v), 0.f);
+    near(h.lookup(uv, 1e6, 0, 0, l, v), h.value(3, 0, 0, 0, 0, 12, 57), 1e-6f);
+    // Cones beyond the last angle clamp to it.
+    near(h.lookup(uv1, 2.0, 80 * deg, 60 * deg, l, v), h.value(1, 1, 0, 3, 3, 12, 57), 1e-6f);
+}
+
+TEST(BtfPrefilter, BadSettingsAreRefused) {
+    const synth::Options o = btf_a(Format::Dfmf);
+    const Factors f = factors_of(o, "bad.dfmf");
+    PrefilterSettings s;
+    s.cone_angles_deg = {5, 15};
+    EXPECT_THROW(Hierarchy(f, o.directions, o.directions, s), std::invalid_argument);
+    s.cone_angles_deg = {0, 30, 15};
+    EXPECT_THROW(Hierarchy(f, o.directions, o.directions, s), std::invalid_argument);
+    s.cone_angles_deg = {0, 15};
+    EXPECT_THROW(Hierarchy(f, o.directions, ubo2014_directions(), s), std::invalid_argument);
 }
 
 }  // namespace

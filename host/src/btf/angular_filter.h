@@ -23,13 +23,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "femto/btf_prefilter.h"
 #include "femto/math.h"
 
 namespace femto::btf {
 
 inline constexpr double kPiD = 3.14159265358979323846;
-
-enum class FilterKernel { Box, Gaussian, Lanczos };
 
 /// Number of real spherical harmonics up to `degree`: (degree + 1)^2.
 inline int sh_count(int degree) { return (degree + 1) * (degree + 1); }

@@ -8,8 +8,8 @@
 #include <cstring>
 
 #include "btf/btf_format.h"
-#include "btf/prefilter.h"
 #include "femto/btf.h"
+#include "femto/btf_prefilter.h"
 #include "femto/error.h"
 #include "femto/log.h"
 

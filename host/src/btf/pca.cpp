@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "femto/btf_prefilter.h"
 #include "femto/random.h"
 
 namespace femto::btf {

@@ -1,7 +1,10 @@
-#include "btf/prefilter.h"
-
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+
+#include "btf/angular_filter.h"
+#include "femto/btf_prefilter.h"
 
 namespace femto::btf {
 
@@ -58,18 +61,25 @@ Hierarchy::Hierarchy(const Factors& base, const std::vector<Vec3>& lights,
     : lights_(base.lights),
       views_(base.views),
       components_(base.components),
-      cones_(settings.cone_angles_deg.size()) {
-    if (lights.size() != base.lights || views.size() != base.views || cones_ == 0)
+      cones_(settings.cone_angles_deg) {
+    if (lights.size() != base.lights || views.size() != base.views)
         throw std::invalid_argument("Hierarchy: the factors do not match the sampling");
+    if (cones_.empty() || cones_[0] != 0 || !std::is_sorted(cones_.begin(), cones_.end()) ||
+        std::adjacent_find(cones_.begin(), cones_.end()) != cones_.end() || cones_.back() > 90)
+        throw std::invalid_argument("Hierarchy: cone angles must increase from 0 to at most 90");
+    if (components_ > kMaxComponents)
+        throw std::invalid_argument("Hierarchy: more than " + std::to_string(kMaxComponents) +
+                                    " components");
+    for (double& a : cones_) a *= kPiD / 180;
     const AngularFilter light_filter(lights, settings.sh_degree, settings.regularization);
     const AngularFilter view_filter(views, settings.sh_degree, settings.regularization);
     std::vector<std::vector<double>> fl, fv;
-    for (double a : settings.cone_angles_deg) {
-        fl.push_back(light_filter.matrix(settings.kernel, a * kPiD / 180));
-        fv.push_back(view_filter.matrix(settings.kernel, a * kPiD / 180));
+    for (double a : cones_) {
+        fl.push_back(light_filter.matrix(settings.kernel, a));
+        fv.push_back(view_filter.matrix(settings.kernel, a));
     }
-    for (size_t i = 0; i < cones_; ++i)
-        for (size_t j = 0; j < cones_; ++j)
+    for (size_t i = 0; i < cones_.size(); ++i)
+        for (size_t j = 0; j < cones_.size(); ++j)
             for (int c = 0; c < 3; ++c)
                 angular_.push_back(
                     filter_angular(base.angular[c], lights_, views_, components_, fl[i], fv[j]));
@@ -95,12 +105,94 @@ Color Hierarchy::value(int level, uint32_t x, uint32_t y, size_t light_cone, siz
     const size_t a_row = l + size_t(lights_) * v;
     const size_t s_row = x + size_t(widths_[size_t(level)]) * y;
     for (int c = 0; c < 3; ++c) {
-        const float* a =
-            &angular_[(light_cone * cones_ + view_cone) * 3 + size_t(c)][a_row * components_];
+        const float* a = &angular_[(light_cone * cones_.size() + view_cone) * 3 + size_t(c)]
+                                  [a_row * components_];
         const float* s = &spatial_[size_t(level) * 3 + size_t(c)][s_row * components_];
         float sum = 0.f;
         for (uint32_t k = 0; k < components_; ++k) sum += a[k] * s[k];
         out[c] = sum;
+    }
+    return out;
+}
+
+void Hierarchy::bracket_cone(double angle, size_t& i0, size_t& i1, float& t) const {
+    const size_t n = cones_.size();
+    if (!(angle > 0) || n == 1) {
+        i0 = i1 = 0;
+        t = 0.f;
+        return;
+    }
+    if (angle >= cones_.back()) {
+        i0 = i1 = n - 1;
+        t = 0.f;
+        return;
+    }
+    i1 = size_t(std::upper_bound(cones_.begin(), cones_.end(), angle) - cones_.begin());
+    i0 = i1 - 1;
+    t = float((angle - cones_[i0]) / (cones_[i1] - cones_[i0]));
+}
+
+void Hierarchy::add_spatial(int level, Vec2 uv, float weight, float* s) const {
+    const uint32_t w = widths_[size_t(level)], h = heights_[size_t(level)];
+    const double fx = double(uv.x) * w - 0.5, fy = (1.0 - double(uv.y)) * h - 0.5;
+    const double x0 = std::floor(fx), y0 = std::floor(fy);
+    const float tx = float(fx - x0), ty = float(fy - y0);
+    auto wrap = [](double i, uint32_t n) {
+        const double m = std::fmod(i, double(n));
+        return uint32_t(m < 0 ? m + n : m) % n;
+    };
+    const uint32_t k = components_;
+    for (int corner = 0; corner < 4; ++corner) {
+        const int dx = corner & 1, dy = corner >> 1;
+        const float wc = weight * (dx ? tx : 1.f - tx) * (dy ? ty : 1.f - ty);
+        if (wc == 0.f) continue;
+        const size_t row = wrap(x0 + dx, w) + size_t(w) * wrap(y0 + dy, h);
+        for (int c = 0; c < 3; ++c) {
+            const float* in = &spatial_[size_t(level) * 3 + size_t(c)][row * k];
+            for (uint32_t i = 0; i < k; ++i) s[size_t(c) * k + i] += wc * in[i];
+        }
+    }
+}
+
+Color Hierarchy::lookup(Vec2 uv, double texel_ratio, double light_cone, double view_cone,
+                        const DirectionMesh::Weights& light,
+                        const DirectionMesh::Weights& view) const {
+    const uint32_t k = components_;
+    // The spatial factor, blended between the two levels around log2(texel_ratio).
+    float s[3 * kMaxComponents] = {};
+    const double level =
+        std::clamp(texel_ratio > 1 ? std::log2(texel_ratio) : 0.0, 0.0, double(levels() - 1));
+    const int l0 = int(level), l1 = std::min(l0 + 1, levels() - 1);
+    const float tl = float(level - l0);
+    add_spatial(l0, uv, 1.f - tl, s);
+    if (tl > 0.f) add_spatial(l1, uv, tl, s);
+    // The angular factors of up to four cone pairs, each blended between the directions.
+    size_t li[2], vi[2];
+    float lt, vt;
+    bracket_cone(light_cone, li[0], li[1], lt);
+    bracket_cone(view_cone, vi[0], vi[1], vt);
+    Color out(0.f);
+    for (int pair = 0; pair < 4; ++pair) {
+        const int a = pair & 1, b = pair >> 1;
+        const float wp = (a ? lt : 1.f - lt) * (b ? vt : 1.f - vt);
+        if (wp == 0.f) continue;
+        const size_t index = li[a] * cones_.size() + vi[b];
+        for (int c = 0; c < 3; ++c) {
+            const std::vector<float>& angular = angular_[index * 3 + size_t(c)];
+            float sum = 0.f;
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) {
+                    const float w = light.weight[i] * view.weight[j];
+                    if (w == 0.f) continue;
+                    const float* row =
+                        &angular[(light.index[i] + size_t(lights_) * view.index[j]) * k];
+                    const float* sc = &s[size_t(c) * k];
+                    float dot = 0.f;
+                    for (uint32_t q = 0; q < k; ++q) dot += row[q] * sc[q];
+                    sum += w * dot;
+                }
+            out[c] += wp * sum;
+        }
     }
     return out;
 }
