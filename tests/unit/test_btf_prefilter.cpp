@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "btf/angular_filter.h"
 #include "btf/synth.h"
@@ -250,6 +251,70 @@ TEST(BtfPrefilter, BadSettingsAreRefused) {
     EXPECT_THROW(Hierarchy(f, o.directions, o.directions, s), std::invalid_argument);
     s.cone_angles_deg = {0, 15};
     EXPECT_THROW(Hierarchy(f, o.directions, ubo2014_directions(), s), std::invalid_argument);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(BtfPrefilter, CacheIsWrittenReusedAndKeyedByFileAndSettings) {
+    const auto dir = femto::testing::temp_dir("btf-cache");
+    const std::string file = (dir / "c.dfmf").string();
+    synth::Options o = btf_a(Format::Dfmf);
+    synth::write(file, o);
+    const PcaSettings pca;
+    PrefilterSettings settings;
+    PrefilterReport first, second, other, changed, corrupt;
+    const auto h1 = prefiltered(file, *read(file), settings, pca, true, first);
+    EXPECT_FALSE(first.from_cache);
+    ASSERT_TRUE(std::filesystem::exists(first.cache_file)) << first.cache_problem;
+    const auto h2 = prefiltered(file, *read(file), settings, pca, true, second);
+    EXPECT_TRUE(second.from_cache);
+    EXPECT_EQ(second.cache_file, first.cache_file);
+    const auto l = at_sample(30), v = at_sample(7);
+    for (double ratio : {1.0, 3.0, 8.0}) {
+        const Color a = h1->lookup({0.3f, 0.4f}, ratio, 0.2, 0.5, l, v);
+        const Color b = h2->lookup({0.3f, 0.4f}, ratio, 0.2, 0.5, l, v);
+        EXPECT_TRUE(a == b);
+    }
+    // Other settings: another cache file.
+    settings.cone_angles_deg = {0, 20, 40};
+    prefiltered(file, *read(file), settings, pca, true, other);
+    EXPECT_FALSE(other.from_cache);
+    EXPECT_NE(other.cache_file, first.cache_file);
+    // Another file under the same name: its CRC differs, the old cache is not used.
+    settings = PrefilterSettings{};
+    o.cosine_flag = true;
+    synth::write(file, o);
+    prefiltered(file, *read(file), settings, pca, true, changed);
+    EXPECT_FALSE(changed.from_cache);
+    // A truncated cache file is rebuilt, not trusted.
+    const auto size = std::filesystem::file_size(changed.cache_file);
+    std::filesystem::resize_file(changed.cache_file, size / 2);
+    prefiltered(file, *read(file), settings, pca, true, corrupt);
+    EXPECT_FALSE(corrupt.from_cache);
+    EXPECT_EQ(std::filesystem::file_size(corrupt.cache_file), size);
+}
+
+TEST(BtfPrefilter, AnUnwritableCacheIsReportedNotFatal) {
+    const auto dir = femto::testing::temp_dir("btf-cache-blocked");
+    const std::string file = (dir / "b.dfmf").string();
+    synth::write(file, btf_a(Format::Dfmf));
+    PrefilterReport probe;
+    prefiltered(file, *read(file), PrefilterSettings{}, PcaSettings{}, false, probe);
+    EXPECT_TRUE(probe.cache_file.empty());
+    // Find the cache's name, then put a directory in its way.
+    PrefilterReport named;
+    prefiltered(file, *read(file), PrefilterSettings{}, PcaSettings{}, true, named);
+    const std::string blocked = named.cache_file;
+    std::filesystem::remove(blocked);
+    std::filesystem::create_directories(std::filesystem::path(blocked) / "x");
+    PrefilterReport report;
+    const auto h = prefiltered(file, *read(file), PrefilterSettings{}, PcaSettings{}, true, report);
+    ASSERT_TRUE(h);
+    EXPECT_FALSE(report.from_cache);
+    EXPECT_FALSE(report.cache_problem.empty());
+    EXPECT_FALSE(std::filesystem::exists(blocked + ".tmp"));
 }
 
 }  // namespace

@@ -14,6 +14,8 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "femto/btf.h"
@@ -85,17 +87,43 @@ public:
 
     static constexpr uint32_t kMaxComponents = 512;  ///< lookup() keeps k floats on the stack
 
+    /// Writes the hierarchy to `path` (binary, this machine's byte order), tagged with `key`.
+    void save(const std::string& path, const std::string& key) const;
+    /// The hierarchy saved at `path` with the same `key`, or null (no file, another key, or a
+    /// file that does not read back whole).
+    static std::shared_ptr<Hierarchy> load(const std::string& path, const std::string& key);
+
 private:
+    Hierarchy() = default;
     /// The two nearest cone indices around `angle` and the weight of the second.
     void bracket_cone(double angle, size_t& i0, size_t& i1, float& t) const;
     /// Adds weight x the bilinear spatial factor of level `level` at uv to s (3 x k).
     void add_spatial(int level, Vec2 uv, float weight, float* s) const;
 
-    uint32_t lights_, views_, components_;
+    uint32_t lights_ = 0, views_ = 0, components_ = 0;
     std::vector<double> cones_;  // radians
     std::vector<uint32_t> widths_, heights_;
     // angular_[(i * cones + j) * 3 + c]: (lights x views) x k; spatial_[level * 3 + c].
     std::vector<std::vector<float>> angular_, spatial_;
 };
+
+/// What prefiltered() did, for a log line.
+struct PrefilterReport {
+    bool from_cache = false;
+    std::string cache_file;     ///< empty when caching is off or impossible
+    std::string cache_problem;  ///< why the cache could not be written, if it could not
+    bool factorized = false;    ///< PCA was needed (BDI, log data)
+    PcaReport pca;
+    double seconds = 0;
+    uint64_t memory_bytes = 0;
+};
+
+/// The hierarchy of the BTF file `path` (read as `data`): loaded from the cache file next to
+/// it when one matches (same file contents by size and CRC-32, same settings), else built
+/// (from the file's factors, or from PCA) and, with `use_cache`, written there.
+std::shared_ptr<const Hierarchy> prefiltered(const std::string& path, const Data& data,
+                                             const PrefilterSettings& settings,
+                                             const PcaSettings& pca, bool use_cache,
+                                             PrefilterReport& report);
 
 }  // namespace femto::btf
