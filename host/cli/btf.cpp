@@ -8,6 +8,7 @@
 
 #include "btf/synth.h"
 #include "femto/btf.h"
+#include "femto/btf_prefilter.h"
 #include "femto/error.h"
 
 namespace femto::cli {
@@ -22,6 +23,11 @@ struct SynthArgs {
     bool half = false, cosine_flag = false;
 } g_synth;
 std::string g_info_file;
+struct PrefilterArgs {
+    bool show = false, no_cache = false;
+    uint32_t components = 16;
+    std::string filter = "box";
+} g_prefilter;
 CLI::App *g_btf = nullptr, *g_synth_cmd = nullptr, *g_info_cmd = nullptr;
 
 btf::Format parse_format(const std::string& name) {
@@ -60,6 +66,49 @@ int run_synth() {
     return 0;
 }
 
+/// The number of leading singular values that hold `share` of the energy.
+size_t components_for(const std::vector<double>& sigma, double share) {
+    double total = 0, kept = 0;
+    for (double s : sigma) total += s * s;
+    for (size_t i = 0; i < sigma.size(); ++i) {
+        kept += sigma[i] * sigma[i];
+        if (kept >= share * total) return i + 1;
+    }
+    return sigma.size();
+}
+
+void print_prefilter(const btf::Data& data) {
+    btf::PrefilterSettings settings;
+    settings.kernel = g_prefilter.filter == "gaussian"  ? btf::FilterKernel::Gaussian
+                      : g_prefilter.filter == "lanczos" ? btf::FilterKernel::Lanczos
+                                                        : btf::FilterKernel::Box;
+    btf::PcaSettings pca;
+    pca.components = g_prefilter.components;
+    btf::PrefilterReport report;
+    const auto h =
+        btf::prefiltered(g_info_file, data, settings, pca, !g_prefilter.no_cache, report);
+    fmt::print("prefilter:   {} filter, {} levels x {} x {} cones, {:.1f} MB, {} in {:.2f} s\n",
+               g_prefilter.filter, h->levels(), h->cone_count(), h->cone_count(),
+               double(report.memory_bytes) / (1 << 20),
+               report.from_cache ? "loaded from " + report.cache_file : "built", report.seconds);
+    if (!report.cache_problem.empty())
+        fmt::print("cache:       not written: {}\n", report.cache_problem);
+    if (report.factorized)
+        fmt::print("PCA:         k = {}: energy kept {:.5f} {:.5f} {:.5f} (R G B)\n",
+                   h->components(), report.pca.energy_kept[0], report.pca.energy_kept[1],
+                   report.pca.energy_kept[2]);
+    fmt::print("level  texels      components for 99% / 99.9% of the energy (R G B)\n");
+    for (int level = 0; level < h->levels(); ++level) {
+        fmt::print("{:5}  {:>5} x {:<5}", level, h->width(level), h->height(level));
+        for (double share : {0.99, 0.999}) {
+            fmt::print(" ");
+            for (int c = 0; c < 3; ++c)
+                fmt::print(" {:3}", components_for(h->level_spectrum(level, c), share));
+        }
+        fmt::print("\n");
+    }
+}
+
 int run_info() {
     const auto data = btf::read(g_info_file);
     const btf::Header& h = data->header();
@@ -73,6 +122,7 @@ int run_info() {
     if (data->components() > 0) fmt::print("components:  {}\n", data->components());
     fmt::print("memory:      {:.1f} MB\n", double(data->memory_bytes()) / (1 << 20));
     fmt::print("setup:       {}\n", h.measurement_setup);
+    if (g_prefilter.show) print_prefilter(*data);
     return 0;
 }
 
@@ -108,6 +158,17 @@ CLI::App* add_btf_command(CLI::App& app) {
                           "Store B cos(theta_light) and set the file's cosine flag");
     g_info_cmd = g_btf->add_subcommand("info", "Print what a BTF file holds");
     g_info_cmd->add_option("file", g_info_file, "BTF file (BDI, DFMF, FMF)")->required();
+    g_info_cmd->add_flag("--prefilter", g_prefilter.show,
+                         "Build (or load) the prefiltered hierarchy and print, per level, the "
+                         "components its energy needs");
+    g_info_cmd
+        ->add_option("--components", g_prefilter.components,
+                     "PCA components for files without linear factors (BDI, log data)")
+        ->check(CLI::Range(1, 512));
+    g_info_cmd->add_option("--filter", g_prefilter.filter, "box, gaussian or lanczos")
+        ->check(CLI::IsMember({"box", "gaussian", "lanczos"}));
+    g_info_cmd->add_flag("--no-cache", g_prefilter.no_cache,
+                         "Neither read nor write the hierarchy's cache file");
     return g_btf;
 }
 

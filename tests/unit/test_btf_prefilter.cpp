@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "btf/angular_filter.h"
+#include "btf/pca.h"
 #include "btf/synth.h"
 #include "femto/btf_prefilter.h"
 #include "femto/testing/render.h"
@@ -315,6 +316,34 @@ TEST(BtfPrefilter, AnUnwritableCacheIsReportedNotFatal) {
     EXPECT_FALSE(report.from_cache);
     EXPECT_FALSE(report.cache_problem.empty());
     EXPECT_FALSE(std::filesystem::exists(blocked + ".tmp"));
+}
+
+}  // namespace
+
+namespace {
+
+TEST(BtfPrefilter, LevelSpectrumIsTheLevelsSingularValues) {
+    // Compare with the singular values of the level's explicit matrix (texels x texels Gram).
+    const synth::Options o = btf_a(Format::Dfmf);
+    const Hierarchy h(factors_of(o, "spectrum.dfmf"), o.directions, o.directions,
+                      PrefilterSettings{});
+    for (int level : {0, 1, 3}) {
+        const size_t texels = size_t(h.width(level)) * h.height(level);
+        std::vector<double> gram(texels * texels, 0.0), values, vectors;
+        for (size_t i = 0; i < texels; ++i)
+            for (size_t j = 0; j < texels; ++j)
+                for (uint32_t v = 0; v < 81; ++v)
+                    for (uint32_t l = 0; l < 81; ++l) {
+                        const uint32_t w = h.width(level);
+                        gram[i * texels + j] +=
+                            double(h.value(level, uint32_t(i % w), uint32_t(i / w), 0, 0, l, v).g) *
+                            h.value(level, uint32_t(j % w), uint32_t(j / w), 0, 0, l, v).g;
+                    }
+        symmetric_eigen(gram, texels, values, vectors);
+        const std::vector<double> spectrum = h.level_spectrum(level, 1);
+        for (size_t i = 0; i < std::min<size_t>(3, texels); ++i)
+            EXPECT_NEAR(spectrum[i], std::sqrt(std::max(0.0, values[i])), 1e-4 * spectrum[0]);
+    }
 }
 
 }  // namespace

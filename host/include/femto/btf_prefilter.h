@@ -84,6 +84,10 @@ public:
     Color lookup(Vec2 uv, double texel_ratio, double light_cone, double view_cone,
                  const DirectionMesh::Weights& light, const DirectionMesh::Weights& view) const;
     uint64_t memory_bytes() const;
+    /// The singular values (decreasing) of level `level`'s unfiltered-cone matrix of channel c,
+    /// (lights x views) x texels: how many components that level needs for a share of its
+    /// energy (thesis Fig. 3.17: coarser levels need far fewer).
+    std::vector<double> level_spectrum(int level, int c) const;
 
     static constexpr uint32_t kMaxComponents = 512;  ///< lookup() keeps k floats on the stack
 

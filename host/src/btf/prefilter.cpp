@@ -4,6 +4,7 @@
 #include <string>
 
 #include "btf/angular_filter.h"
+#include "btf/pca.h"
 #include "femto/btf_prefilter.h"
 
 namespace femto::btf {
@@ -195,6 +196,37 @@ Color Hierarchy::lookup(Vec2 uv, double texel_ratio, double light_cone, double v
         }
     }
     return out;
+}
+
+std::vector<double> Hierarchy::level_spectrum(int level, int c) const {
+    // M = A S^T has the singular values sqrt(eig((A^T A)(S^T S))); with the Cholesky-free
+    // symmetric form G = R_A (S^T S) R_A^T, where A^T A = R_A^T R_A, the eigenvalues are the
+    // same. Here: eigen-decompose A^T A = V D V^T, take R = D^(1/2) V^T.
+    const size_t k = components_;
+    const std::vector<float>& a = angular_[size_t(c)];  // cones (0, 0)
+    const std::vector<float>& s = spatial_[size_t(level) * 3 + size_t(c)];
+    auto gram = [k](const std::vector<float>& m) {
+        std::vector<double> g(k * k, 0.0);
+        for (size_t r = 0; r < m.size() / k; ++r)
+            for (size_t i = 0; i < k; ++i)
+                for (size_t j = 0; j < k; ++j) g[i * k + j] += double(m[r * k + i]) * m[r * k + j];
+        return g;
+    };
+    std::vector<double> d, v;
+    symmetric_eigen(gram(a), k, d, v);
+    const std::vector<double> ss = gram(s);
+    std::vector<double> r(k * k), g(k * k, 0.0);
+    for (size_t i = 0; i < k; ++i)
+        for (size_t j = 0; j < k; ++j) r[i * k + j] = std::sqrt(std::max(0.0, d[i])) * v[j * k + i];
+    for (size_t i = 0; i < k; ++i)
+        for (size_t j = 0; j < k; ++j)
+            for (size_t p = 0; p < k; ++p)
+                for (size_t q = 0; q < k; ++q)
+                    g[i * k + j] += r[i * k + p] * ss[p * k + q] * r[j * k + q];
+    std::vector<double> sigma2, unused;
+    symmetric_eigen(g, k, sigma2, unused);
+    for (double& x : sigma2) x = std::sqrt(std::max(0.0, x));
+    return sigma2;
 }
 
 uint64_t Hierarchy::memory_bytes() const {
