@@ -112,8 +112,8 @@ public:
     }
 
     void start(uint64_t seed, uint64_t pixel_index, uint32_t sample_index) override {
-        const uint32_t block = sample_index / sample_count_;
-        index_in_block_ = sample_index % sample_count_;
+        const uint32_t block = sample_index / strata_;
+        index_in_block_ = sample_index % strata_;
         pixel_key_ = femto::hash_combine(
             femto::hash_combine(femto::hash_combine(seed_, seed), pixel_index), block);
         dimension_ = 0;
@@ -125,7 +125,7 @@ public:
 
     float next_1d() override {
         const uint32_t stratum = next_stratum();
-        return in_stratum(stratum, next_offset(), sample_count_);
+        return in_stratum(stratum, next_offset(), strata_);
     }
 
     femto::Vec2 next_2d() override {
@@ -150,20 +150,24 @@ private:
                                fmt::format("the stratified sampler needs a perfect square "
                                            "sample_count: rounding {} up to {} ({} x {} strata)",
                                            sample_count_, rounded, side_, side_));
-        sample_count_ = uint32_t(rounded);
+        strata_ = uint32_t(rounded);
+        sample_count_ = strata_;
     }
 
     /// The stratum of the current sample in the next dimension.
     uint32_t next_stratum() {
         const auto permutation_seed =
             static_cast<uint32_t>(femto::hash_combine(pixel_key_, dimension_++));
-        return kensler_permute(index_in_block_, sample_count_, permutation_seed);
+        return kensler_permute(index_in_block_, strata_, permutation_seed);
     }
 
     float next_offset() { return jitter_ ? rng_.next_float() : 0.5f; }
 
     bool jitter_ = true;
+    // The strata are fixed when the sampler is built (a later set_sample_count() changes how
+    // many samples the renderer takes, not the strata): strata_ = side_ * side_.
     uint32_t side_ = 2;
+    uint32_t strata_ = 4;
     uint64_t pixel_key_ = 0;
     uint32_t index_in_block_ = 0;
     uint64_t dimension_ = 0;
