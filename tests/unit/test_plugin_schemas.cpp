@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "btf/synth.h"
+#include "femto/btf.h"
 #include "femto/host.h"
 #include "femto/plugin.h"
 #include "femto/properties.h"
@@ -102,6 +104,10 @@ struct Inputs {
         std::ofstream(dir / "env.ppm", std::ios::binary) << "P6\n2 3\n255\n"
                                                          << std::string(18, '\x40');
         write_serialized_triangle(dir / "tri.serialized");
+        femto::btf::synth::Options btf;  // a small synthetic BTF (UBO2003's 81 directions)
+        btf.width = btf.height = 2;
+        btf.directions = femto::btf::ubo2003_directions();
+        femto::btf::synth::write((dir / "tiny.bdi").string(), btf);
         femto::test::VolFile vol;
         vol.data = {1.f};
         femto::test::write_bytes(dir / "density.vol", vol.bytes());
@@ -137,6 +143,7 @@ std::map<std::string, std::function<void(Properties&)>> required(const Inputs& i
          [&](Properties& p) { p.set_string("filename", in("tri.serialized")); }},
         {"texture bitmap", [&](Properties& p) { p.set_string("filename", in("pixel.ppm")); }},
         {"emitter envmap", [&](Properties& p) { p.set_string("filename", in("env.ppm")); }},
+        {"bsdf btf", [&](Properties& p) { p.set_string("filename", in("tiny.bdi")); }},
         {"volume gridvolume", [&](Properties& p) { p.set_string("filename", in("density.vol")); }},
         {"emitter collimated", [](Properties& p) { p.set_float("radius", 1.0); }},
         {"film transient", time_window},

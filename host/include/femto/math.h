@@ -104,10 +104,21 @@ inline float sin2_theta(const Vec3& w) { return std::max(0.f, 1.f - w.z * w.z); 
 inline float tan2_theta(const Vec3& w) { return sin2_theta(w) / (w.z * w.z); }
 }  // namespace local
 
+/// The rays through the neighbouring film positions (pos + (1, 0) and pos + (0, 1) pixels) of a
+/// camera ray: their origins and directions (pbrt's ray differentials).
+struct RayDifferential {
+    Vec3 dx_o, dx_d, dy_o, dy_d;
+};
+
 struct Ray {
     Vec3 o, d;
     float tmin = 0.f;
     float tmax = kInfinity;
+    /// The camera ray's neighbours one pixel over (Sensor::sample_differential()), for the
+    /// pixel footprint of its first hit (Hit::footprint). Only the renderer sets it, on camera
+    /// rays, and it points to its stack: rays spawned from hits leave it null, and a ray kept
+    /// beyond Integrator::sample() must not use it.
+    const RayDifferential* differential = nullptr;
     Vec3 at(float t) const { return o + d * t; }
 };
 

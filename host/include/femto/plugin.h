@@ -43,7 +43,9 @@ namespace femto {
 ///  Bsdf::null_transmission(), trace_shadow()/connect_to_sensor() `through_masks`.)
 /// (19: Hit::dpdu, the surface's u tangent, changes Hit's layout; Bsdf::reciprocal() and
 ///  eval_adjoint()/sample_adjoint() for paths traced from the lights.)
-inline constexpr uint32_t kPluginAbiVersion = 19;
+/// (20: ray differentials: Ray::differential, RayDifferential, Sensor::sample_differential(),
+///  Hit::footprint (PixelFootprint).)
+inline constexpr uint32_t kPluginAbiVersion = 20;
 
 struct PluginDescriptor {
     uint32_t abi_version;

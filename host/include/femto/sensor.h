@@ -37,6 +37,14 @@ public:
     /// Primary ray through film position `pos` (pixels, origin top-left, +x right, +y down);
     /// `aperture` is for lenses. Returns a ray with a unit direction.
     virtual Ray sample_ray(Vec2 pos, Vec2 aperture) const = 0;
+    /// The rays through pos + (1, 0) and pos + (0, 1) with the same `aperture` sample, as
+    /// sample_ray() would return them (unit directions), for the pixel footprint of the camera
+    /// ray's first hit (Hit::footprint). False when the sensor has none (the default: sensors
+    /// without a film plane, such as meters); `out` is then left as it was.
+    virtual bool sample_differential(Vec2 /*pos*/, Vec2 /*aperture*/,
+                                     RayDifferential& /*out*/) const {
+        return false;
+    }
 
     /// False for sensors that no light path can reach by a connection (an orthographic
     /// camera: its rays are parallel, so a point sees it along one direction of measure

@@ -23,6 +23,19 @@ class Medium;
 class Sensor;
 class Shape;
 
+/// What one pixel of a camera ray covers around a hit (zero / valid = false for other rays):
+/// the first-order change of the hit's quantities per pixel step on the film, from the ray's
+/// differential (Ray::differential) intersected with the hit's tangent plane (pbrt's
+/// SurfaceInteraction::ComputeDifferentials). Materials that prefilter their textures (the
+/// BTF) use it to pick a level.
+struct PixelFootprint {
+    bool valid = false;
+    Vec2 duv_dx, duv_dy;  ///< change of Hit::uv per pixel step in x and y
+    Vec3 dp_dx, dp_dy;    ///< change of the position (world)
+    Vec3 dn_dx, dn_dy;    ///< change of the shading normal (world)
+    Vec3 dd_dx, dd_dy;    ///< change of the ray direction (world, unit directions)
+};
+
 /// A ray-surface intersection, everything an integrator needs at a path vertex.
 struct Hit {
     float t = kInfinity;  ///< ray distance
@@ -42,6 +55,9 @@ struct Hit {
     /// coordinate p was computed from (the triangle's vertices, or the sphere's centre plus
     /// radius), which bounds p's rounding and Embree's (docs/precision.md).
     float p_error = 0.f;
+    /// The pixel footprint, filled by Scene::intersect() for rays that carry a differential
+    /// (camera rays); invalid for every other hit.
+    PixelFootprint footprint;
 
     Vec3 to_world(const Vec3& v) const { return sh.to_world(v); }
     Vec3 to_local(const Vec3& v) const { return sh.to_local(v); }

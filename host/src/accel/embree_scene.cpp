@@ -214,6 +214,30 @@ void EmbreeScene::release() {
     scene_ = nullptr;
 }
 
+namespace {
+
+/// Moves the footprint of an instance's hit, found in the group's space, to the world: uv's
+/// change stays, p's is a vector, the normal's is the derivative of the normalized transformed
+/// normal, and the direction's is taken from the world's unit directions.
+void footprint_to_world(const Transform& to_world, const Vec3& local_normal,
+                        const RayDifferential& rd, const Ray& ray, Hit& hit) {
+    PixelFootprint& fp = hit.footprint;
+    fp.dp_dx = to_world.vector(fp.dp_dx);
+    fp.dp_dy = to_world.vector(fp.dp_dy);
+    const float normal_length = length(to_world.normal(local_normal));
+    const Vec3 n = hit.sh.n;
+    const auto normal_change = [&](const Vec3& dn_local) {
+        const Vec3 dn = to_world.normal(dn_local);
+        return (dn - n * dot(n, dn)) / normal_length;
+    };
+    fp.dn_dx = normal_change(fp.dn_dx);
+    fp.dn_dy = normal_change(fp.dn_dy);
+    fp.dd_dx = rd.dx_d - ray.d;
+    fp.dd_dy = rd.dy_d - ray.d;
+}
+
+}  // namespace
+
 void EmbreeScene::fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const {
     const unsigned inst_id = rh.hit.instID[0];
     if (inst_id == RTC_INVALID_GEOMETRY_ID) {
@@ -227,14 +251,24 @@ void EmbreeScene::fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const 
     const ShapeInstance& inst = *placed.instance;
     const Transform& to_world = inst.transform();
     const Transform to_local = to_world.inverse();
-    const Ray local{to_local.point(ray.o), to_local.vector(ray.d), ray.tmin, ray.tmax};
+    Ray local{to_local.point(ray.o), to_local.vector(ray.d), ray.tmin, ray.tmax};
+    RayDifferential local_differential;
+    if (ray.differential) {  // lines map to lines: the footprint is found in the group's space
+        const RayDifferential& rd = *ray.differential;
+        local_differential = {to_local.point(rd.dx_o), to_local.vector(rd.dx_d),
+                              to_local.point(rd.dy_o), to_local.vector(rd.dy_d)};
+        local.differential = &local_differential;
+    }
     const Shape* shape = placed.group->shapes[rh.hit.geomID];
     shape->fill_hit(local, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, hit);
+    const Vec3 local_normal = hit.sh.n;
     hit.p = to_world.point(hit.p);
     hit.ng = normalize(to_world.normal(hit.ng));
     hit.sh = Frame(normalize(to_world.normal(hit.sh.n)));
     hit.dpdu = to_world.vector(hit.dpdu);  // a derivative of p: moved by the linear part
     hit.wi = hit.sh.to_local(-ray.d);
+    if (hit.footprint.valid)
+        footprint_to_world(to_world, local_normal, *ray.differential, ray, hit);
     // The local offset scale (a bound on each coordinate's error) stretched by the transform
     // (its largest row sum of magnitudes bounds each world coordinate's), and the rounding of
     // the transform itself.

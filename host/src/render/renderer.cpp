@@ -150,7 +150,13 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
                 sampler.start(seed, pixel, s);
                 const Vec2 jitter = sampler.next_2d();
                 const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
-                const Ray ray = sensor.sample_ray(pos, sampler.next_2d());
+                const Vec2 aperture = sampler.next_2d();
+                Ray ray = sensor.sample_ray(pos, aperture);
+                // The neighbouring pixels' rays, for the first hit's footprint (materials that
+                // prefilter); the ray points to it only for this sample.
+                RayDifferential differential;
+                if (sensor.sample_differential(pos, aperture, differential))
+                    ray.differential = &differential;
                 list.clear();
                 list.reset_aovs(aov_count);
                 list.set_sample_index(s);

@@ -194,19 +194,117 @@ void fill_cylinder_hit(const Vec3& base, const Frame& f, float radius, float len
         (std::max(max_abs_component(base), max_abs_component(base + f.n * length)) + radius);
 }
 
-/// dp/du on the triangle p0 p1 p2 with vertex uvs uv0 uv1 uv2: the solution of the 2x2 system
-/// dp_i2 = duv_i2.x dpdu + duv_i2.y dpdv (i = 0, 1), as in pbrt. Zero when the uvs do not span
-/// the plane: their determinant is tiny next to the product of the uv edges it is made of (the
-/// sine of the angle between them is below 1e-5, under a float's rounding of near-collinear
-/// uvs), or the result is not finite.
-Vec3 triangle_dpdu(const Vec3& p0, const Vec3& p1, const Vec3& p2, Vec2 uv0, Vec2 uv1, Vec2 uv2) {
+/// dp/du and dp/dv on the triangle p0 p1 p2 with vertex uvs uv0 uv1 uv2: the solution of the
+/// 2x2 system dp_i2 = duv_i2.x dpdu + duv_i2.y dpdv (i = 0, 1), as in pbrt. Zero when the uvs
+/// do not span the plane: their determinant is tiny next to the product of the uv edges it is
+/// made of (the sine of the angle between them is below 1e-5, under a float's rounding of
+/// near-collinear uvs), or the result is not finite.
+struct TriangleTangents {
+    Vec3 dpdu, dpdv;
+};
+TriangleTangents triangle_tangents(const Vec3& p0, const Vec3& p1, const Vec3& p2, Vec2 uv0,
+                                   Vec2 uv1, Vec2 uv2) {
     const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
     const float det = duv02.x * duv12.y - duv02.y * duv12.x;
     const float edges = std::hypot(duv02.x, duv02.y) * std::hypot(duv12.x, duv12.y);
     constexpr float kMinSine = 1e-5f;
-    if (!(std::abs(det) > kMinSine * edges)) return Vec3(0.f);
+    if (!(std::abs(det) > kMinSine * edges)) return {Vec3(0.f), Vec3(0.f)};
     const Vec3 dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
-    return is_finite(dpdu) ? dpdu : Vec3(0.f);
+    const Vec3 dpdv = ((p1 - p2) * duv02.x - (p0 - p2) * duv12.x) / det;
+    return {is_finite(dpdu) ? dpdu : Vec3(0.f), is_finite(dpdv) ? dpdv : Vec3(0.f)};
+}
+
+// -- pixel footprints (Hit::footprint) --------------------------------------------------------
+
+/// Where the line o + t d meets the plane through p with normal n; false when they are
+/// parallel (or the intersection is not finite).
+bool meet_tangent_plane(const Vec3& p, const Vec3& n, const Vec3& o, const Vec3& d, Vec3& out) {
+    const float t = dot(n, p - o) / dot(n, d);
+    if (!std::isfinite(t)) return false;
+    out = o + d * t;
+    return is_finite(out);
+}
+
+/// The coefficients (a, b) of the least-squares fit dp ~ a e1 + b e2 (the normal equations),
+/// for a dp in the plane the two tangents span; zero when they do not span one.
+Vec2 coordinates_in_tangents(const Vec3& dp, const Vec3& e1, const Vec3& e2) {
+    const double a11 = dot(e1, e1), a12 = dot(e1, e2), a22 = dot(e2, e2);
+    const double det = a11 * a22 - a12 * a12;
+    if (!(det > 1e-12 * a11 * a22)) return Vec2{0.f, 0.f};  // parallel or zero tangents
+    const double b1 = dot(e1, dp), b2 = dot(e2, dp);
+    const Vec2 out{float((a22 * b1 - a12 * b2) / det), float((a11 * b2 - a12 * b1) / det)};
+    return std::isfinite(out.x) && std::isfinite(out.y) ? out : Vec2{0.f, 0.f};
+}
+
+/// dp/dv at a hit (Hit::dpdu's partner, for the footprint's uv change).
+Vec3 hit_dpdv(const Shape& shape, const Hit& hit) {
+    if (shape.is_cylinder()) return shape.cylinder_frame().n * shape.cylinder_length();
+    if (shape.is_sphere()) {
+        // d/dv of center + r (sin theta cos phi, sin theta sin phi, cos theta), theta = pi v:
+        // zero at the poles, as dpdu.
+        const Vec3 local = (hit.p - shape.sphere_center()) / shape.sphere_radius();
+        const float sin_theta = std::hypot(local.x, local.y);
+        if (!(sin_theta > 0)) return Vec3(0.f);
+        const float cos_over_sin = local.z / sin_theta;
+        return Vec3(local.x * cos_over_sin, local.y * cos_over_sin, -sin_theta) *
+               (kPi * shape.sphere_radius());
+    }
+    const TriangleMesh& m = shape.mesh();
+    const uint32_t* idx = &m.indices[3 * hit.prim];
+    const Vec3 &p0 = m.positions[idx[0]], &p1 = m.positions[idx[1]], &p2 = m.positions[idx[2]];
+    if (m.uvs.empty()) return p2 - p0;  // uv are the barycentrics of p1 and p2
+    return triangle_tangents(p0, p1, p2, m.uvs[idx[0]], m.uvs[idx[1]], m.uvs[idx[2]]).dpdv;
+}
+
+/// The change of the shading normal (unflipped) for a change dp of the hit on the surface.
+/// `barycentrics` are the hit's (u, v) on a triangle.
+Vec3 normal_change(const Shape& shape, const Hit& hit, Vec2 barycentrics, const Vec3& dp) {
+    if (shape.is_sphere()) return dp / shape.sphere_radius();
+    if (shape.is_cylinder()) {
+        const Vec3 axis = shape.cylinder_frame().n;  // the normal turns only around it
+        return (dp - axis * dot(dp, axis)) / shape.cylinder_radius();
+    }
+    const TriangleMesh& m = shape.mesh();
+    if (m.normals.empty()) return Vec3(0.f);  // flat
+    const uint32_t* idx = &m.indices[3 * hit.prim];
+    const Vec3& p0 = m.positions[idx[0]];
+    const Vec3 &n0 = m.normals[idx[0]], &n1 = m.normals[idx[1]], &n2 = m.normals[idx[2]];
+    // The interpolated normal n0 w + n1 u + n2 v is linear in the barycentrics (u, v), which
+    // are linear in p: this holds whether the uvs are degenerate or not.
+    const Vec2 db = coordinates_in_tangents(dp, m.positions[idx[1]] - p0, m.positions[idx[2]] - p0);
+    const Vec3 dn = (n1 - n0) * db.x + (n2 - n0) * db.y;
+    const float w = 1.f - barycentrics.x - barycentrics.y;
+    const float len = length(n0 * w + n1 * barycentrics.x + n2 * barycentrics.y);
+    if (!(len > 0)) return Vec3(0.f);
+    // The derivative of the normalized normal: the part perpendicular to it, over its length.
+    const Vec3 ns = hit.sh.n;
+    return (dn - ns * dot(ns, dn)) / len;
+}
+
+/// The pixel footprint of `hit` for a ray with a differential (pbrt-v3's
+/// SurfaceInteraction::ComputeDifferentials): the neighbouring rays meet the hit's tangent
+/// plane at p + dp, which gives uv's change through dpdu and dpdv and the normal's through the
+/// shape's curvature.
+PixelFootprint pixel_footprint(const Shape& shape, const Ray& ray, const Hit& hit,
+                               Vec2 barycentrics) {
+    const RayDifferential& rd = *ray.differential;
+    PixelFootprint fp;
+    Vec3 px, py;
+    if (!meet_tangent_plane(hit.p, hit.ng, rd.dx_o, rd.dx_d, px) ||
+        !meet_tangent_plane(hit.p, hit.ng, rd.dy_o, rd.dy_d, py))
+        return fp;
+    fp.valid = true;
+    fp.dp_dx = px - hit.p;
+    fp.dp_dy = py - hit.p;
+    const Vec3 dpdv = hit_dpdv(shape, hit);
+    fp.duv_dx = coordinates_in_tangents(fp.dp_dx, hit.dpdu, dpdv);
+    fp.duv_dy = coordinates_in_tangents(fp.dp_dy, hit.dpdu, dpdv);
+    const float side = shape.flip_normals() ? -1.f : 1.f;
+    fp.dn_dx = normal_change(shape, hit, barycentrics, fp.dp_dx) * side;
+    fp.dn_dy = normal_change(shape, hit, barycentrics, fp.dp_dy) * side;
+    fp.dd_dx = rd.dx_d - ray.d;
+    fp.dd_dy = rd.dy_d - ray.d;
+    return fp;
 }
 
 }  // namespace
@@ -251,7 +349,7 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         if (!mesh_.uvs.empty()) {
             const Vec2 &uv0 = mesh_.uvs[i0], &uv1 = mesh_.uvs[i1], &uv2 = mesh_.uvs[i2];
             hit.uv = uv0 * w + uv1 * u + uv2 * v;
-            hit.dpdu = triangle_dpdu(p0, p1, p2, uv0, uv1, uv2);
+            hit.dpdu = triangle_tangents(p0, p1, p2, uv0, uv1, uv2).dpdu;
         } else {
             hit.uv = {u, v};  // the barycentrics of p = p0 w + p1 u + p2 v
             hit.dpdu = p1 - p0;
@@ -263,6 +361,7 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
     }
     hit.sh = Frame(ns);
     hit.wi = hit.sh.to_local(-ray.d);
+    hit.footprint = ray.differential ? pixel_footprint(*this, ray, hit, {u, v}) : PixelFootprint{};
 }
 
 ShapeSample Shape::sample_area(Vec2 u) const {

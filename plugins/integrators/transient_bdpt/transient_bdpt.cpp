@@ -310,7 +310,11 @@ private:
         paths.camera_beta.push_back(beta);
         paths.camera_clock.push_back(clock);
         walk.pdf_dir = scene.sensor().pdf_direction(camera_ray.d);
-        paths.camera_out.push_back({walk.ray, walk.pdf_dir, kInfinity, walk.medium, beta});
+        // `paths` is thread_local and outlives the sample: keep no pointer to the renderer's
+        // differential (the walk's own copy finds the footprint of the first hit).
+        Ray first_ray = walk.ray;
+        first_ray.differential = nullptr;
+        paths.camera_out.push_back({first_ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         while (int(paths.camera.size()) < max_vertices(true)) {
             Vertex v;
             Color weight(1.f);

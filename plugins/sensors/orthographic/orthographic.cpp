@@ -33,6 +33,13 @@ public:
         return Ray{o, dir_, float(near_) * dir_len_, float(far_) * dir_len_};
     }
 
+    bool sample_differential(Vec2 pos, Vec2 aperture, RayDifferential& out) const override {
+        const Ray x = sample_ray({pos.x + 1.f, pos.y}, aperture);
+        const Ray y = sample_ray({pos.x, pos.y + 1.f}, aperture);
+        out = {x.o, x.d, y.o, y.d};
+        return true;
+    }
+
 private:
     double near_ = 0, far_ = 0;
     float inv_aspect_ = 1, dir_len_ = 1;

@@ -105,6 +105,13 @@ public:
         return Ray{origin_, d_world / len, float(near_) * len, float(far_) * len};
     }
 
+    bool sample_differential(Vec2 pos, Vec2 aperture, RayDifferential& out) const override {
+        const Ray x = sample_ray({pos.x + 1.f, pos.y}, aperture);
+        const Ray y = sample_ray({pos.x, pos.y + 1.f}, aperture);
+        out = {x.o, x.d, y.o, y.d};
+        return true;
+    }
+
 private:
     // pdf_direction() of a direction d (unit) already known to land on the film.
     float density_in_view(const Vec3& d) const {
