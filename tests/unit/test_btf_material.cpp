@@ -32,10 +32,12 @@ std::string synth_file(const btf::synth::Options& o, const std::string& name) {
     return path;
 }
 
-std::shared_ptr<Bsdf> make_btf(const std::string& file, double uv_scale = 1.0) {
+std::shared_ptr<Bsdf> make_btf(const std::string& file, double uv_scale = 1.0,
+                               bool prefilter = false) {
     Properties p("btf", {});
     p.set_string("filename", file);
     p.set_float("uv_scale", uv_scale);
+    p.set_bool("prefilter", prefilter);
     return std::static_pointer_cast<Bsdf>(create_object(PluginKind::Bsdf, "btf", p));
 }
 
@@ -187,6 +189,20 @@ TEST(BtfMaterial, SampleWeightIsEvalOverPdf) {
     EXPECT_TRUE(bsdf->eval(hit, wi, Vec3(0, 0.6f, -0.8f)).is_black());
 }
 
+TEST(BtfMaterial, PrefilteredWithoutAFootprintIsTheFinestLevel) {
+    // Rays without a pixel footprint (after the first bounce) see level 0 unfiltered: for a
+    // file with linear factors, the same values as the material without prefiltering.
+    const auto o = options();
+    const std::string file = synth_file(o, "nofootprint.dfmf");
+    const auto plain = make_btf(file, 2.0), prefiltered = make_btf(file, 2.0, true);
+    const Vec3 view = normalize(Vec3(0.2f, 0.1f, 0.9f)), light = normalize(Vec3(-0.4f, 0.3f, 0.8f));
+    for (const Vec2 uv : {Vec2(0.1f, 0.2f), Vec2(0.77f, 0.41f)}) {
+        const Color a = reflectance(*plain, plane_hit(uv), view, light);
+        const Color b = reflectance(*prefiltered, plane_hit(uv), view, light);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[c], b[c], 2e-6f);
+    }
+}
+
 TEST(BtfMaterial, BadParametersAreLocatedErrors) {
     const std::string good = synth_file(options(), "good.dfmf");
     auto scene = [](const std::string& params) {
@@ -205,6 +221,16 @@ TEST(BtfMaterial, BadParametersAreLocatedErrors) {
     EXPECT_NE(e.find("scale"), std::string::npos) << e;
     e = femto::test::load_error(scene("<float name=\"uv_scale\" value=\"2\"/>"));
     EXPECT_NE(e.find("filename"), std::string::npos) << e;
+    for (const auto& [params, name] :
+         {std::pair{"<string name=\"filter\" value=\"sinc\"/>", "filter"},
+          std::pair{"<string name=\"cone_angles\" value=\"5, 15\"/>", "cone_angles"},
+          std::pair{"<string name=\"cone_angles\" value=\"0, x\"/>", "cone_angles"},
+          std::pair{"<integer name=\"components\" value=\"0\"/>", "components"},
+          std::pair{"<float name=\"scale_view\" value=\"0\"/>", "scale_view"}}) {
+        e = femto::test::load_error(
+            scene("<string name=\"filename\" value=\"" + good + "\"/>" + params));
+        EXPECT_NE(e.find(name), std::string::npos) << e;
+    }
     const std::string bad = (femto::testing::temp_dir("btf-material") / "bad.btf").string();
     femto::test::write_text(bad, "!DFMF08FCR truncated");
     e = femto::test::load_error(scene("<string name=\"filename\" value=\"" + bad + "\"/>"));

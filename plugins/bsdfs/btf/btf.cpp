@@ -9,15 +9,30 @@
 // the light directions times one of the view directions (DirectionMesh); between texels it is
 // bilinear, wrapping around the texture (uv (0, 0) is the texture's bottom-left corner, as for
 // `bitmap`; texel row 0 is its top). Sampling is cosine-weighted: measured data has no lobe
-// shape to importance-sample. A BTF is not reciprocal: paths from the lights evaluate it through
+// shape to importance-sample.
+//
+// With `prefilter`, the material looks the BTF up in its prefiltered hierarchy (thesis ch. 3,
+// femto/btf_prefilter.h) at the level and cones a camera ray's pixel footprint selects
+// (Hit::footprint): the texel-to-pixel ratio r = the longer of the pixel's two steps in texels,
+// times scale_spatial; the light cone = half the pixel's change of the normal (the light's
+// direction relative to the surface turns with it), times scale_light; the view cone = half the
+// pixel's change of the view direction relative to the surface (ray direction plus normal),
+// times scale_view. Rays without a footprint (after the first bounce) see the finest level,
+// unfiltered. A BTF is not reciprocal: paths from the lights evaluate it through
 // eval_adjoint(), with the camera's side as the view.
 #include "femto/btf.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "femto/bsdf.h"
+#include "femto/btf_prefilter.h"
 #include "femto/direction_mesh.h"
+#include "femto/log.h"
 #include "femto/plugin.h"
 #include "femto/warp.h"
 
@@ -42,7 +57,18 @@ public:
           lights_(triangulate(props, data_->header().lights, "light")),
           views_(triangulate(props, data_->header().views, "view")),
           uv_scale_(positive(props, "uv_scale")),
-          scale_(non_negative(props, "scale")) {}
+          scale_(non_negative(props, "scale")),
+          scale_spatial_(positive(props, "scale_spatial")),
+          scale_light_(positive(props, "scale_light")),
+          scale_view_(positive(props, "scale_view")) {
+        // Read every prefilter setting, used or not, so that each is checked (and none is
+        // reported unused) whether or not `prefilter` is on.
+        const bool prefilter = props.get_bool("prefilter", false);
+        const btf::PrefilterSettings settings = prefilter_settings(props);
+        const btf::PcaSettings pca = pca_settings(props);
+        const bool cache = props.get_bool("cache", true);
+        if (prefilter) hierarchy_ = build_hierarchy(props, settings, pca, cache);
+    }
 
     uint32_t flags() const override { return kBsdfGlossyReflection; }
     bool reciprocal() const override { return false; }  // light and view are not exchangeable
@@ -77,21 +103,94 @@ private:
             props.fail("filename", e.message());
         }
     }
+    static btf::PrefilterSettings prefilter_settings(const Properties& props) {
+        btf::PrefilterSettings settings;
+        const std::string filter = props.get_string("filter", "box");
+        if (filter == "gaussian")
+            settings.kernel = btf::FilterKernel::Gaussian;
+        else if (filter == "lanczos")
+            settings.kernel = btf::FilterKernel::Lanczos;
+        else if (filter != "box")
+            props.fail("filter", "filter must be box, gaussian or lanczos, not \"" + filter + "\"");
+        settings.cone_angles_deg = cone_angles(props);
+        return settings;
+    }
+    static btf::PcaSettings pca_settings(const Properties& props) {
+        btf::PcaSettings pca;
+        const int64_t components = props.get_int("components", 16);
+        if (components < 1 || components > btf::Hierarchy::kMaxComponents)
+            props.fail("components",
+                       "components must be 1 to " + std::to_string(btf::Hierarchy::kMaxComponents));
+        pca.components = uint32_t(components);
+        return pca;
+    }
+    std::shared_ptr<const btf::Hierarchy> build_hierarchy(const Properties& props,
+                                                          const btf::PrefilterSettings& settings,
+                                                          const btf::PcaSettings& pca,
+                                                          bool cache) const {
+        btf::PrefilterReport report;
+        auto h =
+            btf::prefiltered(props.get_string("filename"), *data_, settings, pca, cache, report);
+        if (!report.cache_problem.empty())
+            log_warning(props.location_of("filename"),
+                        "the prefiltered BTF is not cached: " + report.cache_problem);
+        return h;
+    }
+    static std::vector<double> cone_angles(const Properties& props) {
+        std::vector<double> angles;
+        std::istringstream in(props.get_string("cone_angles", "0, 15, 30, 45"));
+        for (std::string item; std::getline(in, item, ',');) {
+            char* end = nullptr;
+            const double a = std::strtod(item.c_str(), &end);
+            if (end == item.c_str() || !std::isfinite(a))
+                props.fail("cone_angles", "cone_angles must be numbers separated by commas");
+            angles.push_back(a);
+        }
+        bool increasing = !angles.empty() && angles[0] == 0 && angles.back() <= 90;
+        for (size_t i = 1; i < angles.size(); ++i)
+            increasing = increasing && angles[i] > angles[i - 1];
+        if (!increasing)
+            props.fail("cone_angles", "cone_angles must increase from 0 to at most 90 (degrees)");
+        return angles;
+    }
     static float positive(const Properties& props, const char* name) {
         const double v = props.get_float(name, 1.0);
-        if (!(v > 0) || !std::isfinite(v)) props.fail(name, std::string(name) + " must be a finite number > 0");
+        if (!(v > 0) || !std::isfinite(v))
+            props.fail(name, std::string(name) + " must be a finite number > 0");
         return float(v);
     }
     static float non_negative(const Properties& props, const char* name) {
         const double v = props.get_float(name, 1.0);
-        if (!(v >= 0) || !std::isfinite(v)) props.fail(name, std::string(name) + " must be a finite number >= 0");
+        if (!(v >= 0) || !std::isfinite(v))
+            props.fail(name, std::string(name) + " must be a finite number >= 0");
         return float(v);
     }
 
     /// scale * B for the shading-frame directions wi (view) and wo (light).
     Color reflectance(const Hit& hit, const Vec3& wi, const Vec3& wo) const {
         const Vec2 tangent = tangent_direction(hit);
-        return lookup(hit.uv, to_btf_frame(wo, tangent), to_btf_frame(wi, tangent)) * scale_;
+        const Vec3 light = to_btf_frame(wo, tangent), view = to_btf_frame(wi, tangent);
+        if (!hierarchy_) return lookup(hit.uv, light, view) * scale_;
+        const DirectionMesh::Weights wl = lights_.interpolate(light);
+        const DirectionMesh::Weights wv = views_.interpolate(view);
+        double ratio = 0, light_cone = 0, view_cone = 0;
+        if (hit.footprint.valid) footprint_query(hit.footprint, ratio, light_cone, view_cone);
+        return hierarchy_->lookup(hit.uv * uv_scale_, ratio, light_cone, view_cone, wl, wv) *
+               scale_;
+    }
+
+    /// The level and cones a pixel's footprint selects (see the top of this file).
+    void footprint_query(const PixelFootprint& f, double& ratio, double& light_cone,
+                         double& view_cone) const {
+        const btf::Header& h = data_->header();
+        auto texels = [&](Vec2 duv) {
+            return uv_scale_ * std::hypot(double(duv.x) * h.width, double(duv.y) * h.height);
+        };
+        ratio = scale_spatial_ * std::max(texels(f.duv_dx), texels(f.duv_dy));
+        const double turn = std::max(length(f.dn_dx), length(f.dn_dy));
+        light_cone = scale_light_ * 0.5 * turn;
+        view_cone = scale_view_ * 0.5 *
+                    std::max(length(f.dd_dx) + length(f.dn_dx), length(f.dd_dy) + length(f.dn_dy));
     }
 
     /// The u tangent's direction in the shading frame's xy-plane (the shading frame's own s
@@ -135,6 +234,8 @@ private:
     std::shared_ptr<const btf::Data> data_;
     DirectionMesh lights_, views_;
     float uv_scale_, scale_;
+    float scale_spatial_, scale_light_, scale_view_;
+    std::shared_ptr<const btf::Hierarchy> hierarchy_;  // with `prefilter`
 };
 
 }  // namespace
@@ -143,4 +244,15 @@ FEMTO_PLUGIN(Btf, femto::PluginKind::Bsdf, "btf",
              "Bidirectional texture function from a Bonn BTF file (BDI, DFMF, FMF)",
              {{"filename", "filename", "", "the BTF file (BDI, DFMF or FMF; see docs/btf.md)"},
               {"uv_scale", "float", "1", "texture repetitions per unit of uv"},
-              {"scale", "float", "1", "factor applied to the reflectance"}})
+              {"scale", "float", "1", "factor applied to the reflectance"},
+              {"prefilter", "bool", "false",
+               "look up the prefiltered hierarchy at the camera ray's pixel footprint"},
+              {"filter", "string", "box", "prefilter kernel: box, gaussian or lanczos"},
+              {"cone_angles", "string", "0, 15, 30, 45",
+               "half-angles (degrees) of the light and view cones the hierarchy holds"},
+              {"scale_spatial", "float", "1", "s_x: factor on the texel-to-pixel ratio"},
+              {"scale_light", "float", "1", "s_l: factor on the light cone"},
+              {"scale_view", "float", "1", "s_v: factor on the view cone"},
+              {"components", "integer", "16",
+               "PCA components for files without linear factors (BDI, log data)"},
+              {"cache", "bool", "true", "keep the hierarchy in a file next to the BTF"}})
