@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "btf/synth.h"
+#include "btf_test_util.h"
 #include "chi2.h"
 #include "femto/bsdf.h"
 #include "femto/properties.h"
@@ -45,16 +46,8 @@ std::string angle_name(double deg) { return std::to_string(static_cast<int>(deg)
 
 // A small synthetic BTF (BTF A, docs/btf.md), written once per process.
 std::string synthetic_btf_file() {
-    static const std::string path = [] {
-        femto::btf::synth::Options o;
-        o.format = femto::btf::Format::Dfmf;
-        o.width = 4;
-        o.height = 4;
-        o.directions = femto::btf::ubo2003_directions();
-        const std::string file = (femto::testing::temp_dir("chi2-btf") / "a.dfmf").string();
-        femto::btf::synth::write(file, o);
-        return file;
-    }();
+    static const std::string path =
+        femto::test::write_btf(femto::test::small_btf_a(), "chi2-btf", "a.dfmf");
     return path;
 }
 

@@ -9,6 +9,7 @@
 
 #include "btf/synth.h"
 #include "btf/vgroove.h"
+#include "btf_test_util.h"
 #include "femto/btf.h"
 #include "femto/error.h"
 #include "femto/testing/render.h"
@@ -18,20 +19,10 @@ namespace {
 using namespace femto;
 namespace fs = std::filesystem;
 
-// A non-square texture catches x/y mix-ups; UBO2003's 81 directions keep files small.
-btf::synth::Options small_options(btf::Format format) {
-    btf::synth::Options o;
-    o.format = format;
-    o.width = 8;
-    o.height = 4;
-    o.directions = btf::ubo2003_directions();
-    return o;
-}
+btf::synth::Options small_options(btf::Format format) { return femto::test::small_btf_a(format); }
 
 std::string write_synth(const btf::synth::Options& o, const std::string& name) {
-    const std::string path = (femto::testing::temp_dir("btf-file") / name).string();
-    btf::synth::write(path, o);
-    return path;
+    return femto::test::write_btf(o, "btf-file", name);
 }
 
 /// Checks every (x, y) and a spread of (l, v) pairs against the generator within `tolerance`

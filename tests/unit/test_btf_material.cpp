@@ -7,6 +7,7 @@
 #include <random>
 
 #include "btf/synth.h"
+#include "btf_test_util.h"
 #include "femto/bsdf.h"
 #include "femto/direction_mesh.h"
 #include "femto/host.h"
@@ -17,19 +18,10 @@ namespace {
 
 using namespace femto;
 
-btf::synth::Options options(btf::Format format = btf::Format::Dfmf) {
-    btf::synth::Options o;
-    o.format = format;
-    o.width = 8;
-    o.height = 4;
-    o.directions = btf::ubo2003_directions();
-    return o;
-}
+btf::synth::Options options() { return femto::test::small_btf_a(); }
 
 std::string synth_file(const btf::synth::Options& o, const std::string& name) {
-    const std::string path = (femto::testing::temp_dir("btf-material") / name).string();
-    btf::synth::write(path, o);
-    return path;
+    return femto::test::write_btf(o, "btf-material", name);
 }
 
 std::shared_ptr<Bsdf> make_btf(const std::string& file, double uv_scale = 1.0,

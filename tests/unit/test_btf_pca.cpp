@@ -8,6 +8,7 @@
 
 #include "btf/pca.h"
 #include "btf/synth.h"
+#include "btf_test_util.h"
 #include "femto/btf_prefilter.h"
 #include "femto/testing/render.h"
 
@@ -17,19 +18,10 @@ using namespace femto;
 using namespace femto::btf;
 constexpr double kPiD = 3.14159265358979323846;
 
-synth::Options btf_a(Format format) {
-    synth::Options o;
-    o.format = format;
-    o.width = 8;
-    o.height = 4;
-    o.directions = ubo2003_directions();
-    return o;
-}
+synth::Options btf_a(Format format) { return femto::test::small_btf_a(format); }
 
 std::shared_ptr<const Data> written(const synth::Options& o, const std::string& name) {
-    const std::string path = (femto::testing::temp_dir("btf-pca") / name).string();
-    synth::write(path, o);
-    return read(path);
+    return read(femto::test::write_btf(o, "btf-pca", name));
 }
 
 /// ||M - angular spatial^T||_F / ||M||_F for channel c, measured value by value.

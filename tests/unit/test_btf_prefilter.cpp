@@ -10,6 +10,7 @@
 #include "btf/angular_filter.h"
 #include "btf/pca.h"
 #include "btf/synth.h"
+#include "btf_test_util.h"
 #include "femto/btf_prefilter.h"
 #include "femto/testing/render.h"
 
@@ -124,18 +125,10 @@ TEST(BtfPrefilter, AngularFilterKeepsConstantsAndSpreadsHighlights) {
     EXPECT_LT(previous_peak, 0.5);
 }
 
-synth::Options btf_a(Format format) {
-    synth::Options o;
-    o.format = format;
-    o.width = 8;
-    o.height = 4;
-    o.directions = ubo2003_directions();
-    return o;
-}
+synth::Options btf_a(Format format) { return femto::test::small_btf_a(format); }
 
 Factors factors_of(const synth::Options& o, const std::string& name) {
-    const std::string path = (femto::testing::temp_dir("btf-prefilter") / name).string();
-    synth::write(path, o);
+    const std::string path = femto::test::write_btf(o, "btf-prefilter", name);
     Factors f;
     EXPECT_TRUE(linear_factors(*read(path), f));
     return f;

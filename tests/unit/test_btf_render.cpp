@@ -8,6 +8,7 @@
 
 #include "agreement_util.h"
 #include "btf/synth.h"
+#include "btf_test_util.h"
 #include "cube_util.h"
 #include "scene_util.h"
 
@@ -16,16 +17,7 @@ namespace {
 using namespace femto;
 using namespace femto::test;
 
-std::string btf_file() {
-    btf::synth::Options o;
-    o.format = btf::Format::Dfmf;
-    o.width = 8;
-    o.height = 4;
-    o.directions = btf::ubo2003_directions();
-    const std::string path = (femto::testing::temp_dir("btf-render") / "a.dfmf").string();
-    btf::synth::write(path, o);
-    return path;
-}
+std::string btf_file() { return write_btf(small_btf_a(), "btf-render", "a.dfmf"); }
 
 // A BTF square of side 4 (uv_scale 2: the texture twice across) under a point light off to one
 // side, seen from above at an angle by a 16 x 16 pinhole camera; one bounce.
