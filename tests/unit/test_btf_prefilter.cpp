@@ -340,3 +340,54 @@ TEST(BtfPrefilter, LevelSpectrumIsTheLevelsSingularValues) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(BtfPrefilter, GaussianAndLanczosEntriesMatchTheirClosedForms) {
+    // The smooth kernels: spatially, each level scales BTF A's cosines by the downsampling
+    // weights' frequency response; angularly, band l by the kernel's Funk-Hecke coefficient.
+    // Both are exact for BTF A, so the tolerance is float rounding as for the box.
+    const synth::Options o = btf_a(Format::Dfmf);
+    const Factors base = factors_of(o, "smooth.dfmf");
+    const synth::HarmonicBtf closed(o.width, o.height);
+    for (FilterKernel kernel : {FilterKernel::Gaussian, FilterKernel::Lanczos}) {
+        PrefilterSettings settings;
+        settings.kernel = kernel;
+        const Hierarchy h(base, o.directions, o.directions, settings);
+        const std::array<float, 4> weights = downsampling_weights(kernel);
+        double worst = 0;
+        for (int level = 0; level < h.levels(); ++level)
+            for (size_t i = 0; i < 4; ++i)
+                for (size_t j = 0; j < 4; ++j) {
+                    const auto sl =
+                        kernel_band_scales(kernel, settings.cone_angles_deg[i] * kPiD / 180, 2);
+                    const auto sv =
+                        kernel_band_scales(kernel, settings.cone_angles_deg[j] * kPiD / 180, 2);
+                    for (uint32_t y = 0; y < h.height(level); ++y)
+                        for (uint32_t x = 0; x < h.width(level); ++x)
+                            for (uint32_t l = 0; l < 81; l += 11)
+                                for (uint32_t v = 0; v < 81; v += 9) {
+                                    const Color got = h.value(level, x, y, i, j, l, v);
+                                    for (int c = 0; c < 3; ++c) {
+                                        double want = 0;
+                                        for (int k = 0; k < 3; ++k)
+                                            want +=
+                                                closed.spatial_downsampled(c, k, level, x, y,
+                                                                           weights) *
+                                                synth::HarmonicBtf::angular_filtered(
+                                                    k, o.directions[l], o.directions[v], sl, sv);
+                                        worst = std::max(worst, std::abs(got[c] - want));
+                                    }
+                                }
+                }
+        EXPECT_LT(worst, 2e-6) << (kernel == FilterKernel::Gaussian ? "gaussian" : "lanczos");
+        std::printf("[prefilter] %s: worst |entry - closed form| %.2g\n",
+                    kernel == FilterKernel::Gaussian ? "gaussian" : "lanczos", worst);
+    }
+    // The box weights are the 2 x 2 mean, whose cascade is the Dirichlet box mean.
+    const std::array<float, 4> box = downsampling_weights(FilterKernel::Box);
+    EXPECT_NEAR(closed.spatial_downsampled(0, 1, 2, 1, 0, box),
+                closed.spatial_box_mean(0, 1, 4, 0, 4, 4), 1e-12);
+}
+
+}  // namespace

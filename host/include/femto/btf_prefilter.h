@@ -56,6 +56,18 @@ struct PcaReport {
 /// data). k is clamped to the matrix's smaller side.
 Factors factorize(const Data& data, const PcaSettings& settings, PcaReport* report = nullptr);
 
+/// The weights of the four children along one axis (offsets -1.5, -0.5, 0.5, 1.5 child texels
+/// from the parent's centre) by which a level's texel is made from the finer level: box = the
+/// two under the parent (a 2 x 2 mean); Gaussian and Lanczos = pbrt's shapes over a radius of
+/// 2 child texels (Gaussian alpha = 2; Lanczos sinc(x) sinc(x / 2)), normalized to sum to 1.
+std::array<float, 4> downsampling_weights(FilterKernel kernel);
+
+/// The Funk-Hecke coefficients lambda_0 .. lambda_{max_band} of `kernel` over cones of
+/// half-angle `alpha` (radians): averaging a band-l function over the cones scales it by
+/// lambda_l (box: (P_{l-1}(cos a) - P_{l+1}(cos a)) / ((2l + 1)(1 - cos a)); the others by
+/// quadrature). All 1 for alpha = 0.
+std::vector<double> kernel_band_scales(FilterKernel kernel, double alpha, int max_band);
+
 struct PrefilterSettings {
     FilterKernel kernel = FilterKernel::Box;
     std::vector<double> cone_angles_deg = {0, 15, 30, 45};  ///< increasing, from 0

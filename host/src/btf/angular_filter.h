@@ -36,11 +36,6 @@ inline int sh_count(int degree) { return (degree + 1) * (degree + 1); }
 /// l (l + 1) + m.
 void sh_eval(int degree, const Vec3& d, double* out);
 
-/// The kernel's Funk-Hecke coefficients lambda_0 .. lambda_{max_band} for half-angle `alpha`
-/// (radians; lambda_l = 1 for alpha = 0): the factor by which averaging with the kernel over
-/// cones of half-angle alpha scales a band-l function.
-std::vector<double> kernel_band_scales(FilterKernel kernel, double alpha, int max_band);
-
 /// The angular filter on one set of sampled directions.
 class AngularFilter {
 public:

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -9,25 +10,48 @@
 
 namespace femto::btf {
 
+namespace {}  // namespace
+
+std::array<float, 4> downsampling_weights(FilterKernel kernel) {
+    if (kernel == FilterKernel::Box) return {0.f, 0.5f, 0.5f, 0.f};
+    auto shape = [kernel](double x) {
+        if (kernel == FilterKernel::Gaussian)
+            return std::exp(-2 * x * x) - std::exp(-2 * 2.0 * 2.0);
+        auto sinc = [](double t) { return t < 1e-9 ? 1.0 : std::sin(kPiD * t) / (kPiD * t); };
+        return sinc(x) * sinc(x / 2);
+    };
+    const double inner = shape(0.5), outer = shape(1.5), sum = 2 * (inner + outer);
+    return {float(outer / sum), float(inner / sum), float(inner / sum), float(outer / sum)};
+}
+
 namespace {
 
-/// Level L + 1's spatial factor from level L's: the mean of each 2 x 2 block of texels,
-/// wrapping around (the texture tiles), for one channel of k components.
+/// Level L + 1's spatial factor from level L's: each parent texel is the weighted sum of the
+/// 4 x 4 children around it (separable `weights`), wrapping around (the texture tiles), for one
+/// channel of k components.
 std::vector<float> downsample(const std::vector<float>& s, uint32_t w, uint32_t h, uint32_t k,
-                              uint32_t& w2, uint32_t& h2) {
+                              const std::array<float, 4>& weights, uint32_t& w2, uint32_t& h2) {
     w2 = std::max(1u, (w + 1) / 2);
     h2 = std::max(1u, (h + 1) / 2);
+    auto wrap = [](int64_t i, uint32_t n) { return uint32_t(((i % n) + n) % n); };
+    std::vector<float> rows(size_t(w2) * h * k, 0.f);  // filtered along x
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w2; ++x)
+            for (int t = 0; t < 4; ++t) {
+                if (weights[t] == 0.f) continue;
+                const float* in = &s[(size_t(y) * w + wrap(2 * int64_t(x) - 1 + t, w)) * k];
+                float* o = &rows[(size_t(y) * w2 + x) * k];
+                for (uint32_t c = 0; c < k; ++c) o[c] += weights[t] * in[c];
+            }
     std::vector<float> out(size_t(w2) * h2 * k, 0.f);
     for (uint32_t y = 0; y < h2; ++y)
-        for (uint32_t x = 0; x < w2; ++x) {
-            float* o = &out[(size_t(y) * w2 + x) * k];
-            for (uint32_t dy = 0; dy < 2; ++dy)
-                for (uint32_t dx = 0; dx < 2; ++dx) {
-                    const uint32_t cx = (2 * x + dx) % w, cy = (2 * y + dy) % h;
-                    const float* in = &s[(size_t(cy) * w + cx) * k];
-                    for (uint32_t c = 0; c < k; ++c) o[c] += 0.25f * in[c];
-                }
-        }
+        for (uint32_t x = 0; x < w2; ++x)
+            for (int t = 0; t < 4; ++t) {
+                if (weights[t] == 0.f) continue;
+                const float* in = &rows[(size_t(wrap(2 * int64_t(y) - 1 + t, h)) * w2 + x) * k];
+                float* o = &out[(size_t(y) * w2 + x) * k];
+                for (uint32_t c = 0; c < k; ++c) o[c] += weights[t] * in[c];
+            }
     return out;
 }
 
@@ -91,8 +115,8 @@ Hierarchy::Hierarchy(const Factors& base, const std::vector<Vec3>& lights,
     while (w > 1 || h > 1) {
         uint32_t w2 = 0, h2 = 0;
         for (int c = 0; c < 3; ++c)
-            spatial_.push_back(
-                downsample(spatial_[spatial_.size() - 3], w, h, components_, w2, h2));
+            spatial_.push_back(downsample(spatial_[spatial_.size() - 3], w, h, components_,
+                                          downsampling_weights(settings.kernel), w2, h2));
         w = w2;
         h = h2;
         widths_.push_back(w);

@@ -50,6 +50,29 @@ double HarmonicBtf::spatial_box_mean(int c, int k, uint32_t x0, uint32_t y0, uin
                              cosine_block_mean(wy, kPhaseY[k], y0, ny);
 }
 
+double HarmonicBtf::spatial_downsampled(int c, int k, int level, uint32_t x, uint32_t y,
+                                        const std::array<float, 4>& weights) const {
+    auto axis = [&](double w, double phase, uint32_t i) {
+        double amplitude = 1;
+        for (int step = 0; step < level; ++step, w *= 2) {
+            double h = 0;
+            for (int t = 0; t < 4; ++t) h += weights[t] * std::cos(w * (t - 1.5));
+            amplitude *= h;
+        }
+        return amplitude * std::cos(w * (double(i) + 0.5) + phase);
+    };
+    const double wx = 2 * kPi * kFreqX[k] / width_, wy = 2 * kPi * kFreqY[k] / height_;
+    return kMean[k][c] + kSwing[k] * axis(wx, kPhaseX[k], x) * axis(wy, kPhaseY[k], y);
+}
+
+double HarmonicBtf::angular_filtered(int k, const Vec3& l, const Vec3& v,
+                                     const std::vector<double>& light_scales,
+                                     const std::vector<double>& view_scales) {
+    if (k == 0) return 1;
+    if (k == 1) return light_scales[1] * view_scales[1] * angular(1, l, v);
+    return light_scales[2] * angular(2, l, v);
+}
+
 double HarmonicBtf::angular(int k, const Vec3& l, const Vec3& v) {
     if (k == 0) return 1;
     if (k == 1) return dotd(l, kAxisA) * dotd(v, kAxisB);

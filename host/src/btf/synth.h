@@ -2,6 +2,7 @@
 // databases cannot be downloaded everywhere, and a closed form tells right from nearly right.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -31,12 +32,22 @@ public:
     double spatial(int c, int k, uint32_t x, uint32_t y) const;
     /// The mean of T_ck over the texels [x0, x0 + nx) x [y0, y0 + ny) (wrapping), in closed form.
     double spatial_box_mean(int c, int k, uint32_t x0, uint32_t y0, uint32_t nx, uint32_t ny) const;
+    /// T_ck at texel (x, y) of the level `level` steps coarser, made by repeatedly downsampling
+    /// with the separable child `weights` (femto/btf_prefilter.h's downsampling_weights, which
+    /// wrap): a cosine of frequency w in a level's texels comes out of one step scaled by
+    /// H(w) = sum_t weights[t] cos(w (t - 1.5)), its frequency doubled, its phase kept.
+    double spatial_downsampled(int c, int k, int level, uint32_t x, uint32_t y,
+                               const std::array<float, 4>& weights) const;
     /// G_k(l, v) for any directions.
     static double angular(int k, const Vec3& l, const Vec3& v);
     /// The mean of G_k over lights in the cap of half-angle alpha_l around l and views in the
     /// cap of half-angle alpha_v around v (Funk-Hecke).
     static double angular_cap_mean(int k, const Vec3& l, const Vec3& v, double alpha_l,
                                    double alpha_v);
+    /// G_k averaged over cones with band scales lambda (kernel_band_scales) for l and for v.
+    static double angular_filtered(int k, const Vec3& l, const Vec3& v,
+                                   const std::vector<double>& light_scales,
+                                   const std::vector<double>& view_scales);
     /// B at texel (x, y) for any directions.
     Color value(uint32_t x, uint32_t y, const Vec3& l, const Vec3& v) const;
 
