@@ -49,14 +49,15 @@ public:
     /// Fails unless the file ends here.
     void expect_end() const;
 
+    // (An empty file is mapped as null: memcpy must not see it, even for 0 bytes.)
     void bytes(void* out, uint64_t n, const char* field) {
         expect(n, 1, field);
-        std::memcpy(out, file_->data() + pos_, n);
+        if (n > 0) std::memcpy(out, file_->data() + pos_, n);
         pos_ += n;
     }
     size_t peek(void* out, size_t n) const {
         n = size_t(std::min<uint64_t>(n, remaining()));
-        std::memcpy(out, file_->data() + pos_, n);
+        if (n > 0) std::memcpy(out, file_->data() + pos_, n);
         return n;
     }
     void skip(uint64_t n, const char* field) {
@@ -75,6 +76,7 @@ public:
     uint8_t u8(const char* field) { return scalar<uint8_t>(field); }
     std::string text(uint64_t n, const char* field) {
         expect(n, 1, field);
+        if (n == 0) return {};
         std::string s(reinterpret_cast<const char*>(file_->data() + pos_), size_t(n));
         pos_ += n;
         return s;
