@@ -44,7 +44,7 @@ if [ ! -f "$BUILD/build.ninja" ]; then
 fi
 # The harnesses and what they load (libfemto, every plugin, the seeds), not the CLI.
 cmake --build "$BUILD" -j "$(nproc)" --target femto_fuzz_xml femto_fuzz_ply femto_fuzz_obj femto_fuzz_serialized \
-  femto_fuzz_vol >/dev/null
+  femto_fuzz_vol femto_fuzz_btf >/dev/null
 
 # Leaks are reported (scripts/test.sh's suppressions: OpenImageIO's own leak). UBSan stops at
 # the first report so that libFuzzer records it as a crash.
