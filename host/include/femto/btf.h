@@ -75,6 +75,15 @@ protected:
     Header header_;
 };
 
+/// The four texels around texture position uv on a width x height texture that tiles (uv (0, 0)
+/// is the bottom-left corner and texel row 0 the top, as for `bitmap`), with their bilinear
+/// weights: corner i is (x[i & 1], y[i >> 1]) with weight weight[i].
+struct BilinearTexels {
+    uint32_t x[2], y[2];
+    float weight[4];
+};
+BilinearTexels bilinear_texels(Vec2 uv, uint32_t width, uint32_t height);
+
 /// Reads a BTF file; throws SceneError ("FILE: FIELD: what is wrong") for anything it cannot
 /// read. Reading never allocates more than the file's size implies.
 std::shared_ptr<const Data> read(const std::string& path);

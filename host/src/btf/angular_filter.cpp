@@ -126,7 +126,7 @@ std::vector<double> kernel_band_scales(FilterKernel kernel, double alpha, int ma
 }
 
 AngularFilter::AngularFilter(const std::vector<Vec3>& directions, int degree, double regularization)
-    : directions_(directions), n_(directions.size()), degree_(degree) {
+    : directions_(directions), mesh_(directions), n_(directions.size()), degree_(degree) {
     const size_t count = size_t(sh_count(degree));
     if (degree < 0 || count > n_)
         throw std::invalid_argument("AngularFilter: degree " + std::to_string(degree) + " needs " +
@@ -158,7 +158,6 @@ std::vector<double> AngularFilter::cone_quadrature(FilterKernel kernel, double a
         return q;
     }
     constexpr int kRings = 12, kAzimuths = 24;  // midpoint rule in theta and phi
-    const DirectionMesh mesh(directions_);
     for (size_t i = 0; i < n_; ++i) {
         const Frame frame(directions_[i]);
         double total = 0.0;
@@ -169,7 +168,7 @@ std::vector<double> AngularFilter::cone_quadrature(FilterKernel kernel, double a
                 const double phi = 2 * kPiD * (a + 0.5) / kAzimuths;
                 const Vec3 local(float(std::sin(theta) * std::cos(phi)),
                                  float(std::sin(theta) * std::sin(phi)), float(std::cos(theta)));
-                const DirectionMesh::Weights iw = mesh.interpolate(frame.to_world(local));
+                const DirectionMesh::Weights iw = mesh_.interpolate(frame.to_world(local));
                 for (int k = 0; k < 3; ++k) q[i * n_ + iw.index[k]] += w * iw.weight[k];
                 total += w;
             }

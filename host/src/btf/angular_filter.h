@@ -53,6 +53,7 @@ private:
     std::vector<double> cone_quadrature(FilterKernel kernel, double alpha) const;
 
     std::vector<Vec3> directions_;
+    DirectionMesh mesh_;  // interpolates the residual inside the cones
     size_t n_;
     int degree_;
     std::vector<double> basis_;    // n x count: Y

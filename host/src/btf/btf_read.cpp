@@ -380,6 +380,24 @@ Color Data::finish(const float raw[3], uint32_t light) const {
     return result;
 }
 
+BilinearTexels bilinear_texels(Vec2 uv, uint32_t width, uint32_t height) {
+    const double fx = double(uv.x) * width - 0.5, fy = (1.0 - double(uv.y)) * height - 0.5;
+    const double x0 = std::floor(fx), y0 = std::floor(fy);
+    const float tx = float(fx - x0), ty = float(fy - y0);
+    auto wrap = [](double i, uint32_t n) {
+        const double m = std::fmod(i, double(n));
+        return uint32_t(m < 0 ? m + n : m) % n;
+    };
+    BilinearTexels t;
+    for (int d = 0; d < 2; ++d) {
+        t.x[d] = wrap(x0 + d, width);
+        t.y[d] = wrap(y0 + d, height);
+    }
+    for (int corner = 0; corner < 4; ++corner)
+        t.weight[corner] = ((corner & 1) ? tx : 1.f - tx) * ((corner >> 1) ? ty : 1.f - ty);
+    return t;
+}
+
 const char* format_name(Format format) {
     switch (format) {
         case Format::Bdi:

@@ -96,12 +96,15 @@ Hierarchy::Hierarchy(const Factors& base, const std::vector<Vec3>& lights,
         throw std::invalid_argument("Hierarchy: more than " + std::to_string(kMaxComponents) +
                                     " components");
     for (double& a : cones_) a *= kPiD / 180;
+    // Bonn files sample lights and views alike: one filter then serves both.
     const AngularFilter light_filter(lights, settings.sh_degree, settings.regularization);
-    const AngularFilter view_filter(views, settings.sh_degree, settings.regularization);
     std::vector<std::vector<double>> fl, fv;
-    for (double a : cones_) {
-        fl.push_back(light_filter.matrix(settings.kernel, a));
-        fv.push_back(view_filter.matrix(settings.kernel, a));
+    for (double a : cones_) fl.push_back(light_filter.matrix(settings.kernel, a));
+    if (lights == views) {
+        fv = fl;
+    } else {
+        const AngularFilter view_filter(views, settings.sh_degree, settings.regularization);
+        for (double a : cones_) fv.push_back(view_filter.matrix(settings.kernel, a));
     }
     for (size_t i = 0; i < cones_.size(); ++i)
         for (size_t j = 0; j < cones_.size(); ++j)
@@ -158,20 +161,13 @@ void Hierarchy::bracket_cone(double angle, size_t& i0, size_t& i1, float& t) con
 }
 
 void Hierarchy::add_spatial(int level, Vec2 uv, float weight, float* s) const {
-    const uint32_t w = widths_[size_t(level)], h = heights_[size_t(level)];
-    const double fx = double(uv.x) * w - 0.5, fy = (1.0 - double(uv.y)) * h - 0.5;
-    const double x0 = std::floor(fx), y0 = std::floor(fy);
-    const float tx = float(fx - x0), ty = float(fy - y0);
-    auto wrap = [](double i, uint32_t n) {
-        const double m = std::fmod(i, double(n));
-        return uint32_t(m < 0 ? m + n : m) % n;
-    };
+    const uint32_t w = widths_[size_t(level)];
+    const BilinearTexels texels = bilinear_texels(uv, w, heights_[size_t(level)]);
     const uint32_t k = components_;
     for (int corner = 0; corner < 4; ++corner) {
-        const int dx = corner & 1, dy = corner >> 1;
-        const float wc = weight * (dx ? tx : 1.f - tx) * (dy ? ty : 1.f - ty);
+        const float wc = weight * texels.weight[corner];
         if (wc == 0.f) continue;
-        const size_t row = wrap(x0 + dx, w) + size_t(w) * wrap(y0 + dy, h);
+        const size_t row = texels.x[corner & 1] + size_t(w) * texels.y[corner >> 1];
         for (int c = 0; c < 3; ++c) {
             const float* in = &spatial_[size_t(level) * 3 + size_t(c)][row * k];
             for (uint32_t i = 0; i < k; ++i) s[size_t(c) * k + i] += wc * in[i];

@@ -208,16 +208,12 @@ private:
         const DirectionMesh::Weights wl = lights_.interpolate(light);
         const DirectionMesh::Weights wv = views_.interpolate(view);
         const btf::Header& h = data_->header();
-        const double fx = double(uv.x) * uv_scale_ * h.width - 0.5;
-        const double fy = (1.0 - double(uv.y) * uv_scale_) * h.height - 0.5;
-        const double x0 = std::floor(fx), y0 = std::floor(fy);
-        const float tx = float(fx - x0), ty = float(fy - y0);
+        const btf::BilinearTexels texels = btf::bilinear_texels(uv * uv_scale_, h.width, h.height);
         Color sum(0.f);
         for (int corner = 0; corner < 4; ++corner) {
-            const int dx = corner & 1, dy = corner >> 1;
-            const float w = (dx ? tx : 1.f - tx) * (dy ? ty : 1.f - ty);
+            const float w = texels.weight[corner];
             if (w == 0.f) continue;
-            const uint32_t x = wrap(x0 + dx, h.width), y = wrap(y0 + dy, h.height);
+            const uint32_t x = texels.x[corner & 1], y = texels.y[corner >> 1];
             for (int i = 0; i < 3; ++i)
                 for (int j = 0; j < 3; ++j) {
                     const float wij = w * wl.weight[i] * wv.weight[j];
@@ -226,11 +222,6 @@ private:
         }
         return sum;
     }
-    static uint32_t wrap(double i, uint32_t n) {
-        const double m = std::fmod(i, double(n));
-        return uint32_t(m < 0 ? m + n : m) % n;
-    }
-
     std::shared_ptr<const btf::Data> data_;
     DirectionMesh lights_, views_;
     float uv_scale_, scale_;
