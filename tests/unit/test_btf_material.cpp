@@ -195,6 +195,48 @@ TEST(BtfMaterial, PrefilteredWithoutAFootprintIsTheFinestLevel) {
     }
 }
 
+TEST(BtfMaterial, LightConeSelectsTheLightFilteredEntries) {
+    // A camera hit whose light sample stands for a cone of light directions
+    // (PixelFootprint::light_cone, e.g. an area light's extent) reads the hierarchy's entries
+    // filtered over that cone: BTF A's closed form, cap means of half-angle 30 degrees over
+    // lights (Funk-Hecke), at a texel centre and sampled directions, for a cone of 30 degrees
+    // and for 15 degrees with scale_light = 2.
+    const auto o = options();
+    const std::string file = synth_file(o, "lightcone.dfmf");
+    const btf::synth::HarmonicBtf closed(o.width, o.height);
+    constexpr double kDeg = 3.14159265358979323846 / 180;
+    for (const double scale_light : {1.0, 2.0}) {
+        Properties p("btf", {});
+        p.set_string("filename", file);
+        p.set_bool("prefilter", true);
+        p.set_float("scale_light", scale_light);
+        const auto bsdf = std::static_pointer_cast<Bsdf>(create_object(PluginKind::Bsdf, "btf", p));
+        double worst = 0, change = 0;
+        for (const uint32_t x : {1u, 6u})
+            for (uint32_t l = 3; l < 81; l += 13)
+                for (uint32_t v = 2; v < 81; v += 17) {
+                    Hit hit = plane_hit(texel_uv(o, x, 2));
+                    hit.footprint.valid = true;  // no derivatives: level 0, no view cone
+                    hit.footprint.light_cone = float(30 * kDeg / scale_light);
+                    const Color got = reflectance(*bsdf, hit, o.directions[v], o.directions[l]);
+                    hit.footprint.light_cone = 0;
+                    const Color sharp = reflectance(*bsdf, hit, o.directions[v], o.directions[l]);
+                    for (int c = 0; c < 3; ++c) {
+                        double want = 0;
+                        for (int k = 0; k < 3; ++k)
+                            want += closed.spatial(c, k, x, 2) *
+                                    btf::synth::HarmonicBtf::angular_cap_mean(
+                                        k, o.directions[l], o.directions[v], 30 * kDeg, 0);
+                        worst = std::max(worst, std::abs(got[c] - want));
+                        change = std::max(change, double(std::abs(got[c] - sharp[c])));
+                    }
+                }
+        // Float factors and pi / cos: as the unfiltered lookup, 1e-5.
+        EXPECT_LT(worst, 1e-5) << "scale_light " << scale_light;
+        EXPECT_GT(change, 1e-2) << "the cone must change the value";
+    }
+}
+
 TEST(BtfMaterial, BadParametersAreLocatedErrors) {
     const std::string good = synth_file(options(), "good.dfmf");
     auto scene = [](const std::string& params) {

@@ -4,18 +4,24 @@
 // And a transient render of it integrates to the steady one.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "agreement_util.h"
 #include "btf/synth.h"
 #include "btf_test_util.h"
 #include "cube_util.h"
+#include "femto/direction_mesh.h"
 #include "scene_util.h"
 
 namespace {
 
 using namespace femto;
 using namespace femto::test;
+
+constexpr double kPiD = 3.14159265358979323846;
 
 std::string btf_file() { return write_btf(small_btf_a(), "btf-render", "a.dfmf"); }
 
@@ -126,6 +132,111 @@ TEST(BtfRender, PrefilteredPlaneMatchesTheClosedFormAtEveryDistance) {
         EXPECT_LT(worst, 2e-5) << "r = " << r;
         std::printf("[btf] r = %3d (%3d x %3d pixels): worst relative error %.2g\n", r, n, n,
                     worst);
+    }
+}
+
+TEST(BtfRender, AreaLightIsFilteredOverTheConeItSubtends) {
+    // Thesis ch. 3's light solid angle, end to end: a prefiltered BTF-A plane lit by a spherical
+    // area light (at distance 2, a 40-degree cone, beside the camera's view), seen by an
+    // orthographic camera whose one pixel covers 0.002 x 0.002 of the plane's centre (level 0;
+    // texel coordinate 3.5, so bilinear weights of 1/4 on texels 3 and 4 in x and y, and linear
+    // within the pixel). `direct` takes one light sample per camera sample (uniform in the sphere's
+    // visible cone) and the material filters it over PixelFootprint::light_cone = 30 degrees
+    // plus half the light direction's turn across the pixel. Expected
+    // value and the estimator's variance by quadrature over the cone, with the hierarchy's own
+    // rules: barycentric between sampled directions, linear between its 30 and 45-degree entries.
+    btf::synth::Options o = small_btf_a();
+    o.height = 8;
+    const std::string file = write_btf(o, "btf-render", "cone.dfmf");
+    const btf::synth::HarmonicBtf closed(o.width, o.height);
+    const Vec3 centre(1.5f, 0.f, float(std::sqrt(1.75)));
+    const double radius = 2 * std::sin(40 * kPiD / 180), radiance = 3, half_pixel = 0.001;
+    constexpr int kSpp = 262144;
+    const std::string xml =
+        "<scene version=\"3.0.0\"><integrator type=\"direct\"><integer name=\"bsdf_samples\" "
+        "value=\"0\"/></integrator><sensor type=\"orthographic\"><transform "
+        "name=\"to_world\"><scale x=\"" +
+        xml_number(half_pixel) + "\" y=\"" + xml_number(half_pixel) +
+        "\"/><lookat origin=\"0, 0, 5\" target=\"0, 0, 0\" up=\"0, 1, 0\"/></transform>" +
+        independent_sampler(kSpp) +
+        "<film type=\"hdrfilm\"><integer name=\"width\" value=\"1\"/><integer name=\"height\" "
+        "value=\"1\"/><rfilter type=\"box\"/></film></sensor><shape type=\"sphere\"><point "
+        "name=\"center\" x=\"1.5\" y=\"0\" z=\"" +
+        xml_number(centre.z) + "\"/><float name=\"radius\" value=\"" + xml_number(radius) +
+        "\"/>"
+        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"" +
+        xml_number(radiance) +
+        "\"/></emitter></shape><shape type=\"rectangle\"><bsdf type=\"btf\"><string "
+        "name=\"filename\" value=\"" +
+        file + "\"/><boolean name=\"prefilter\" value=\"true\"/></bsdf></shape></scene>";
+    const auto scene = load_scene_string(xml);
+    const std::vector<float> image = femto::testing::render_steady(*scene, 1);
+    ASSERT_EQ(image.size(), 3u);
+
+    const DirectionMesh lights(o.directions), views(o.directions);
+    const DirectionMesh::Weights wv = views.interpolate(Vec3(0, 0, 1));
+    constexpr double kDeg = kPiD / 180;
+    // B(l, v = normal) for channel c with the light filtered over `cone` (radians).
+    auto reflectance = [&](int c, const Vec3& l, double cone, bool filtered) {
+        const DirectionMesh::Weights wl = lights.interpolate(l);
+        const double t = filtered ? std::clamp((cone - 30 * kDeg) / (15 * kDeg), 0.0, 1.0) : 0;
+        const double a0 = filtered ? 30 * kDeg : 0, a1 = 45 * kDeg;
+        double b = 0;
+        for (int k = 0; k < 3; ++k) {
+            double s = 0;
+            for (const uint32_t x : {3u, 4u})
+                for (const uint32_t y : {3u, 4u}) s += 0.25 * closed.spatial(c, k, x, y);
+            double g = 0;
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) {
+                    const double w = double(wl.weight[i]) * wv.weight[j];
+                    if (w == 0) continue;
+                    const Vec3 &dl = o.directions[wl.index[i]], &dv = o.directions[wv.index[j]];
+                    using H = btf::synth::HarmonicBtf;
+                    g += w * ((1 - t) * H::angular_cap_mean(k, dl, dv, a0, 0) +
+                              (t > 0 ? t * H::angular_cap_mean(k, dl, dv, a1, 0) : 0.0));
+                }
+            b += s * g;
+        }
+        return b;
+    };
+    const double D = length(centre), alpha = std::asin(radius / D);
+    const double solid_angle = 2 * kPiD * (1 - std::cos(alpha));
+    const Frame frame(normalize(centre));
+    constexpr int kTheta = 192, kPhi = 384;
+    for (int c = 0; c < 3; ++c) {
+        double mean = 0, second = 0, unfiltered = 0;
+        for (int i = 0; i < kTheta; ++i) {
+            const double th = (i + 0.5) * alpha / kTheta;
+            for (int j = 0; j < kPhi; ++j) {
+                const double ph = (j + 0.5) * 2 * kPiD / kPhi;
+                const Vec3 l =
+                    frame.to_world(Vec3(float(std::sin(th) * std::cos(ph)),
+                                        float(std::sin(th) * std::sin(ph)), float(std::cos(th))));
+                // Distance to the sphere along l, and the turn of l across the pixel's step.
+                const double b = dot(l, centre);
+                const double dist = b - std::sqrt(std::max(0.0, b * b - (D * D - radius * radius)));
+                const double step = 2 * half_pixel;
+                const double turn = std::max(step * std::sqrt(1 - double(l.x) * l.x),
+                                             step * std::sqrt(1 - double(l.y) * l.y)) /
+                                    dist;
+                const double cone = alpha + 0.5 * turn;
+                const double dw = std::sin(th) * (alpha / kTheta) * (2 * kPiD / kPhi);
+                const double g = radiance * reflectance(c, l, cone, true) / kPiD * l.z;
+                mean += g * dw;
+                second += g * g * dw;
+                unfiltered += radiance * reflectance(c, l, 0, false) / kPiD * l.z * dw;
+            }
+        }
+        const double sigma = std::sqrt(std::max(0.0, solid_angle * second - mean * mean));
+        const double tolerance = 5 * sigma / std::sqrt(double(kSpp));
+        std::printf(
+            "[btf] area light, channel %d: rendered %.5f, cone-filtered %.5f +- %.5f "
+            "(5 sigma), unfiltered %.5f\n",
+            c, image[size_t(c)], mean, tolerance, unfiltered);
+        EXPECT_NEAR(image[size_t(c)], mean, tolerance) << "channel " << c;
+        EXPECT_GT(std::abs(unfiltered - mean), 2 * tolerance)
+            << "the test must tell the filtered light from the unfiltered one";
     }
 }
 

@@ -138,6 +138,17 @@ public:
     /// their plane waves and light-path starts by it.
     virtual void set_scene_sphere(const SceneSphere& /*sphere*/) {}
 
+    /// Half-angle (radians) of the cone of directions in which `ref` sees the emitter: what
+    /// a light sample stands for when a material prefilters over the light's directions
+    /// (thesis ch. 3: the solid angle "subtended by a pixel and the light source"). The
+    /// default covers every built-in kind: an area emitter's shape
+    /// (Shape::subtended_half_angle()), pi for environments (light from every direction), 0
+    /// for point-like and collimated emitters.
+    virtual float subtended_half_angle(const Vec3& ref) const {
+        if (shape_) return shape_->subtended_half_angle(ref);
+        return is_infinite() && !is_delta() ? kPi : 0.f;
+    }
+
     /// Area emitters are attached to the shape that holds them, by the host.
     void set_shape(const Shape* shape) { shape_ = shape; }
     const Shape* shape() const { return shape_; }

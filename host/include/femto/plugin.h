@@ -45,7 +45,9 @@ namespace femto {
 ///  eval_adjoint()/sample_adjoint() for paths traced from the lights.)
 /// (20: ray differentials: Ray::differential, RayDifferential, Sensor::sample_differential(),
 ///  Hit::footprint (PixelFootprint).)
-inline constexpr uint32_t kPluginAbiVersion = 20;
+/// (21: the light's cone at a shading point: PixelFootprint::light_cone changes Hit's layout;
+///  Emitter::subtended_half_angle(), Shape::subtended_half_angle().)
+inline constexpr uint32_t kPluginAbiVersion = 21;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -34,6 +34,11 @@ struct PixelFootprint {
     Vec3 dp_dx, dp_dy;    ///< change of the position (world)
     Vec3 dn_dx, dn_dy;    ///< change of the shading normal (world)
     Vec3 dd_dx, dd_dy;    ///< change of the ray direction (world, unit directions)
+    /// Half-angle (radians) of the light directions the current light sample stands for over
+    /// the pixel: the emitter's own cone at p plus half the turn of its direction across the
+    /// footprint. Set by sample_emitter(scene, Hit&, sampler) (femto/transport.h) before the
+    /// material is evaluated toward the light; 0 until then.
+    float light_cone = 0.f;
 };
 
 /// A ray-surface intersection, everything an integrator needs at a path vertex.
@@ -133,6 +138,10 @@ public:
     ShapeSample sample_direct(const Vec3& ref, Vec2 u) const;
     /// Solid-angle pdf of sample_direct() choosing `hit` (a hit on this shape) from `ref`.
     float pdf_direct(const Vec3& ref, const Hit& hit) const;
+    /// Half-angle (radians) of a cone from `ref` holding the whole shape: exact for a sphere,
+    /// the cone around a bounding sphere otherwise; pi when `ref` is inside that sphere. What a
+    /// prefiltering material needs of an area light's extent (thesis ch. 3's light solid angle).
+    float subtended_half_angle(const Vec3& ref) const;
     /// Uniform point on the surface (area measure, pdf = 1/area).
     ShapeSample sample_area(Vec2 u) const;
 
@@ -167,6 +176,8 @@ private:
     Frame cylinder_frame_;
     float length_ = 0.f;
     float area_ = 0.f;
+    Vec3 bound_center_;  // a sphere holding the shape (subtended_half_angle())
+    float bound_radius_ = 0.f;
     std::shared_ptr<Bsdf> bsdf_;
     std::shared_ptr<Emitter> emitter_;
     std::shared_ptr<Sensor> sensor_;

@@ -137,6 +137,33 @@ inline EmitterSample sample_emitter(const Scene& scene, const Vec3& ref, Sampler
     return scene.sample_emitter(ref, u_select, sampler.next_2d());
 }
 
+/// The half-angle of light directions `light` stands for over a camera ray's pixel footprint
+/// at `p` (PixelFootprint::light_cone): the cone the emitter subtends there, plus half the
+/// turn of the direction toward a light at finite distance across the pixel (the
+/// perpendicular part of the footprint's step over the distance). At most pi.
+inline float footprint_light_cone(const PixelFootprint& f, const Vec3& p,
+                                  const EmitterSample& light) {
+    float cone = light.emitter ? light.emitter->subtended_half_angle(p) : 0.f;
+    if (light.emitter && !light.emitter->is_infinite() && light.distance > 0.f) {
+        auto turn = [&](const Vec3& dp) {
+            return length(dp - light.wi * dot(dp, light.wi)) / light.distance;
+        };
+        cone += 0.5f * std::max(turn(f.dp_dx), turn(f.dp_dy));
+    }
+    return std::min(cone, kPi);
+}
+
+/// sample_emitter() at a surface hit: when a camera ray found it (hit.footprint.valid), also
+/// sets hit.footprint.light_cone for the sample, so that a prefiltering material (btf)
+/// evaluated toward the light, and then sampled to continue the path, filters over the light
+/// directions the pixel sees. Other materials ignore it.
+inline EmitterSample sample_emitter(const Scene& scene, Hit& hit, Sampler& sampler) {
+    const EmitterSample light = sample_emitter(scene, hit.p, sampler);
+    if (hit.footprint.valid)
+        hit.footprint.light_cone = footprint_light_cone(hit.footprint, hit.p, light);
+    return light;
+}
+
 /// Receives the pieces a shadow connection crosses between boundaries, in order from the
 /// connection's start (`medium` null in vacuum): a bidirectional integrator weighs its
 /// strategies with the distance densities of these pieces (SegmentDensities).

@@ -97,6 +97,15 @@ void Shape::set_mesh(TriangleMesh mesh) {
     triangle_cdf_.resize(n + 1);
     for (size_t i = 0; i <= n; ++i) triangle_cdf_[i] = float(acc[i] / acc[n]);
     triangle_cdf_[n] = 1.f;
+    Vec3 lo = mesh_.positions[0], hi = lo;
+    for (const Vec3& q : mesh_.positions) {
+        lo = Vec3(std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z));
+        hi = Vec3(std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z));
+    }
+    bound_center_ = (lo + hi) * 0.5f;
+    bound_radius_ = 0.f;
+    for (const Vec3& q : mesh_.positions)
+        bound_radius_ = std::max(bound_radius_, length(q - bound_center_));
 }
 
 void Shape::set_sphere(const Vec3& center, float radius) {
@@ -115,6 +124,8 @@ void Shape::set_sphere(const Vec3& center, float radius) {
     center_ = center;
     radius_ = radius;
     area_ = 4.f * kPi * radius * radius;
+    bound_center_ = center;
+    bound_radius_ = radius;
 }
 
 void Shape::set_cylinder(const Vec3& base, const Frame& frame, float radius, float length) {
@@ -140,6 +151,14 @@ void Shape::set_cylinder(const Vec3& base, const Frame& frame, float radius, flo
     radius_ = radius;
     length_ = length;
     area_ = float(2.0 * double(kPi) * double(radius) * double(length));
+    bound_center_ = base + frame.n * (0.5f * length);
+    bound_radius_ = std::hypot(radius, 0.5f * length);
+}
+
+float Shape::subtended_half_angle(const Vec3& ref) const {
+    const float d = length(ref - bound_center_);
+    if (!(d > bound_radius_)) return kPi;
+    return std::asin(bound_radius_ / d);
 }
 
 bool Shape::intersect_cylinder(const Ray& ray, float& t_hit) const {

@@ -15,8 +15,10 @@
 // femto/btf_prefilter.h) at the level and cones a camera ray's pixel footprint selects
 // (Hit::footprint): the texel-to-pixel ratio r = the longer of the pixel's two steps in texels,
 // times scale_spatial; the light cone = half the pixel's change of the normal (the light's
-// direction relative to the surface turns with it), times scale_light; the view cone = half the
-// pixel's change of the view direction relative to the surface (ray direction plus normal),
+// direction relative to the surface turns with it) plus the cone of light directions the light
+// sample stands for (PixelFootprint::light_cone: the emitter's extent and its direction's turn
+// across the pixel, set by the toolkit's light sampling), times scale_light; the view cone = half
+// the pixel's change of the view direction relative to the surface (ray direction plus normal),
 // times scale_view. Rays without a footprint (after the first bounce) see the finest level,
 // unfiltered. A BTF is not reciprocal: paths from the lights evaluate it through
 // eval_adjoint(), with the camera's side as the view.
@@ -188,7 +190,7 @@ private:
         };
         ratio = scale_spatial_ * std::max(texels(f.duv_dx), texels(f.duv_dy));
         const double turn = std::max(length(f.dn_dx), length(f.dn_dy));
-        light_cone = scale_light_ * 0.5 * turn;
+        light_cone = scale_light_ * (0.5 * turn + f.light_cone);
         view_cone = scale_view_ * 0.5 *
                     std::max(length(f.dd_dx) + length(f.dn_dx), length(f.dd_dy) + length(f.dn_dy));
     }

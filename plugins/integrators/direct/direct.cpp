@@ -49,7 +49,7 @@ public:
         const float ne = float(emitter_samples_), nb = float(bsdf_samples_);
         if (bsdf.flags() & kBsdfSmooth)
             for (int64_t i = 0; i < emitter_samples_; ++i) {
-                const EmitterSample light = sample_emitter(scene, hit.p, sampler);
+                const EmitterSample light = sample_emitter(scene, hit, sampler);
                 if (!(light.pdf > 0) || light.weight.is_black()) continue;
                 const Vec3 wo = hit.to_local(light.wi);
                 const Color f = bsdf.eval(hit, hit.wi, wo);

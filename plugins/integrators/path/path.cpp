@@ -121,8 +121,7 @@ private:
     // ---- surfaces ----------------------------------------------------------------------------
 
     // The path reaches surface `hit`. Returns false when it ends there.
-    bool surface_vertex(const Scene& scene, Sampler& sampler, PathState& path,
-                        const Hit& hit) const {
+    bool surface_vertex(const Scene& scene, Sampler& sampler, PathState& path, Hit& hit) const {
         const Bsdf& bsdf = *hit.shape->bsdf();
         path.clock.travel_to(hit.p, path.medium.eta());
         if (!bsdf.is_null()) path.clock.reach_vertex();
@@ -155,10 +154,11 @@ private:
     }
 
     // Next-event estimation at a surface: one light sample and its shadow connection; the
-    // light arrives over the connection's optical length.
-    void surface_light(const Scene& scene, Sampler& sampler, PathState& path, const Hit& hit,
+    // light arrives over the connection's optical length. (The sample also tells a camera
+    // ray's hit which light directions it stands for: PixelFootprint::light_cone.)
+    void surface_light(const Scene& scene, Sampler& sampler, PathState& path, Hit& hit,
                        const Bsdf& bsdf) const {
-        const EmitterSample light = sample_emitter(scene, hit.p, sampler);
+        const EmitterSample light = sample_emitter(scene, hit, sampler);
         if (light.pdf > 0 && !light.weight.is_black()) {
             const Vec3 wo = hit.to_local(light.wi);
             const Color f = bsdf.eval(hit, hit.wi, wo);

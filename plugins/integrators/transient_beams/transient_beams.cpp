@@ -164,10 +164,10 @@ private:
     void trace_beams(const Scene& scene, const PassInfo& pass);
     bool medium_segment(Sampler& sampler, EyePath& eye, bool found, const Hit& hit) const;
     void gather(Sampler& sampler, const EyePath& eye, double length) const;
-    bool surface_vertex(const Scene& scene, Sampler& sampler, EyePath& eye, const Hit& hit) const;
+    bool surface_vertex(const Scene& scene, Sampler& sampler, EyePath& eye, Hit& hit) const;
     void emitter_hit(const Scene& scene, Sampler& sampler, EyePath& eye, const Hit& hit,
                      const Emitter& emitter) const;
-    void surface_light(const Scene& scene, Sampler& sampler, EyePath& eye, const Hit& hit,
+    void surface_light(const Scene& scene, Sampler& sampler, EyePath& eye, Hit& hit,
                        const Bsdf& bsdf) const;
     bool continue_from_surface(Sampler& sampler, EyePath& eye, const Hit& hit,
                                const Bsdf& bsdf) const;
@@ -284,7 +284,7 @@ void TransientBeams::gather(Sampler& sampler, const EyePath& eye, double length)
 
 // The camera path reaches surface `hit`. Returns false when it ends there.
 bool TransientBeams::surface_vertex(const Scene& scene, Sampler& sampler, EyePath& eye,
-                                    const Hit& hit) const {
+                                    Hit& hit) const {
     const Bsdf& bsdf = *hit.shape->bsdf();
     eye.clock.travel_to(hit.p, eye.medium.eta());
     if (!bsdf.is_null()) eye.clock.reach_vertex();
@@ -316,9 +316,9 @@ void TransientBeams::emitter_hit(const Scene& scene, Sampler& sampler, EyePath& 
 
 // Next-event estimation at a surface: one light sample and its shadow connection, through
 // media with their transmittance; the light arrives over the connection's optical length.
-void TransientBeams::surface_light(const Scene& scene, Sampler& sampler, EyePath& eye,
-                                   const Hit& hit, const Bsdf& bsdf) const {
-    const EmitterSample light = sample_emitter(scene, hit.p, sampler);
+void TransientBeams::surface_light(const Scene& scene, Sampler& sampler, EyePath& eye, Hit& hit,
+                                   const Bsdf& bsdf) const {
+    const EmitterSample light = sample_emitter(scene, hit, sampler);
     if (!(light.pdf > 0) || light.weight.is_black()) return;
     const Vec3 wo = hit.to_local(light.wi);
     const Color f = bsdf.eval(hit, hit.wi, wo);
