@@ -275,6 +275,11 @@ int cmd_render(const std::string& scene_path, std::string out_base,
                    stats.interrupted ? "Interrupted after" : "Rendered", stats.spp_done,
                    stats.spp_requested, stats.seconds,
                    stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0, out_base);
+    if (!quiet && stats.adaptive) {
+        const femto::Film& film = scene->sensor().film();
+        fmt::print(stderr, "adaptive sampling: {:.1f} samples per pixel on average\n",
+                   double(stats.camera_samples) / (double(film.width()) * film.height()));
+    }
     const auto write_start = std::chrono::steady_clock::now();
     auto files = scene->sensor().film().write(out_base, info);
     for (auto& f : scene->integrator().write(out_base, info)) files.push_back(std::move(f));

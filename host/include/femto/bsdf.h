@@ -91,6 +91,15 @@ public:
     /// sample_adjoint() below, which swap the roles for such materials.
     virtual bool reciprocal() const { return true; }
 
+    /// Adaptive sampling (thesis ch. 3, Fig. 3.15): true when pixel_sample_share() can be
+    /// below 1. The renderer then casts one ray through each pixel's centre before rendering.
+    virtual bool adapts_sampling() const { return false; }
+    /// The share s of the base sample count (spp_0) that a pixel whose centre ray first meets
+    /// this material at `hit` needs: the renderer takes spp_p = max(1, ceil(s x spp_0))
+    /// samples there. `hit.footprint` holds the pixel's footprint. Values outside (0, 1] are
+    /// clamped. Only called when adapts_sampling() is true.
+    virtual float pixel_sample_share(const Hit& /*hit*/) const { return 1.f; }
+
     bool has_delta_only() const { return (flags() & kBsdfSmooth) == 0; }
     bool is_null() const { return flags() == kBsdfNull; }
 };

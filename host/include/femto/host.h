@@ -65,7 +65,12 @@ struct RenderStats {
     uint32_t spp_requested = 0;
     double seconds = 0;
     uint64_t rays = 0;
+    /// Camera samples taken over the image: pixels x spp_done, fewer with adaptive sampling
+    /// (Bsdf::pixel_sample_share()).
     uint64_t camera_samples = 0;
+    /// Adaptive sampling took a count of samples per pixel (camera_samples / pixels on
+    /// average) from the materials the pixels see first.
+    bool adaptive = false;
     bool interrupted = false;
     /// What the film refused over its life (every render into it), by reason.
     RejectedContributions rejected;

@@ -47,7 +47,8 @@ namespace femto {
 ///  Hit::footprint (PixelFootprint).)
 /// (21: the light's cone at a shading point: PixelFootprint::light_cone changes Hit's layout;
 ///  Emitter::subtended_half_angle(), Shape::subtended_half_angle().)
-inline constexpr uint32_t kPluginAbiVersion = 21;
+/// (22: adaptive sampling: Bsdf::adapts_sampling()/pixel_sample_share().)
+inline constexpr uint32_t kPluginAbiVersion = 22;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -12,6 +12,7 @@
 #include <unistd.h>
 #include <xmmintrin.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -19,10 +20,13 @@
 #include <cstdio>
 #include <mutex>
 #include <thread>
+#include <vector>
 
+#include "femto/bsdf.h"
 #include "femto/host.h"
 #include "femto/integrator.h"
 #include "femto/log.h"
+#include "femto/scene.h"
 #include "femto/sensor.h"
 
 namespace femto {
@@ -121,14 +125,87 @@ std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H, int tile) {
     return by_colour;
 }
 
+// Adaptive sampling (thesis ch. 3, Fig. 3.15): how many camera samples each pixel takes, spp_p =
+// max(1, ceil(s x spp)) with s the share the material its centre ray meets first asks for
+// (Bsdf::pixel_sample_share()). Empty: every pixel takes spp.
+struct PixelCounts {
+    std::vector<uint32_t> count;  // per pixel, row-major; empty when not adaptive
+    uint32_t spp = 0;
+
+    uint32_t end(uint64_t pixel, uint32_t s1) const {
+        return count.empty() ? s1 : std::min(s1, count[pixel]);
+    }
+    // Samples [s0, s1) of the pixels of `tile` take, in every row or only in the film's
+    // active ones.
+    uint64_t in(const Tile& tile, int width, uint32_t s0, uint32_t s1, const Film* active) const {
+        uint64_t n = 0;
+        for (int y = tile.y0; y < tile.y0 + tile.h; ++y) {
+            if (active && !active->row_active(y)) continue;
+            if (count.empty()) {
+                n += uint64_t(tile.w) * (s1 - s0);
+                continue;
+            }
+            for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
+                const uint32_t e = end(uint64_t(y) * uint64_t(width) + uint64_t(x), s1);
+                n += e > s0 ? e - s0 : 0;
+            }
+        }
+        return n;
+    }
+};
+
+bool adapts_sampling(const Scene& scene) {
+    for (const auto& shape : scene.shapes())
+        if (shape->bsdf() && shape->bsdf()->adapts_sampling()) return true;
+    return false;
+}
+
+// One ray through each pixel's centre (with its differential, for the footprint) finds the
+// material that sets the pixel's count. Integrators that splat put light on other pixels than
+// their camera sample's, which per-pixel counts would weigh wrongly: they take spp everywhere.
+PixelCounts pixel_counts(const Scene& scene, uint32_t spp, bool splatting) {
+    PixelCounts counts;
+    counts.spp = spp;
+    if (!adapts_sampling(scene)) return counts;
+    if (splatting) {
+        log_warning(
+            fmt::format("adaptive sampling is off: {} splats light onto other pixels "
+                        "than its camera samples', so every pixel takes {} samples",
+                        scene.integrator().type_name(), spp));
+        return counts;
+    }
+    const Sensor& sensor = scene.sensor();
+    const int W = sensor.film().width(), H = sensor.film().height();
+    counts.count.assign(size_t(W) * size_t(H), spp);
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) {
+            const Vec2 pos{float(x) + 0.5f, float(y) + 0.5f}, aperture{0.5f, 0.5f};
+            Ray ray = sensor.sample_ray(pos, aperture);
+            RayDifferential differential;
+            if (sensor.sample_differential(pos, aperture, differential))
+                ray.differential = &differential;
+            Hit hit;
+            if (!scene.intersect(ray, hit) || !hit.shape->bsdf()) continue;
+            const Bsdf& bsdf = *hit.shape->bsdf();
+            if (!bsdf.adapts_sampling()) continue;
+            const float share = bsdf.pixel_sample_share(hit);
+            const double s = std::isfinite(share) ? std::clamp(double(share), 0.0, 1.0) : 1.0;
+            counts.count[size_t(y) * size_t(W) + size_t(x)] =
+                std::max<uint32_t>(1, uint32_t(std::min(double(spp), std::ceil(s * spp))));
+        }
+    });
+    return counts;
+}
+
 // Samples [s0, s1) of every pixel of `tile`: each camera sample's numbers come from (seed,
 // pixel, sample index) alone. The tile's block is merged into the film at the end. A stop
 // request ends the tile early (Ctrl-C takes effect within a few samples' work, whatever the
 // pass size): the samples taken are merged, so the pixels keep valid, if unequal, estimates.
-// Returns the number of camera samples taken.
+// With adaptive sampling a pixel stops at its own count. Returns the number of camera samples
+// taken.
 uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0, uint32_t s1,
-                     Sampler& sampler, ContributionList& list, SplatList* splats,
-                     const std::atomic<bool>* stop) {
+                     const PixelCounts& counts, Sampler& sampler, ContributionList& list,
+                     SplatList* splats, const std::atomic<bool>* stop) {
     const Sensor& sensor = scene.sensor();
     Film& film = sensor.film();
     const Integrator& integrator = scene.integrator();
@@ -141,7 +218,8 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
         if (!film.row_active(y)) continue;
         for (int x = tile.x0; x < tile.x0 + tile.w; ++x) {
             const uint64_t pixel = uint64_t(y) * uint64_t(film.width()) + uint64_t(x);
-            for (uint32_t s = s0; s < s1; ++s) {
+            const uint32_t end = counts.end(pixel, s1);
+            for (uint32_t s = s0; s < end; ++s) {
                 if (stop && stop->load(std::memory_order_relaxed)) {
                     film.merge(*block);
                     return taken;
@@ -300,7 +378,13 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
             : uint32_t(std::max<uint64_t>(
                   1, std::min<uint64_t>((spp + 15) / 16, max_pass_samples / pixels)));
     const uint32_t pilot_spp = film.pilot_samples();
-    Progress progress(options.progress, pixels * (uint64_t(spp) + pilot_spp));
+    const PixelCounts counts = pixel_counts(scene, spp, splatting);
+    uint64_t image_samples = pixels * uint64_t(spp);  // what the passes take, all rows
+    if (!counts.count.empty()) {
+        image_samples = 0;
+        for (const uint32_t n : counts.count) image_samples += n;
+    }
+    Progress progress(options.progress, image_samples + pixels * pilot_spp);
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
         [&] { return prototype.clone(); });
     tbb::enumerable_thread_specific<ContributionList> lists;
@@ -309,27 +393,29 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     // Camera samples [s0, s1) of every pixel, tiles of one colour at a time, the splats of each
     // colour's tiles merged after it; returns the share of the pass's samples taken (1 unless
     // stopped).
-    uint64_t active_pixels = 0;
-    for (int y = 0; y < H; ++y) active_pixels += film.row_active(y) ? uint64_t(W) : 0;
     std::vector<SplatList> tile_splats;
     auto run_camera_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1) {
         std::atomic<uint64_t> taken{0};
+        uint64_t expected = 0;  // in the film's active rows
+        for (const auto& tiles : by_colour)
+            for (const Tile& t : tiles) expected += counts.in(t, W, s0, s1, &film);
         for (const auto& tiles : by_colour) {
             if (splatting) tile_splats.resize(std::max(tile_splats.size(), tiles.size()));
             tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
                 enable_flush_to_zero();
                 SplatList* splats = splatting ? &tile_splats[t] : nullptr;
                 if (splats) splats->clear();
-                taken += render_tile(scene, tiles[t], seed, s0, s1, *samplers.local(),
+                taken += render_tile(scene, tiles[t], seed, s0, s1, counts, *samplers.local(),
                                      lists.local(), splats, options.stop);
-                progress.advance(uint64_t(tiles[t].w) * uint64_t(tiles[t].h) * (s1 - s0));
+                progress.advance(counts.in(tiles[t], W, s0, s1, nullptr));
             });
             if (!splatting) continue;
             std::vector<const SplatList*> in_order;
             for (size_t t = 0; t < tiles.size(); ++t) in_order.push_back(&tile_splats[t]);
             merger.merge(film, in_order);
         }
-        return double(taken.load()) / double(std::max<uint64_t>(1, active_pixels * (s1 - s0)));
+        // (A pass in which no pixel has samples left, adaptive sampling's, is complete.)
+        return expected == 0 ? 1.0 : double(taken.load()) / double(expected);
     };
 
     // Light paths of samples [s0, s1): pixels x (s1 - s0) of them, in waves of fixed chunks
@@ -392,6 +478,11 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.rays = scene.rays_traced() - rays_before;
     stats.camera_samples = pixels * stats.spp_done;
+    if (!counts.count.empty()) {
+        stats.camera_samples = 0;
+        for (const uint32_t n : counts.count) stats.camera_samples += std::min(n, stats.spp_done);
+        stats.adaptive = true;
+    }
     stats.rejected = film.rejected();
     if (const RejectedContributions& r = stats.rejected; r.total() > 0)
         log_warning(

@@ -20,7 +20,9 @@
 // across the pixel, set by the toolkit's light sampling), times scale_light; the view cone = half
 // the pixel's change of the view direction relative to the surface (ray direction plus normal),
 // times scale_view. Rays without a footprint (after the first bounce) see the finest level,
-// unfiltered. A BTF is not reciprocal: paths from the lights evaluate it through
+// unfiltered. With `adaptive_spp` (thesis Fig. 3.15), a pixel whose centre ray meets the
+// material first takes share(r) of the render's samples per pixel (femto/bsdf.h,
+// pixel_sample_share()). A BTF is not reciprocal: paths from the lights evaluate it through
 // eval_adjoint(), with the camera's side as the view.
 #include "femto/btf.h"
 
@@ -70,6 +72,7 @@ public:
         const btf::PcaSettings pca = pca_settings(props);
         const bool cache = props.get_bool("cache", true);
         if (prefilter) hierarchy_ = build_hierarchy(props, settings, pca, cache);
+        sample_shares_ = sample_shares(props);
     }
 
     uint32_t flags() const override { return kBsdfGlossyReflection; }
@@ -94,6 +97,22 @@ public:
     float pdf(const Hit&, const Vec3& wi, const Vec3& wo) const override {
         if (wi.z <= 0.f || wo.z <= 0.f) return 0.f;
         return warp::cosine_hemisphere_pdf(wo);
+    }
+
+    bool adapts_sampling() const override { return !sample_shares_.empty(); }
+    /// `adaptive_spp`'s share at the pixel's texel-to-pixel ratio: linear in log2 r between
+    /// the table's entries, its first and last share beyond them.
+    float pixel_sample_share(const Hit& hit) const override {
+        if (sample_shares_.empty() || !hit.footprint.valid) return 1.f;
+        const double r = texel_ratio(hit.footprint);
+        const double x = r > 0 ? std::log2(r) : -1e300;
+        if (x <= sample_shares_.front().first) return float(sample_shares_.front().second);
+        for (size_t i = 1; i < sample_shares_.size(); ++i) {
+            const auto& [x1, s1] = sample_shares_[i];
+            const auto& [x0, s0] = sample_shares_[i - 1];
+            if (x <= x1) return float(s0 + (s1 - s0) * (x - x0) / (x1 - x0));
+        }
+        return float(sample_shares_.back().second);
     }
 
 private:
@@ -138,6 +157,33 @@ private:
                         "the prefiltered BTF is not cached: " + report.cache_problem);
         return h;
     }
+    /// `adaptive_spp`: "r:s, r:s, ..." pairs of a texel-to-pixel ratio (increasing, > 0) and
+    /// the share of the base sample count a pixel at that ratio takes (0 < s <= 1); stored as
+    /// (log2 r, s). Empty: no adaptive sampling.
+    static std::vector<std::pair<double, double>> sample_shares(const Properties& props) {
+        std::vector<std::pair<double, double>> table;
+        std::istringstream in(props.get_string("adaptive_spp", ""));
+        const char* form =
+            "adaptive_spp must be \"ratio:share\" pairs separated by commas, "
+            "ratios increasing from above 0 and shares in (0, 1], e.g. \"1:1, "
+            "16:0.25\"";
+        for (std::string item; std::getline(in, item, ',');) {
+            if (item.find_first_not_of(" \t") == std::string::npos && table.empty() && in.eof())
+                break;  // the empty default
+            char* end = nullptr;
+            const double r = std::strtod(item.c_str(), &end);
+            if (end == item.c_str() || *end != ':') props.fail("adaptive_spp", form);
+            const char* rest = end + 1;
+            const double share = std::strtod(rest, &end);
+            if (end == rest || std::string(end).find_first_not_of(" \t") != std::string::npos)
+                props.fail("adaptive_spp", form);
+            if (!(r > 0) || !std::isfinite(r) || !(share > 0 && share <= 1) ||
+                (!table.empty() && !(std::log2(r) > table.back().first)))
+                props.fail("adaptive_spp", form);
+            table.emplace_back(std::log2(r), share);
+        }
+        return table;
+    }
     static std::vector<double> cone_angles(const Properties& props) {
         std::vector<double> angles;
         std::istringstream in(props.get_string("cone_angles", "0, 15, 30, 45"));
@@ -181,14 +227,18 @@ private:
                scale_;
     }
 
-    /// The level and cones a pixel's footprint selects (see the top of this file).
-    void footprint_query(const PixelFootprint& f, double& ratio, double& light_cone,
-                         double& view_cone) const {
+    /// The texel-to-pixel ratio: the longer of the pixel's two steps, in texels.
+    double texel_ratio(const PixelFootprint& f) const {
         const btf::Header& h = data_->header();
         auto texels = [&](Vec2 duv) {
             return uv_scale_ * std::hypot(double(duv.x) * h.width, double(duv.y) * h.height);
         };
-        ratio = scale_spatial_ * std::max(texels(f.duv_dx), texels(f.duv_dy));
+        return std::max(texels(f.duv_dx), texels(f.duv_dy));
+    }
+    /// The level and cones a pixel's footprint selects (see the top of this file).
+    void footprint_query(const PixelFootprint& f, double& ratio, double& light_cone,
+                         double& view_cone) const {
+        ratio = scale_spatial_ * texel_ratio(f);
         const double turn = std::max(length(f.dn_dx), length(f.dn_dy));
         light_cone = scale_light_ * (0.5 * turn + f.light_cone);
         view_cone = scale_view_ * 0.5 *
@@ -228,7 +278,8 @@ private:
     DirectionMesh lights_, views_;
     float uv_scale_, scale_;
     float scale_spatial_, scale_light_, scale_view_;
-    std::shared_ptr<const btf::Hierarchy> hierarchy_;  // with `prefilter`
+    std::shared_ptr<const btf::Hierarchy> hierarchy_;       // with `prefilter`
+    std::vector<std::pair<double, double>> sample_shares_;  // `adaptive_spp`: (log2 r, share)
 };
 
 }  // namespace
@@ -248,4 +299,7 @@ FEMTO_PLUGIN(Btf, femto::PluginKind::Bsdf, "btf",
               {"scale_view", "float", "1", "s_v: factor on the view cone"},
               {"components", "integer", "16",
                "PCA components for files without linear factors (BDI, log data)"},
-              {"cache", "bool", "true", "keep the hierarchy in a file next to the BTF"}})
+              {"cache", "bool", "true", "keep the hierarchy in a file next to the BTF"},
+              {"adaptive_spp", "string", "",
+               "adaptive sampling: \"ratio:share, ...\" pairs; a pixel whose camera ray meets "
+               "the BTF first at texel-to-pixel ratio r takes share(r) x spp samples"}})
