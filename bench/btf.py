@@ -37,8 +37,16 @@ error at N = 1 gets t_ms(1) / t_pf, flagged.
 Hierarchy build time and size: `femto btf info --prefilter --no-cache --filter F` (its
 "built in T s" and size), median of RUNS, and the size of the cache file it writes.
 
+The same speed-ups on the inner pixels' RMSE (rmse_inner) are in speedup_inner: at the far
+distances a 1-spp render's silhouette, which no prefiltering antialiases, dominates the whole
+image's error. At d3 and d4 a 1-spp render takes 0.01 s, femto's printed resolution; --cost
+measures each mode's time per sample from renders of 64 spp (btf_cost.csv), and
+speedup_by_cost = N_equal / (a prefiltered sample's time / an unfiltered sample's time).
+
 Usage: btf.py FEMTO OUT_DIR [--res 128] [--ref-spp 4096] [--runs 3] [--max-spp 256]
                             [--threads N] [--quick]
+       btf.py FEMTO OUT_DIR --analyse     the speed-ups and the plot again from btf_runs.csv
+       btf.py FEMTO OUT_DIR --cost [--res 128] [--runs 3]   the time per sample, btf_cost.csv
 Writes OUT_DIR/btf_runs.csv, btf_speedup.csv, btf_build.csv, btf.png.
 """
 import csv
@@ -187,6 +195,14 @@ def hierarchy_costs(femto, runs, work):
 
 def main():
     femto, out_dir = sys.argv[1], sys.argv[2]
+    if "--analyse" in sys.argv:  # the speed-ups and the plot again from btf_runs.csv
+        summarise(out_dir)
+        return
+    if "--cost" in sys.argv:
+        cost(femto, out_dir, int(option("--res", "128")), int(option("--runs", "3")),
+             option("--threads"))
+        summarise(out_dir)
+        return
     quick = "--quick" in sys.argv
     res = int(option("--res", "32" if quick else "128"))
     ref_spp = int(option("--ref-spp", "256" if quick else "4096"))
@@ -207,9 +223,7 @@ def main():
 
     runs_csv = open(os.path.join(out_dir, "btf_runs.csv"), "w", newline="")
     out_runs = csv.writer(runs_csv)
-    out_runs.writerow(["distance", "r", "camera_distance", "res", "mode", "filter", "scale",
-                       "spp", "seed", "seconds", "rmse", "rmse_inner", "ssim"])
-    speed_rows, plot_data = [], {}
+    out_runs.writerow(RUN_COLUMNS)
     for i, r in enumerate(RATIOS):
         dname, dist = f"d{i}", camera_distance(r, res)
         xml = os.path.join(work, f"btf-sphere-{dname}.xml")
@@ -240,70 +254,143 @@ def main():
             med = [float(np.median([x[k] for x in rs])) for k in range(4)]
             print(f"  {dname} {mode:12s} {filt:8s} s={scale:3s} spp {spp:4d}: {med[0]:7.3f} s "
                   f"RMSE {med[1]:.4g} (inner {med[2]:.4g}) SSIM {med[3]:.4f}", flush=True)
-            return med
 
-        ms = {}
         for n in budgets:
-            t, e, ei, s = measure("multisampled", "", "", n, {"prefilter": "false"})
-            ms[n] = (e, t, ei, s)
-        pf = {}
+            measure("multisampled", "", "", n, {"prefilter": "false"})
         for filt in FILTERS:
             for scale in SCALES:
-                pf[(filt, scale)] = measure("prefiltered", filt, scale, 1,
-                                            {"prefilter": "true", "filter": filt,
-                                             "scale": scale})
-        plot_data[dname] = (r, ms, pf)
-        for (filt, scale), (t_pf, e_pf, ei_pf, s_pf) in pf.items():
+                measure("prefiltered", filt, scale, 1,
+                        {"prefilter": "true", "filter": filt, "scale": scale})
+    runs_csv.close()
+    shutil.rmtree(work, ignore_errors=True)
+    summarise(out_dir)
+
+
+COST_SPP = 64
+
+
+def cost(femto, out_dir, res, runs, threads):
+    """The time per sample of each mode, from renders of COST_SPP samples per pixel (long
+    enough that femto's 0.01 s resolution and the fixed costs do not matter): the unfiltered
+    BTF and the prefiltered one per filter at s = 1, RUNS runs each, interleaved."""
+    work = tempfile.mkdtemp()
+    with open(os.path.join(out_dir, "btf_cost.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["distance", "r", "res", "mode", "filter", "spp", "seed", "seconds"])
+        for i, r in enumerate(RATIOS):
+            dname = f"d{i}"
+            xml = os.path.join(work, f"btf-sphere-{dname}.xml")
+            open(xml, "w").write(scene_xml(camera_distance(r, res)))
+            for seed in range(1, runs + 1):
+                for mode, filt in [("multisampled", "")] + [("prefiltered", x) for x in FILTERS]:
+                    defines = {"res": str(res), "spp": str(COST_SPP),
+                               "prefilter": "true" if filt else "false"}
+                    if filt:
+                        defines["filter"] = filt
+                    t, _ = render(femto, xml, defines, seed, os.path.join(work, "x"), threads)
+                    w.writerow([dname, r, res, mode, filt, COST_SPP, seed, t])
+                    f.flush()
+                    print(f"  {dname} {mode:12s} {filt:8s} {COST_SPP} spp: {t:.2f} s", flush=True)
+    shutil.rmtree(work, ignore_errors=True)
+
+
+RUN_COLUMNS = ["distance", "r", "camera_distance", "res", "mode", "filter", "scale", "spp",
+               "seed", "seconds", "rmse", "rmse_inner", "ssim"]
+
+
+def summarise(out_dir):
+    """btf_speedup.csv and btf.png from btf_runs.csv: per distance, the medians of the
+    multisampled runs per N and of the prefiltered runs per (filter, scale), and the
+    equal-error speed-ups on the whole image's RMSE and on the inner pixels' RMSE."""
+    rows = list(csv.DictReader(open(os.path.join(out_dir, "btf_runs.csv"))))
+    data = {}
+    for row in rows:
+        d = data.setdefault(row["distance"], (int(row["r"]), int(row["res"]), {}, {}))
+        key = int(row["spp"]) if row["mode"] == "multisampled" else (row["filter"], row["scale"])
+        (d[2] if row["mode"] == "multisampled" else d[3]).setdefault(key, []).append(
+            [float(row[k]) for k in ("rmse", "seconds", "rmse_inner", "ssim")])
+    med = lambda runs: tuple(float(np.median([x[k] for x in runs])) for k in range(4))
+    # Per distance and filter, a prefiltered sample's cost over an unfiltered one's (btf_cost.csv
+    # from --cost; medians of its runs), if measured.
+    cost_ratio = {}
+    cost_file = os.path.join(out_dir, "btf_cost.csv")
+    if os.path.exists(cost_file):
+        times = {}
+        for row in csv.DictReader(open(cost_file)):
+            times.setdefault((row["distance"], row["filter"]), []).append(float(row["seconds"]))
+        for (dname, filt), v in times.items():
+            if filt:
+                cost_ratio[(dname, filt)] = float(np.median(v)) / float(
+                    np.median(times[(dname, "")]))
+    speed_rows, plot_data = [], {}
+    for dname in sorted(data):
+        r, res, ms_runs, pf_runs = data[dname]
+        ms = {n: med(v) for n, v in ms_runs.items()}  # (rmse, seconds, rmse_inner, ssim)
+        pf = {k: med(v) for k, v in pf_runs.items()}
+        plot_data[dname] = (r, ms, pf, res)
+        ms_inner = {n: (v[2], v[1]) for n, v in ms.items()}
+        for (filt, scale), (e_pf, t_pf, ei_pf, s_pf) in pf.items():
             n, t_ms, flag = equal_error(ms, e_pf)
-            ratio = t_ms / t_pf if t_pf > 0 else float("nan")
+            ni, ti_ms, flag_i = equal_error(ms_inner, ei_pf)
+            c = cost_ratio.get((dname, filt), float("nan"))
             speed_rows.append([dname, r, res, filt, scale, f"{e_pf:.6g}", f"{ei_pf:.6g}",
                                f"{s_pf:.5f}", f"{t_pf:.3f}", f"{n:.3g}", f"{t_ms:.3f}",
-                               f"{ratio:.3g}", flag])
-            print(f"  {dname} {filt:8s} s={scale:3s}: equal error at N = {n:.3g}, "
-                  f"t_ms {t_ms:.3f} s / t_pf {t_pf:.3f} s = {ratio:.3g}x {flag}", flush=True)
-    runs_csv.close()
+                               f"{t_ms / t_pf:.3g}", flag, f"{ni:.3g}", f"{ti_ms / t_pf:.3g}",
+                               flag_i, f"{c:.3g}", f"{n / c:.3g}", f"{ni / c:.3g}"])
+            print(f"{dname} {filt:8s} s={scale:3s}: equal RMSE at N = {n:.3g}: t_ms {t_ms:.3f} s"
+                  f" / t_pf {t_pf:.3f} s = {t_ms / t_pf:.3g}x {flag}; inner pixels: N = "
+                  f"{ni:.3g}, {ti_ms / t_pf:.3g}x {flag_i}", flush=True)
     with open(os.path.join(out_dir, "btf_speedup.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["distance", "r", "res", "filter", "scale", "rmse_pf", "rmse_inner_pf",
                     "ssim_pf", "seconds_pf", "equal_error_spp", "seconds_ms_at_equal_error",
-                    "speedup", "note"])
+                    "speedup", "note", "equal_error_spp_inner", "speedup_inner", "note_inner",
+                    "cost_per_sample_pf_over_ms", "speedup_by_cost", "speedup_inner_by_cost"])
         w.writerows(speed_rows)
-    print("mean speed-up over d1-d4 (arithmetic / geometric):", flush=True)
+    print("mean speed-up over d1-d4, whole image / inner pixels (arithmetic mean, geometric "
+          "mean):", flush=True)
     for filt in FILTERS:
         for scale in SCALES:
-            v = [float(row[11]) for row in speed_rows
-                 if row[3] == filt and row[4] == scale and row[0] != "d0"]
-            v = [x for x in v if math.isfinite(x)]
-            if v:
-                print(f"  {filt:8s} s={scale:3s}: {np.mean(v):.3g} / "
-                      f"{math.exp(np.mean(np.log(v))):.3g}  (per distance {['%.3g' % x for x in v]})",
-                      flush=True)
-    plot(plot_data, os.path.join(out_dir, "btf.png"), res)
-    shutil.rmtree(work, ignore_errors=True)
+            for col, what in ((11, "whole"), (14, "inner"), (17, "whole, by cost"),
+                              (18, "inner, by cost")):
+                v = [float(row[col]) for row in speed_rows
+                     if row[3] == filt and row[4] == scale and row[0] != "d0"]
+                v = [x for x in v if math.isfinite(x)]
+                if v:
+                    print(f"  {filt:8s} s={scale:3s} {what}: {np.mean(v):.3g}, "
+                          f"{math.exp(np.mean(np.log(v))):.3g} (d1..d4: "
+                          f"{', '.join('%.3g' % x for x in v)})", flush=True)
+    plot(plot_data, os.path.join(out_dir, "btf.png"))
 
 
-def plot(data, path, res):
+def plot(data, path):
+    """Error against time per distance: the multisampled medians per N (a line) and the
+    prefiltered medians per (filter, scale) (points); top the whole image, bottom the inner
+    pixels."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, len(data), figsize=(3.4 * len(data), 3.4), squeeze=False)
+    fig, axes = plt.subplots(2, len(data), figsize=(3.2 * len(data), 6.4), squeeze=False)
     markers = {"box": "s", "gaussian": "o", "lanczos": "^"}
     colours = {"0.5": "tab:blue", "1": "tab:orange", "2": "tab:green"}
-    for ax, (dname, (r, ms, pf)) in zip(axes[0], data.items()):
+    for col, (dname, (r, ms, pf, res)) in enumerate(data.items()):
         ns = sorted(ms)
-        ax.loglog([ms[n][1] for n in ns], [ms[n][0] for n in ns], "k.-", lw=1,
-                  label="multisampled N = 1..%d" % ns[-1])
-        for n in (ns[0], ns[-1]):
-            ax.annotate(str(n), (ms[n][1], ms[n][0]), fontsize=6)
-        for (filt, scale), (t, e, _, _) in pf.items():
-            ax.loglog([t], [e], markers[filt], color=colours[scale], ms=5,
-                      label=f"{filt} s={scale}")
-        ax.set_title(f"{dname}: r = {r} ({res}x{res})", fontsize=9)
-        ax.set_xlabel("render time (s)")
-        ax.set_ylabel("RMSE")
+        for row, (k, what) in enumerate(((0, "RMSE, whole image"), (2, "RMSE, inner pixels"))):
+            ax = axes[row][col]
+            ax.loglog([ms[n][1] for n in ns], [ms[n][k] for n in ns], "k.-", lw=1,
+                      label=f"multisampled, N = 1..{ns[-1]}")
+            for n in (ns[0], ns[-1]):
+                ax.annotate(f"N={n}", (ms[n][1], ms[n][k]), fontsize=6)
+            for (filt, scale), v in sorted(pf.items()):
+                ax.loglog([v[1]], [v[k]], markers[filt], color=colours[scale], ms=5,
+                          mfc="none", label=f"prefiltered {filt}, s = {scale}")
+            ax.set_title(f"{dname}: r = {r} ({res}x{res})", fontsize=9)
+            ax.set_xlabel("render time (s)", fontsize=8)
+            ax.set_ylabel(what, fontsize=8)
+            ax.tick_params(labelsize=7)
     axes[0][0].legend(fontsize=5.5)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
 
 
 if __name__ == "__main__":
