@@ -7,9 +7,12 @@
 #include <numbers>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "femto/host.h"
 #include "femto/rfilter.h"
+#include "femto/scene.h"
+#include "femto/sensor.h"
 
 namespace {
 
@@ -53,9 +56,10 @@ TEST(RFilterBox, MitsubaBox) {
     EXPECT_EQ(f->eval(0.f), 1.f);
     EXPECT_EQ(f->eval(0.49f), 1.f);
     EXPECT_EQ(f->eval(-0.49f), 1.f);
-    // Half-open support: a sample on a pixel boundary belongs to exactly one pixel.
-    EXPECT_EQ(f->eval(-0.5f), 1.f);
-    EXPECT_EQ(f->eval(0.5f), 0.f);
+    // Half-open support: a sample on a pixel boundary belongs to exactly one pixel, the one
+    // whose samples lie in [i, i + 1): at position i exactly, offset centre - position = 0.5.
+    EXPECT_EQ(f->eval(0.5f), 1.f);
+    EXPECT_EQ(f->eval(-0.5f), 0.f);
     EXPECT_EQ(f->eval(0.7f), 0.f);
     EXPECT_EQ(f->eval(-3.f), 0.f);
     EXPECT_NEAR(integral(*f), 1.0, 1e-4);
@@ -152,6 +156,33 @@ TEST(RFilterSchema, ParametersAreDocumented) {
                      femto::SceneError)
             << type;
     }
+}
+
+}  // namespace
+
+namespace {
+
+// Regression: `ldsampler` at 1 spp gives some pixels a jitter of exactly 0 (4 of 512 x 512 at
+// seed 0), a sample on the pixel's lower edge. With the box filter's support the wrong way
+// round it went to the pixel above, leaving its own black. Every pixel of an orthographic view
+// of an emitting rectangle must read its radiance.
+TEST(RFilterBox, EveryPixelKeepsItsOwnSample) {
+    const std::string xml =
+        "<scene version=\"3.0.0\"><integrator type=\"direct\"/><sensor type=\"orthographic\">"
+        "<transform name=\"to_world\"><lookat origin=\"0, 0, 5\" target=\"0, 0, 0\" up=\"0, 1, "
+        "0\"/></transform><sampler type=\"ldsampler\"><integer name=\"sample_count\" "
+        "value=\"1\"/></sampler><film type=\"hdrfilm\"><integer name=\"width\" value=\"512\"/>"
+        "<integer name=\"height\" value=\"512\"/><rfilter type=\"box\"/></film></sensor>"
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2\"/></transform>"
+        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter></shape></scene>";
+    const auto scene = femto::load_scene_string(xml);
+    femto::RenderOptions opt;
+    femto::render(*scene, opt);
+    const std::vector<float> image = scene->sensor().film().steady_image();
+    int wrong = 0;
+    for (size_t i = 0; i < image.size(); ++i)
+        if (image[i] != 1.f && ++wrong <= 5) ADD_FAILURE() << "pixel " << i / 3 << ": " << image[i];
+    EXPECT_EQ(wrong, 0);
 }
 
 }  // namespace

@@ -125,6 +125,15 @@ std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H, int tile) {
     return by_colour;
 }
 
+// A camera sample's film position in pixel (x, y) for a jitter in [0, 1)^2: inside [x, x + 1) x
+// [y, y + 1) even where x + jitter rounds up to x + 1 in float (a jitter within 2^-24 x of 1),
+// so that the film gives it to the pixel it was taken for (a 1-spp pixel would stay black).
+Vec2 pixel_position(int x, int y, Vec2 jitter) {
+    const float fx = float(x), fy = float(y);
+    return {std::min(fx + jitter.x, std::nextafter(fx + 1.f, fx)),
+            std::min(fy + jitter.y, std::nextafter(fy + 1.f, fy))};
+}
+
 // Adaptive sampling (thesis ch. 3, Fig. 3.15): how many camera samples each pixel takes, spp_p =
 // max(1, ceil(s x spp)) with s the share the material its centre ray meets first asks for
 // (Bsdf::pixel_sample_share()). Empty: every pixel takes spp.
@@ -226,8 +235,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
                 }
                 ++taken;
                 sampler.start(seed, pixel, s);
-                const Vec2 jitter = sampler.next_2d();
-                const Vec2 pos{float(x) + jitter.x, float(y) + jitter.y};
+                const Vec2 pos = pixel_position(x, y, sampler.next_2d());
                 const Vec2 aperture = sampler.next_2d();
                 Ray ray = sensor.sample_ray(pos, aperture);
                 // The neighbouring pixels' rays, for the first hit's footprint (materials that
