@@ -223,8 +223,11 @@ private:
         const DirectionMesh::Weights wv = views_.interpolate(view);
         double ratio = 0, light_cone = 0, view_cone = 0;
         if (hit.footprint.valid) footprint_query(hit.footprint, ratio, light_cone, view_cone);
-        return hierarchy_->lookup(hit.uv * uv_scale_, ratio, light_cone, view_cone, wl, wv) *
-               scale_;
+        Color b = hierarchy_->lookup(hit.uv * uv_scale_, ratio, light_cone, view_cone, wl, wv);
+        // A filtered reflectance is >= 0; the angular filter's low-order fit can undershoot
+        // at hard shadow edges (BTF B's grooves), and the PCA truncation a little anywhere.
+        for (int c = 0; c < 3; ++c) b[c] = std::max(b[c], 0.f);
+        return b * scale_;
     }
 
     /// The texel-to-pixel ratio: the longer of the pixel's two steps, in texels.
