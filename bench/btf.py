@@ -43,10 +43,17 @@ image's error. At d3 and d4 a 1-spp render takes 0.01 s, femto's printed resolut
 measures each mode's time per sample from renders of 64 spp (btf_cost.csv), and
 speedup_by_cost = N_equal / (a prefiltered sample's time / an unfiltered sample's time).
 
-Usage: btf.py FEMTO OUT_DIR [--res 128] [--ref-spp 4096] [--runs 3] [--max-spp 256]
+BTF A (--btf a, the default) is scenes/btf-sphere/btf-a.btf; BTF B (--btf b) is made at bench
+time in the temporary folder by `femto btf synth --kind vgroove --format dfmf --half --width 64
+--height 32` (3.4 MB, not in the source tree; 64 x 32 texels like A, so d0..d4 keep their r) and
+passed to the scene as -D btf=... . B's hierarchy takes ~5-8 s to build (A's 0.2 s), so with B
+the material caches it (cache true) next to the generated file: the first render of each filter
+builds it, the others load it. The times measured are the renders' alone either way.
+
+Usage: btf.py FEMTO OUT_DIR [--btf a|b] [--res 128] [--ref-spp 4096] [--runs 3] [--max-spp 256]
                             [--threads N] [--quick]
        btf.py FEMTO OUT_DIR --analyse     the speed-ups and the plot again from btf_runs.csv
-       btf.py FEMTO OUT_DIR --cost [--res 128] [--runs 3]   the time per sample, btf_cost.csv
+       btf.py FEMTO OUT_DIR --cost [--btf a|b] [--res 128] [--runs 3]   the time per sample, btf_cost.csv
 Writes OUT_DIR/btf_runs.csv, btf_speedup.csv, btf_build.csv, btf.png.
 """
 import csv
@@ -65,7 +72,10 @@ from skimage.metrics import structural_similarity
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE_DIR = os.path.join(ROOT, "scenes", "btf-sphere")
-BTF = os.path.join(SCENE_DIR, "btf-a.btf")
+BTF_A = os.path.join(SCENE_DIR, "btf-a.btf")
+# BTF B: Lambertian V-grooves (period 4 texels) with self-shadowing and masking, 64 x 32 texels.
+SYNTH_B = ["btf", "synth", "--kind", "vgroove", "--format", "dfmf", "--half", "--width", "64",
+           "--height", "32"]
 RATIOS = [1, 4, 16, 64, 256]  # r at d0..d4
 RADIUS = 1.0
 TEXELS_PER_UNIT = 128 * 64 / (2 * math.pi * RADIUS)  # uv_scale * width / (2 pi R)
@@ -84,9 +94,23 @@ def camera_distance(r, res):
     return RADIUS + r * res / (TEXELS_PER_UNIT * 2 * math.tan(math.radians(FOV / 2)))
 
 
-def scene_xml(distance):
+def btf_file(femto, work):
+    """The BTF (--btf a or b) as an absolute path, and whether the material should cache its
+    hierarchy: A is the scene's file; B is made in WORK."""
+    which = option("--btf", "a")
+    if which == "a":
+        return BTF_A, False
+    if which != "b":
+        sys.exit(f"--btf {which}: a or b")
+    path = os.path.join(work, "btf-b.btf")
+    subprocess.run([femto, *SYNTH_B, "-o", path], capture_output=True, text=True, check=True)
+    return path, True
+
+
+def scene_xml(distance, btf, cache=False):
     """scenes/btf-sphere/scene.xml with the camera at `distance` (distance-dK.xml's sensor,
-    moved) and the BTF's path made absolute."""
+    moved), the BTF parameter's default the absolute path BTF, and the hierarchy cached next to
+    the BTF if CACHE."""
     text = open(os.path.join(SCENE_DIR, "scene.xml")).read()
     sensor = open(os.path.join(SCENE_DIR, "distance-d0.xml")).read()
     sensor = sensor[sensor.index("<sensor"):sensor.index("</sensor>") + len("</sensor>")]
@@ -94,7 +118,13 @@ def scene_xml(distance):
     assert n == 1
     include = '<include filename="distance-$distance.xml"/>'
     assert include in text
-    text = text.replace(include, sensor).replace('value="btf-a.btf"', f'value="{BTF}"')
+    default = '<default name="btf" value="btf-a.btf"/>'
+    assert default in text
+    text = text.replace(include, sensor).replace(default, f'<default name="btf" value="{btf}"/>')
+    if cache:
+        no_cache = '<boolean name="cache" value="false"/>'
+        assert no_cache in text
+        text = text.replace(no_cache, '<boolean name="cache" value="true"/>')
     return text.replace('<default name="distance" value="d2"/>', "")
 
 
@@ -168,15 +198,17 @@ def equal_error(ms, e_pf):
     return n, ta + tb * n, f"extrapolated (log-log slope {slope:.2f} over N = {ns[-k]}..{ns[-1]})"
 
 
-def hierarchy_costs(femto, runs, work):
+def hierarchy_costs(femto, runs, work, btf):
     rows = []
-    copy = os.path.join(work, "btf-a.btf")
-    shutil.copy(BTF, copy)
+    work = os.path.join(work, "hierarchy")  # its own folder: the cache files it writes and removes
+    os.makedirs(work)
+    copy = os.path.join(work, os.path.basename(btf))
+    shutil.copy(btf, copy)
     for f in FILTERS:
         times, size_mb = [], None
         for _ in range(runs):
             p = subprocess.run([femto, "btf", "info", "--prefilter", "--no-cache", "--filter", f,
-                                BTF], capture_output=True, text=True, check=True)
+                                btf], capture_output=True, text=True, check=True)
             m = re.search(r"prefilter:.*, ([0-9.]+) MB, built in ([0-9.]+) s", p.stdout)
             size_mb = float(m.group(1))
             times.append(float(m.group(2)))
@@ -212,10 +244,12 @@ def main():
     budgets = [2 ** k for k in range(int(math.log2(max_spp)) + 1)]
     os.makedirs(out_dir, exist_ok=True)
     work = tempfile.mkdtemp()
+    btf, cache = btf_file(femto, work)
+    print(f"BTF {btf}", flush=True)
     print(f"res {res}, reference {ref_spp} spp (two halves), multisampled N = {budgets}, "
           f"{runs} runs per configuration", flush=True)
 
-    build_rows = hierarchy_costs(femto, runs, work)
+    build_rows = hierarchy_costs(femto, runs, work, btf)
     with open(os.path.join(out_dir, "btf_build.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["filter", "build_seconds", "hierarchy_mb", "cache_file_bytes"])
@@ -227,7 +261,7 @@ def main():
     for i, r in enumerate(RATIOS):
         dname, dist = f"d{i}", camera_distance(r, res)
         xml = os.path.join(work, f"btf-sphere-{dname}.xml")
-        open(xml, "w").write(scene_xml(dist))
+        open(xml, "w").write(scene_xml(dist, btf, cache))
         base = {"res": str(res)}
         halves = []
         for h in (1, 2):
@@ -274,13 +308,14 @@ def cost(femto, out_dir, res, runs, threads):
     enough that femto's 0.01 s resolution and the fixed costs do not matter): the unfiltered
     BTF and the prefiltered one per filter at s = 1, RUNS runs each, interleaved."""
     work = tempfile.mkdtemp()
+    btf, cache = btf_file(femto, work)
     with open(os.path.join(out_dir, "btf_cost.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["distance", "r", "res", "mode", "filter", "spp", "seed", "seconds"])
         for i, r in enumerate(RATIOS):
             dname = f"d{i}"
             xml = os.path.join(work, f"btf-sphere-{dname}.xml")
-            open(xml, "w").write(scene_xml(camera_distance(r, res)))
+            open(xml, "w").write(scene_xml(camera_distance(r, res), btf, cache))
             for seed in range(1, runs + 1):
                 for mode, filt in [("multisampled", "")] + [("prefiltered", x) for x in FILTERS]:
                     defines = {"res": str(res), "spp": str(COST_SPP),

@@ -4,14 +4,20 @@
 # ratios, equal-error speed-ups, the hierarchy's build time and size.
 #   bench/run_btf.sh [--quick]       about 20 minutes on 2 cores once built (--quick: 3 min)
 #   bench/run_btf.sh --res R --ref-spp N --runs K --max-spp M   other settings
-# Results: bench/results/btf/btf_runs.csv, btf_speedup.csv, btf_build.csv, btf_cost.csv,
-# btf.png, btf_run.log.
+#   bench/run_btf.sh --btf b         BTF B (V-grooves, made at bench time) instead of BTF A
+# Results: bench/results/btf/ (BTF A) or bench/results/btf-b/ (BTF B): btf_runs.csv,
+# btf_speedup.csv, btf_build.csv, btf_cost.csv, btf.png, btf_run.log.
 set -euo pipefail
 
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 bench_build  # the CLI and its plugins
 "$root/scripts/deps.sh"  # python3-skimage for the SSIM
+btf=a
+for ((i = 0; i + 1 < $#; i++)); do
+    a=("$@"); if [[ ${a[i]} == --btf ]]; then btf=${a[i + 1]}; fi
+done
 out="$results/btf"
+if [[ $btf == b ]]; then out="$results/btf-b"; fi
 mkdir -p "$out"
 log="$out/btf_run.log"
 bench_log_header "$log"
@@ -24,5 +30,5 @@ for ((i = 0; i + 1 < $#; i++)); do
 done
 if [[ " $* " == *" --quick "* ]]; then res=32; fi
 echo "time per sample (--cost):" | tee -a "$log"
-/usr/bin/python3 "$root/bench/btf.py" "$build/bin/femto" "$out" --cost --res "$res" 2>&1 | tee -a "$log"
+/usr/bin/python3 "$root/bench/btf.py" "$build/bin/femto" "$out" --cost --btf "$btf" --res "$res" 2>&1 | tee -a "$log"
 echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$log"
