@@ -139,7 +139,6 @@ Vec2 pixel_position(int x, int y, Vec2 jitter) {
 // (Bsdf::pixel_sample_share()). Empty: every pixel takes spp.
 struct PixelCounts {
     std::vector<uint32_t> count;  // per pixel, row-major; empty when not adaptive
-    uint32_t spp = 0;
 
     uint32_t end(uint64_t pixel, uint32_t s1) const {
         return count.empty() ? s1 : std::min(s1, count[pixel]);
@@ -174,7 +173,6 @@ bool adapts_sampling(const Scene& scene) {
 // their camera sample's, which per-pixel counts would weigh wrongly: they take spp everywhere.
 PixelCounts pixel_counts(const Scene& scene, uint32_t spp, bool splatting) {
     PixelCounts counts;
-    counts.spp = spp;
     if (!adapts_sampling(scene)) return counts;
     if (splatting) {
         log_warning(
