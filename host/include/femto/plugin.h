@@ -48,7 +48,8 @@ namespace femto {
 /// (21: the light's cone at a shading point: PixelFootprint::light_cone changes Hit's layout;
 ///  Emitter::subtended_half_angle(), Shape::subtended_half_angle().)
 /// (22: adaptive sampling: Bsdf::adapts_sampling()/pixel_sample_share().)
-inline constexpr uint32_t kPluginAbiVersion = 22;
+/// (23: Bsdf::uses_footprint(): camera rays carry differentials only for such materials.)
+inline constexpr uint32_t kPluginAbiVersion = 23;
 
 struct PluginDescriptor {
     uint32_t abi_version;

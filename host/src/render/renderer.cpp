@@ -168,6 +168,13 @@ bool adapts_sampling(const Scene& scene) {
     return false;
 }
 
+// Whether camera rays need their differentials: only for materials that read the footprint.
+bool uses_footprints(const Scene& scene) {
+    for (const auto& shape : scene.shapes())
+        if (shape->bsdf() && shape->bsdf()->uses_footprint()) return true;
+    return false;
+}
+
 // One ray through each pixel's centre (with its differential, for the footprint) finds the
 // material that sets the pixel's count. Integrators that splat put light on other pixels than
 // their camera sample's, which per-pixel counts would weigh wrongly: they take spp everywhere.
@@ -208,11 +215,12 @@ PixelCounts pixel_counts(const Scene& scene, uint32_t spp, bool splatting) {
 // pixel, sample index) alone. The tile's block is merged into the film at the end. A stop
 // request ends the tile early (Ctrl-C takes effect within a few samples' work, whatever the
 // pass size): the samples taken are merged, so the pixels keep valid, if unequal, estimates.
-// With adaptive sampling a pixel stops at its own count. Returns the number of camera samples
+// With adaptive sampling a pixel stops at its own count. Camera rays carry differentials when
+// `differentials` (some material reads the footprint). Returns the number of camera samples
 // taken.
 uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0, uint32_t s1,
-                     const PixelCounts& counts, Sampler& sampler, ContributionList& list,
-                     SplatList* splats, const std::atomic<bool>* stop) {
+                     const PixelCounts& counts, bool differentials, Sampler& sampler,
+                     ContributionList& list, SplatList* splats, const std::atomic<bool>* stop) {
     const Sensor& sensor = scene.sensor();
     Film& film = sensor.film();
     const Integrator& integrator = scene.integrator();
@@ -239,7 +247,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
                 // The neighbouring pixels' rays, for the first hit's footprint (materials that
                 // prefilter); the ray points to it only for this sample.
                 RayDifferential differential;
-                if (sensor.sample_differential(pos, aperture, differential))
+                if (differentials && sensor.sample_differential(pos, aperture, differential))
                     ray.differential = &differential;
                 list.clear();
                 list.reset_aovs(aov_count);
@@ -385,6 +393,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                   1, std::min<uint64_t>((spp + 15) / 16, max_pass_samples / pixels)));
     const uint32_t pilot_spp = film.pilot_samples();
     const PixelCounts counts = pixel_counts(scene, spp, splatting);
+    const bool differentials = uses_footprints(scene);
     uint64_t image_samples = pixels * uint64_t(spp);  // what the passes take, all rows
     if (!counts.count.empty()) {
         image_samples = 0;
@@ -411,8 +420,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                 enable_flush_to_zero();
                 SplatList* splats = splatting ? &tile_splats[t] : nullptr;
                 if (splats) splats->clear();
-                taken += render_tile(scene, tiles[t], seed, s0, s1, counts, *samplers.local(),
-                                     lists.local(), splats, options.stop);
+                taken += render_tile(scene, tiles[t], seed, s0, s1, counts, differentials,
+                                     *samplers.local(), lists.local(), splats, options.stop);
                 progress.advance(counts.in(tiles[t], W, s0, s1, nullptr));
             });
             if (!splatting) continue;

@@ -99,6 +99,7 @@ public:
         return warp::cosine_hemisphere_pdf(wo);
     }
 
+    bool uses_footprint() const override { return hierarchy_ || !sample_shares_.empty(); }
     bool adapts_sampling() const override { return !sample_shares_.empty(); }
     /// `adaptive_spp`'s share at the pixel's texel-to-pixel ratio: linear in log2 r between
     /// the table's entries, its first and last share beyond them.
