@@ -162,16 +162,11 @@ struct PixelCounts {
     }
 };
 
-bool adapts_sampling(const Scene& scene) {
+// Whether some material of the scene answers true to `question` (Bsdf::adapts_sampling,
+// Bsdf::uses_footprint).
+bool any_material(const Scene& scene, bool (Bsdf::*question)() const) {
     for (const auto& shape : scene.shapes())
-        if (shape->bsdf() && shape->bsdf()->adapts_sampling()) return true;
-    return false;
-}
-
-// Whether camera rays need their differentials: only for materials that read the footprint.
-bool uses_footprints(const Scene& scene) {
-    for (const auto& shape : scene.shapes())
-        if (shape->bsdf() && shape->bsdf()->uses_footprint()) return true;
+        if (shape->bsdf() && (shape->bsdf()->*question)()) return true;
     return false;
 }
 
@@ -180,7 +175,7 @@ bool uses_footprints(const Scene& scene) {
 // their camera sample's, which per-pixel counts would weigh wrongly: they take spp everywhere.
 PixelCounts pixel_counts(const Scene& scene, uint32_t spp, bool splatting) {
     PixelCounts counts;
-    if (!adapts_sampling(scene)) return counts;
+    if (!any_material(scene, &Bsdf::adapts_sampling)) return counts;
     if (splatting) {
         log_warning(
             fmt::format("adaptive sampling is off: {} splats light onto other pixels "
@@ -393,7 +388,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                   1, std::min<uint64_t>((spp + 15) / 16, max_pass_samples / pixels)));
     const uint32_t pilot_spp = film.pilot_samples();
     const PixelCounts counts = pixel_counts(scene, spp, splatting);
-    const bool differentials = uses_footprints(scene);
+    // Camera rays need their differentials only for materials that read the footprint.
+    const bool differentials = any_material(scene, &Bsdf::uses_footprint);
     uint64_t image_samples = pixels * uint64_t(spp);  // what the passes take, all rows
     if (!counts.count.empty()) {
         image_samples = 0;

@@ -8,6 +8,7 @@
 #include "femto/bsdf.h"
 #include "femto/emitter.h"
 #include "femto/medium.h"
+#include "femto/scene.h"
 #include "femto/sensor.h"
 #include "femto/warp.h"
 
@@ -97,13 +98,10 @@ void Shape::set_mesh(TriangleMesh mesh) {
     triangle_cdf_.resize(n + 1);
     for (size_t i = 0; i <= n; ++i) triangle_cdf_[i] = float(acc[i] / acc[n]);
     triangle_cdf_[n] = 1.f;
-    Vec3 lo = mesh_.positions[0], hi = lo;
-    for (const Vec3& q : mesh_.positions) {
-        lo = Vec3(std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z));
-        hi = Vec3(std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z));
-    }
-    bound_center_ = (lo + hi) * 0.5f;
-    bound_radius_ = 0.f;
+    Bounds3 box;
+    for (const Vec3& q : mesh_.positions) box.expand(q);
+    bound_center_ = box.center();
+    bound_radius_ = 0.f;  // the farthest vertex: tighter than the box's half-diagonal
     for (const Vec3& q : mesh_.positions)
         bound_radius_ = std::max(bound_radius_, length(q - bound_center_));
 }
