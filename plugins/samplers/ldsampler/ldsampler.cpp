@@ -37,13 +37,14 @@
 
 namespace {
 
+/// The bits of x in reverse order: the bytes swapped, then the bits within each byte.
 constexpr uint32_t reverse_bits(uint32_t x) {
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = __builtin_bswap32(x);
     x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    return ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
 }
+static_assert(reverse_bits(1u) == 0x80000000u && reverse_bits(0x12345678u) == 0x1e6a2c48u);
 
 /// A random permutation of 32-bit words in which output bit i depends only on input bits
 /// 0..i and the seed (every step only propagates information towards higher bits).
@@ -62,29 +63,31 @@ constexpr uint32_t laine_karras_permutation(uint32_t x, uint32_t seed) {
 
 /// The second Sobol dimension is y = C i over GF(2), with the generator matrix's columns
 /// v_0 = 1 << 31, v_j = v_{j-1} ^ (v_{j-1} >> 1) (Pascal's triangle mod 2). Being linear, it is
-/// tabulated per byte of the index; the tables hold the bit-reversed y, which is what the
-/// scrambling below consumes.
+/// tabulated per byte. The tables hold the bit-reversed y, which is what the scrambling below
+/// consumes, and are indexed by the bytes of the bit-reversed index, which is what the index
+/// shuffle produces: neither needs a reversal of its own.
 struct SobolDim1Tables {
-    uint32_t reversed[4][256];
-    constexpr SobolDim1Tables() : reversed{} {
+    uint32_t by_reversed_index[4][256];
+    constexpr SobolDim1Tables() : by_reversed_index{} {
         uint32_t v[32] = {};
         v[0] = 1u << 31;
         for (int j = 1; j < 32; ++j) v[j] = v[j - 1] ^ (v[j - 1] >> 1);
+        // Bit k of the reversed index r is bit 31 - k of the index.
         for (int b = 0; b < 4; ++b)
             for (uint32_t byte = 0; byte < 256; ++byte) {
                 uint32_t y = 0;
-                for (int j = 0; j < 8; ++j)
-                    if (byte & (1u << j)) y ^= v[8 * b + j];
-                reversed[b][byte] = reverse_bits(y);
+                for (int k = 0; k < 8; ++k)
+                    if (byte & (1u << k)) y ^= v[31 - (8 * b + k)];
+                by_reversed_index[b][byte] = reverse_bits(y);
             }
     }
 };
 constexpr SobolDim1Tables kSobolDim1{};
 
-/// reverse_bits(y) of the second Sobol dimension at index i.
-constexpr uint32_t sobol_dim1_reversed(uint32_t i) {
-    return kSobolDim1.reversed[0][i & 0xffu] ^ kSobolDim1.reversed[1][(i >> 8) & 0xffu] ^
-           kSobolDim1.reversed[2][(i >> 16) & 0xffu] ^ kSobolDim1.reversed[3][i >> 24];
+/// reverse_bits(y) of the second Sobol dimension at index reverse_bits(r).
+constexpr uint32_t sobol_dim1_reversed(uint32_t r) {
+    const auto& t = kSobolDim1.by_reversed_index;
+    return t[0][r & 0xffu] ^ t[1][(r >> 8) & 0xffu] ^ t[2][(r >> 16) & 0xffu] ^ t[3][r >> 24];
 }
 
 /// Reference definition of the same dimension, used to check the tables at compile time.
@@ -96,8 +99,10 @@ constexpr uint32_t sobol_dim1(uint32_t index) {
 }
 static_assert(sobol_dim1(1) == 0x80000000u && sobol_dim1(2) == 0xc0000000u &&
               sobol_dim1(3) == 0x40000000u && sobol_dim1(4) == 0xa0000000u);
-static_assert(sobol_dim1_reversed(0xdeadbeefu) == reverse_bits(sobol_dim1(0xdeadbeefu)));
-static_assert(sobol_dim1_reversed(0x01234567u) == reverse_bits(sobol_dim1(0x01234567u)));
+static_assert(sobol_dim1_reversed(reverse_bits(0xdeadbeefu)) ==
+              reverse_bits(sobol_dim1(0xdeadbeefu)));
+static_assert(sobol_dim1_reversed(reverse_bits(0x01234567u)) ==
+              reverse_bits(sobol_dim1(0x01234567u)));
 
 /// [0, 1) float from the 24 most significant bits (never rounds up to 1).
 constexpr float to_unit_float(uint32_t x) { return static_cast<float>(x >> 8) * 0x1p-24f; }
@@ -114,25 +119,28 @@ public:
 
     void start(uint64_t seed, uint64_t pixel_index, uint32_t sample_index) override {
         pixel_seed_ = femto::hash_combine(femto::hash_combine(seed_, seed), pixel_index);
+        // hash_combine(pixel_seed_, slot) = mix64(pixel_seed_ ^ (slot + slot_offset_)).
+        slot_offset_ = 0x9e3779b97f4a7c15ULL + (pixel_seed_ << 6) + (pixel_seed_ >> 2);
         reversed_index_ = reverse_bits(sample_index);
         slot_ = 0;
     }
 
     // In both functions below, with s0, s1, s2 the slot's seeds and LK the permutation above:
-    //   shuffled index  i = owen(index, s0)     = reverse(LK(reverse(index), s0))
+    //   shuffled index  i = owen(index, s0)     = reverse(r), r = LK(reverse(index), s0)
     //   first dim.      x = owen(vdc(i), s1)    = reverse(LK(i, s1))   since vdc(i) = reverse(i)
     //   second dim.     y = owen(sobol1(i), s2) = reverse(LK(reverse(sobol1(i)), s2))
+    // (reverse(sobol1(i)) is read from r directly: sobol_dim1_reversed).
     float next_1d() override {
         const Slot s = next_slot();
-        const uint32_t i = reverse_bits(laine_karras_permutation(reversed_index_, s.index_seed));
-        return to_unit_float(reverse_bits(laine_karras_permutation(i, s.x_seed)));
+        const uint32_t r = laine_karras_permutation(reversed_index_, s.index_seed);
+        return to_unit_float(reverse_bits(laine_karras_permutation(reverse_bits(r), s.x_seed)));
     }
 
     femto::Vec2 next_2d() override {
         const Slot s = next_slot();
-        const uint32_t i = reverse_bits(laine_karras_permutation(reversed_index_, s.index_seed));
-        const uint32_t x = reverse_bits(laine_karras_permutation(i, s.x_seed));
-        const uint32_t y = reverse_bits(laine_karras_permutation(sobol_dim1_reversed(i), s.y_seed));
+        const uint32_t r = laine_karras_permutation(reversed_index_, s.index_seed);
+        const uint32_t x = reverse_bits(laine_karras_permutation(reverse_bits(r), s.x_seed));
+        const uint32_t y = reverse_bits(laine_karras_permutation(sobol_dim1_reversed(r), s.y_seed));
         return {to_unit_float(x), to_unit_float(y)};
     }
 
@@ -142,12 +150,13 @@ private:
     };
     /// Seeds of the next dimension slot: hashes of (sampler seed, render seed, pixel, slot).
     Slot next_slot() {
-        const uint64_t h = femto::hash_combine(pixel_seed_, slot_++);
+        const uint64_t h = femto::mix64(pixel_seed_ ^ (slot_++ + slot_offset_));
         const uint64_t g = femto::mix64(h ^ 0x2545f4914f6cdd1dULL);
         return {low32(h), static_cast<uint32_t>(h >> 32), low32(g)};
     }
 
     uint64_t pixel_seed_ = 0;
+    uint64_t slot_offset_ = 0;
     uint32_t reversed_index_ = 0;
     uint64_t slot_ = 0;
 };
