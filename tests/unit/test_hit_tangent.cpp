@@ -12,6 +12,7 @@
 #include <random>
 #include <string>
 
+#include "btf_test_util.h"
 #include "femto/host.h"
 #include "femto/scene.h"
 #include "femto/shape.h"
@@ -66,23 +67,32 @@ f 1 4 3 2
 
 const Vec3 kPyramidCentre(1.f, 0.75f, 0.4f);
 
+// The shapes wear a BTF, a material that reads Hit::dpdu (Bsdf::uses_tangent()): hits on
+// other materials may leave it zero (HitTangent.OnlyMaterialsThatReadItGetIt).
+const std::string& tangent_bsdf() {
+    static const std::string xml =
+        "<bsdf type=\"btf\"><string name=\"filename\" value=\"" +
+        femto::test::write_btf(femto::test::small_btf_a(), "hit_tangent", "a.dfmf") + "\"/></bsdf>";
+    return xml;
+}
+
 std::string obj_shape(const std::string& file, const std::string& extra = "") {
     return "<shape type=\"obj\"><string name=\"filename\" value=\"" + file + "\"/>" + extra +
-           "</shape>";
+           tangent_bsdf() + "</shape>";
 }
 
 std::string sphere_shape(const std::string& extra = "") {
     return "<shape type=\"sphere\"><point name=\"center\" x=\"0.3\" y=\"-0.2\" z=\"0.1\"/>"
            "<float name=\"radius\" value=\"0.8\"/><transform name=\"to_world\"><rotate x=\"1\" "
            "y=\"1\" angle=\"35\"/></transform>" +
-           extra + "</shape>";
+           extra + tangent_bsdf() + "</shape>";
 }
 
 std::string cylinder_shape(const std::string& extra = "") {
     return "<shape type=\"cylinder\"><point name=\"p0\" x=\"0.2\" y=\"-0.1\" z=\"-0.5\"/>"
            "<point name=\"p1\" x=\"-0.3\" y=\"0.4\" z=\"1.0\"/><float name=\"radius\" "
            "value=\"0.7\"/>" +
-           extra + "</shape>";
+           extra + tangent_bsdf() + "</shape>";
 }
 
 std::unique_ptr<Scene> load(const std::string& shapes) {
@@ -191,7 +201,8 @@ TEST(HitTangent, RectangleIsAlongX) {
     // The rectangle's u = (x + 1) / 2: dp/du = (2, 0, 0), then scaled and rotated by to_world.
     const auto scene = load(
         "<shape type=\"rectangle\"><transform name=\"to_world\"><scale x=\"3\" y=\"0.5\"/>"
-        "<rotate z=\"1\" angle=\"90\"/></transform></shape>");
+        "<rotate z=\"1\" angle=\"90\"/></transform>" +
+        tangent_bsdf() + "</shape>");
     Hit hit;
     ASSERT_TRUE(scene->intersect(Ray{{0.1f, 0.4f, 2.f}, {0, 0, -1}, 0.f, femto::kInfinity}, hit));
     EXPECT_TRUE(vec_near(hit.dpdu, {0, 6, 0}, 1e-5));
@@ -298,6 +309,10 @@ Hit hit_on_triangle_with_uvs(const ScratchDir& dir, const std::string& uvs) {
     props.set_string("filename", dir.write("triangle.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n" + uvs +
                                                                "f 1/1 2/2 3/3\n"));
     props.set_bool("flip_tex_coords", false);
+    Properties btf("btf", {});  // a material that reads the tangent (Bsdf::uses_tangent())
+    btf.set_string("filename",
+                   femto::test::write_btf(femto::test::small_btf_a(), "hit_tangent", "a.dfmf"));
+    props.set_object("bsdf", femto::create_object(femto::PluginKind::Bsdf, "btf", btf));
     const auto shape = make_shape(props);
     Hit hit;
     if (!shape ||
@@ -318,6 +333,37 @@ TEST(HitTangent, DegenerateTriangleUvsGiveZero) {
     EXPECT_TRUE(
         vec_near(hit_on_triangle_with_uvs(dir, "vt 1000 500\nvt 1002 500\nvt 1000 503\n").dpdu,
                  {0.5f, 0, 0}, 1e-6));
+}
+
+TEST(HitTangent, OnlyMaterialsThatReadItGetIt) {
+    // The same rectangle under a BTF (uses_tangent()), the BTF inside twosided and mask (which
+    // pass the question on), and a diffuse material, which does not read the tangent: its hits
+    // skip the solve unless the ray carries a differential (a footprint needs dpdu).
+    const std::string rect =
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale "
+        "x=\"3\" y=\"0.5\"/></transform>";
+    const Ray down{{0.1f, 0.2f, 2.f}, {0, 0, -1}, 0.f, femto::kInfinity};
+    const Vec3 expected{6, 0, 0};
+    for (const std::string& bsdf :
+         {tangent_bsdf(), "<bsdf type=\"twosided\">" + tangent_bsdf() + "</bsdf>",
+          "<bsdf type=\"mask\"><float name=\"opacity\" value=\"0.5\"/>" + tangent_bsdf() +
+              "</bsdf>"}) {
+        const auto scene = load(rect + bsdf + "</shape>");
+        Hit hit;
+        ASSERT_TRUE(scene->intersect(down, hit));
+        EXPECT_TRUE(vec_near(hit.dpdu, expected, 1e-5)) << bsdf;
+    }
+    const auto diffuse = load(rect + "</shape>");
+    Hit hit;
+    ASSERT_TRUE(diffuse->intersect(down, hit));
+    EXPECT_EQ(hit.dpdu, Vec3(0.f));
+    femto::RayDifferential differential{down.o + Vec3(1e-3f, 0, 0), down.d, down.o,
+                                        normalize(down.d + Vec3(0, 1e-3f, 0))};
+    Ray with_differential = down;
+    with_differential.differential = &differential;
+    ASSERT_TRUE(diffuse->intersect(with_differential, hit));
+    EXPECT_TRUE(vec_near(hit.dpdu, expected, 1e-5));
+    EXPECT_TRUE(hit.footprint.valid);
 }
 
 }  // namespace

@@ -7,9 +7,11 @@
 // for 1% over the kWarpTests tests of this file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,7 +25,7 @@ using femto::Vec2;
 using femto::Vec3;
 using namespace femto_test;
 
-constexpr int kWarpTests = 8;  // the WarpChi2 tests below (all use `level()`)
+constexpr int kWarpTests = 10;  // the WarpChi2 tests below (all use `level()`)
 
 double level() { return corrected_significance(kWarpTests); }
 
@@ -165,6 +167,68 @@ TEST(WarpChi2, DiscreteCdf) {
             return p[i];
         });
     expect_pass(r, "discrete cdf");
+}
+
+/// AliasTable: as sample_discrete_cdf above, the index follows the weights (never one of
+/// weight 0) and the rescaled u is uniform within the entry, for two tables: a small one with
+/// empty entries, and one of 1000 entries of very unequal weights (1 to 1000, as the
+/// triangles of a mesh light), binned over its first 40 entries and the rest together.
+void alias_chi2(const std::vector<double>& weights, int bins_x, const char* name) {
+    const femto::warp::AliasTable table(weights);
+    const uint32_t n = static_cast<uint32_t>(weights.size());
+    double sum = 0;
+    for (double w : weights) sum += w;
+    ASSERT_EQ(table.size(), n);
+    // x = index + u over [0, n) for the small table; the large one folds every index >= 39
+    // into [39, 40) so that the bins keep enough expected counts.
+    const uint32_t shown = std::min<uint32_t>(n, 40);
+    Chi2Options o;
+    o.nx = bins_x;
+    o.ny = 4;
+    o.x0 = 0;
+    o.x1 = shown;
+    o.y0 = 0;
+    o.y1 = 1;
+    o.seed = seed_from_name(name);
+    const Chi2Result r = chi2_test(
+        o,
+        [&](femto::Pcg32& rng) -> std::optional<std::pair<double, double>> {
+            float u = rng.next_float();
+            const uint32_t i = table.sample(u);
+            EXPECT_LT(i, n);
+            EXPECT_GT(weights[i], 0.0) << "picked an empty entry " << i;
+            EXPECT_GE(u, 0.f);
+            EXPECT_LT(u, 1.f);
+            const double x = i < shown - 1 ? i + double(u) : (shown - 1) + double(u);
+            return std::make_pair(x, double(rng.next_float()));
+        },
+        [&](double x, double) {
+            const uint32_t i = std::min(static_cast<uint32_t>(std::floor(x)), shown - 1);
+            if (i < shown - 1) return weights[i] / sum;
+            double rest = 0;
+            for (uint32_t k = shown - 1; k < n; ++k) rest += weights[k];
+            return rest / sum;
+        });
+    expect_pass(r, name);
+}
+
+TEST(WarpChi2, AliasTableSmall) {
+    alias_chi2({0.1, 0.0, 0.25, 0.05, 0.3, 0.0, 0.2, 0.1}, 32, "alias table, 8 entries");
+}
+
+TEST(WarpChi2, AliasTableUnequal) {
+    std::vector<double> w(1000);
+    femto::Pcg32 rng(seed_from_name("alias weights"), 3);
+    for (double& x : w) x = 1.0 + 999.0 * double(rng.next_float());
+    w[5] = 0.0;
+    alias_chi2(w, 160, "alias table, 1000 unequal entries");
+}
+
+TEST(AliasTable, RejectsWeightsWithoutAPositiveFiniteSum) {
+    EXPECT_THROW(femto::warp::AliasTable({0.0, 0.0}), std::invalid_argument);
+    EXPECT_THROW(femto::warp::AliasTable({1.0, -1.0}), std::invalid_argument);
+    EXPECT_THROW(femto::warp::AliasTable({1.0, NAN}), std::invalid_argument);
+    EXPECT_THROW(femto::warp::AliasTable(std::vector<double>{}), std::invalid_argument);
 }
 
 // ---- the harness itself ----------------------------------------------------------------------

@@ -96,6 +96,10 @@ public:
     /// when some material in the scene does: the footprint costs ~8 % of a path tracer's
     /// instructions on a small scene.
     virtual bool uses_footprint() const { return false; }
+    /// True when the material reads hit.dpdu (an oriented material: a BTF's frame, anisotropic
+    /// roughness). Hits on other materials skip it (a triangle's tangent solve costs ~5 % of a
+    /// path tracer's instructions) and leave it zero, unless the ray carries a differential.
+    virtual bool uses_tangent() const { return false; }
     /// Adaptive sampling (thesis ch. 3, Fig. 3.15): true when pixel_sample_share() can be
     /// below 1. The renderer then casts one ray through each pixel's centre before rendering.
     virtual bool adapts_sampling() const { return false; }

@@ -49,7 +49,9 @@ namespace femto {
 ///  Emitter::subtended_half_angle(), Shape::subtended_half_angle().)
 /// (22: adaptive sampling: Bsdf::adapts_sampling()/pixel_sample_share().)
 /// (23: Bsdf::uses_footprint(): camera rays carry differentials only for such materials.)
-inline constexpr uint32_t kPluginAbiVersion = 23;
+/// (24: Bsdf::uses_tangent(): Hit::dpdu only for such materials; Shape's layout changes with
+///  its lazily built area-sampling table.)
+inline constexpr uint32_t kPluginAbiVersion = 24;
 
 struct PluginDescriptor {
     uint32_t abi_version;

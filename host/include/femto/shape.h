@@ -6,8 +6,10 @@
 // implements hit records and area/solid-angle sampling for both representations.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "femto/math.h"
@@ -51,7 +53,9 @@ struct Hit {
     /// World-space derivative of the position with respect to uv.x (u), not normalized: the
     /// direction in which the texture's u grows, and by how much per unit u. Zero when the
     /// shape's parameterization is degenerate at this point (a sphere's poles, a triangle with
-    /// degenerate uvs): materials then fall back to sh.s.
+    /// degenerate uvs): materials then fall back to sh.s. Set for materials whose
+    /// Bsdf::uses_tangent() is true and for rays with a differential; other hits may leave it
+    /// zero (its solve on a triangle is not free).
     Vec3 dpdu;
     Vec3 wi;  ///< direction toward the ray origin, in the shading frame
     const Shape* shape = nullptr;
@@ -169,8 +173,15 @@ private:
     bool is_sphere_ = false;
     bool is_cylinder_ = false;
     bool flip_normals_ = false;
+    bool fills_tangent_ = false;  // the bsdf reads Hit::dpdu (Bsdf::uses_tangent())
     TriangleMesh mesh_;
-    std::vector<float> triangle_cdf_;
+    // Built on a mesh's first sample_area() (most shapes are never sampled): the triangles
+    // by area, and each one's unit normal (flipped with the shape) and rounding bound.
+    struct AreaSampling;
+    const AreaSampling& area_sampling() const;
+    mutable std::mutex area_sampling_mutex_;  // guards the build
+    mutable std::unique_ptr<const AreaSampling> area_sampling_owner_;
+    mutable std::atomic<const AreaSampling*> area_sampling_{nullptr};  // set once built
     Vec3 center_;
     float radius_ = 0.f;
     Frame cylinder_frame_;

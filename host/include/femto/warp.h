@@ -2,6 +2,9 @@
 // Each has a chi-square test against its pdf in tests/unit/test_warp_chi2.cpp.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "femto/math.h"
 
 namespace femto::warp {
@@ -28,5 +31,28 @@ Vec2 square_to_uniform_triangle(Vec2 u);
 /// Sample an index of a discrete distribution given its normalized CDF (size n+1, cdf[0]=0,
 /// cdf[n]=1). Returns the index and rescales `u` to [0,1) within the chosen interval.
 uint32_t sample_discrete_cdf(const float* cdf, uint32_t n, float& u);
+
+/// A discrete distribution sampled in O(1) by Walker's alias method (Vose's construction):
+/// index i with probability weights[i] / sum(weights), whatever the number of entries (the
+/// CDF search above takes log2 n steps and as many cache misses on a large mesh light).
+class AliasTable {
+public:
+    AliasTable() = default;
+    /// Weights >= 0 and finite, with a positive sum (else std::invalid_argument).
+    explicit AliasTable(const std::vector<double>& weights);
+    size_t size() const { return entries_.size(); }
+    /// An index, with `u` rescaled to [0, 1) within the part of [0, 1) that chose it, for
+    /// reuse. Never an index of weight 0. The table must not be empty.
+    uint32_t sample(float& u) const;
+
+private:
+    // Cell i (of width 1/n) keeps i below `threshold` (a fraction of the cell) and gives
+    // `alias` above it.
+    struct Cell {
+        float threshold = 1.f;
+        uint32_t alias = 0;
+    };
+    std::vector<Cell> entries_;
+};
 
 }  // namespace femto::warp

@@ -38,6 +38,7 @@ Shape::Shape(const Properties& props) : location_(props.location()) {
     to_world_ = read_to_world(props);
     flip_normals_ = props.get_bool("flip_normals", false);
     bsdf_ = std::static_pointer_cast<Bsdf>(props.child(PluginKind::Bsdf, "diffuse"));
+    fills_tangent_ = bsdf_ && bsdf_->uses_tangent();
     interior_ = std::static_pointer_cast<Medium>(props.get_object("interior", PluginKind::Medium));
     exterior_ = std::static_pointer_cast<Medium>(props.get_object("exterior", PluginKind::Medium));
     for (const ObjectPtr& m : props.objects(PluginKind::Medium))
@@ -95,9 +96,6 @@ void Shape::set_mesh(TriangleMesh mesh) {
     }
     area_ = float(acc[n]);
     if (!(area_ > 0)) throw SceneError(location_, "the mesh has zero surface area");
-    triangle_cdf_.resize(n + 1);
-    for (size_t i = 0; i <= n; ++i) triangle_cdf_[i] = float(acc[i] / acc[n]);
-    triangle_cdf_[n] = 1.f;
     Bounds3 box;
     for (const Vec3& q : mesh_.positions) box.expand(q);
     bound_center_ = box.center();
@@ -223,7 +221,9 @@ TriangleTangents triangle_tangents(const Vec3& p0, const Vec3& p1, const Vec3& p
                                    Vec2 uv1, Vec2 uv2) {
     const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
     const float det = duv02.x * duv12.y - duv02.y * duv12.x;
-    const float edges = std::hypot(duv02.x, duv02.y) * std::hypot(duv12.x, duv12.y);
+    // (uv edges are far from float's overflow: no need for hypot's care, which costs a call)
+    const float edges = std::sqrt((duv02.x * duv02.x + duv02.y * duv02.y) *
+                                  (duv12.x * duv12.x + duv12.y * duv12.y));
     constexpr float kMinSine = 1e-5f;
     if (!(std::abs(det) > kMinSine * edges)) return {Vec3(0.f), Vec3(0.f)};
     const Vec3 dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
@@ -327,6 +327,8 @@ PixelFootprint pixel_footprint(const Shape& shape, const Ray& ray, const Hit& hi
 }  // namespace
 
 void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, Hit& hit) const {
+    // The tangent only for materials that read it and for footprints (which need it).
+    const bool tangent = fills_tangent_ || ray.differential;
     hit.t = t;
     hit.shape = this;
     hit.prim = prim;
@@ -345,7 +347,7 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
                   std::acos(clamp(local.z, -1.f, 1.f)) * kInvPi};
         // d/du of center + r (sin theta cos phi, sin theta sin phi, cos theta) with
         // phi = 2pi u, in the world's axes as uv is (0 at the poles, where phi is undefined).
-        hit.dpdu = Vec3(-local.y, local.x, 0.f) * (2 * kPi * radius_);
+        if (tangent) hit.dpdu = Vec3(-local.y, local.x, 0.f) * (2 * kPi * radius_);
     } else {
         const uint32_t i0 = mesh_.indices[3 * prim], i1 = mesh_.indices[3 * prim + 1],
                        i2 = mesh_.indices[3 * prim + 2];
@@ -366,10 +368,10 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         if (!mesh_.uvs.empty()) {
             const Vec2 &uv0 = mesh_.uvs[i0], &uv1 = mesh_.uvs[i1], &uv2 = mesh_.uvs[i2];
             hit.uv = uv0 * w + uv1 * u + uv2 * v;
-            hit.dpdu = triangle_tangents(p0, p1, p2, uv0, uv1, uv2).dpdu;
+            if (tangent) hit.dpdu = triangle_tangents(p0, p1, p2, uv0, uv1, uv2).dpdu;
         } else {
             hit.uv = {u, v};  // the barycentrics of p = p0 w + p1 u + p2 v
-            hit.dpdu = p1 - p0;
+            if (tangent) hit.dpdu = p1 - p0;
         }
     }
     if (flip_normals_) {  // the inside becomes the outside; the parameterization stays
@@ -379,6 +381,42 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
     hit.sh = Frame(ns);
     hit.wi = hit.sh.to_local(-ray.d);
     hit.footprint = ray.differential ? pixel_footprint(*this, ray, hit, {u, v}) : PixelFootprint{};
+}
+
+struct Shape::AreaSampling {
+    warp::AliasTable triangles;  // by area
+    std::vector<Vec3> normal;    // unit, flipped with the shape
+    std::vector<float> p_error;  // Hit::p_error of a point on the triangle
+};
+
+const Shape::AreaSampling& Shape::area_sampling() const {
+    // Double-checked: after the first build a sample pays one atomic load (std::call_once
+    // would pay a thread-local lookup per call).
+    if (const AreaSampling* built = area_sampling_.load(std::memory_order_acquire)) return *built;
+    std::lock_guard<std::mutex> lock(area_sampling_mutex_);
+    if (!area_sampling_owner_) {
+        auto table = std::make_unique<AreaSampling>();
+        const size_t n = mesh_.triangle_count();
+        std::vector<double> areas(n);
+        table->normal.resize(n);
+        table->p_error.resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            const Vec3& p0 = mesh_.positions[mesh_.indices[3 * i]];
+            const Vec3& p1 = mesh_.positions[mesh_.indices[3 * i + 1]];
+            const Vec3& p2 = mesh_.positions[mesh_.indices[3 * i + 2]];
+            const Vec3 c = cross(p1 - p0, p2 - p0);
+            areas[i] = 0.5 * double(length(c));
+            const Vec3 normal = normalize(c);
+            table->normal[i] = flip_normals_ ? -normal : normal;
+            table->p_error[i] =
+                kRayOffsetScale *
+                std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)});
+        }
+        table->triangles = warp::AliasTable(areas);  // set_mesh() checked the total area
+        area_sampling_owner_ = std::move(table);
+        area_sampling_.store(area_sampling_owner_.get(), std::memory_order_release);
+    }
+    return *area_sampling_owner_;
 }
 
 ShapeSample Shape::sample_area(Vec2 u) const {
@@ -400,19 +438,17 @@ ShapeSample Shape::sample_area(Vec2 u) const {
         s.n = flip_normals_ ? -d : d;
         s.p_error = kRayOffsetScale * (max_abs_component(center_) + radius_);
     } else {
+        const AreaSampling& table = area_sampling();
         float ux = u.x;
-        const uint32_t tri =
-            warp::sample_discrete_cdf(triangle_cdf_.data(), uint32_t(mesh_.triangle_count()), ux);
+        const uint32_t tri = table.triangles.sample(ux);
         const Vec2 b = warp::square_to_uniform_triangle({ux, u.y});
         const Vec3& p0 = mesh_.positions[mesh_.indices[3 * tri]];
         const Vec3& p1 = mesh_.positions[mesh_.indices[3 * tri + 1]];
         const Vec3& p2 = mesh_.positions[mesh_.indices[3 * tri + 2]];
         s.p = p0 * (1.f - b.x - b.y) + p1 * b.x + p2 * b.y;
-        const Vec3 n = normalize(cross(p1 - p0, p2 - p0));
-        s.n = flip_normals_ ? -n : n;
+        s.n = table.normal[tri];
         s.uv = b;
-        s.p_error = kRayOffsetScale *
-                    std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)});
+        s.p_error = table.p_error[tri];
     }
     s.pdf = 1.f / area_;
     return s;

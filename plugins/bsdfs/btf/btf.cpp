@@ -100,6 +100,7 @@ public:
     }
 
     bool uses_footprint() const override { return hierarchy_ || !sample_shares_.empty(); }
+    bool uses_tangent() const override { return true; }  // the BTF's frame follows dpdu
     bool adapts_sampling() const override { return !sample_shares_.empty(); }
     /// `adaptive_spp`'s share at the pixel's texel-to-pixel ratio: linear in log2 r between
     /// the table's entries, its first and last share beyond them.

@@ -92,6 +92,12 @@ public:
 
     // What passes straight: the transparent part, and what the nested material lets through.
     bool reciprocal() const override { return nested_->reciprocal(); }
+    bool uses_footprint() const override { return nested_->uses_footprint(); }
+    bool uses_tangent() const override { return nested_->uses_tangent(); }
+    bool adapts_sampling() const override { return nested_->adapts_sampling(); }
+    float pixel_sample_share(const Hit& hit) const override {
+        return nested_->pixel_sample_share(hit);
+    }
 
     Color null_transmission(const Hit& hit) const override {
         const float alpha = opacity(hit);

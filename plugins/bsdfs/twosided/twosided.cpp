@@ -59,6 +59,19 @@ public:
     }
 
     bool reciprocal() const override { return front_->reciprocal() && back_->reciprocal(); }
+    bool uses_footprint() const override {
+        return front_->uses_footprint() || back_->uses_footprint();
+    }
+    bool uses_tangent() const override { return front_->uses_tangent() || back_->uses_tangent(); }
+    bool adapts_sampling() const override {
+        return front_->adapts_sampling() || back_->adapts_sampling();
+    }
+    float pixel_sample_share(const Hit& hit) const override {
+        if (hit.wi.z >= 0.f) return front_->pixel_sample_share(hit);
+        Hit mirrored = hit;
+        mirrored.wi = flip_z(hit.wi);
+        return back_->pixel_sample_share(mirrored);
+    }
 
     // The side's vertex event (delay, colour transfer: e.g. a two-sided `fluorescent`), with
     // wi mirrored on the back side as for the other calls.
