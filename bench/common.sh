@@ -30,3 +30,19 @@ bench_log_header() {
         echo "load average before the benchmark: $(cat /proc/loadavg)"
     } | tee "$log"
 }
+
+# Prints an LD_PRELOAD value for running femto under valgrind (empty when not needed): libhwy,
+# loaded with OpenImageIO, runs an instruction valgrind 3.19 cannot decode on some CPUs in a
+# static initializer; bench/tools/valgrind_hwy_shim.cpp stands in for that function. Built into
+# DIR (default: the bench build folder).
+valgrind_preload() {
+    local dir=${1:-$build} lib
+    lib=$(ldconfig -p 2>/dev/null | awk '/libhwy\.so/ {print $NF; exit}')
+    [[ -n "$lib" ]] || return 0
+    mkdir -p "$dir"
+    if [[ ! -f "$dir/libvalgrind_hwy_shim.so" ]]; then
+        c++ -O2 -shared -fPIC "$root/bench/tools/valgrind_hwy_shim.cpp" \
+            -o "$dir/libvalgrind_hwy_shim.so"
+    fi
+    echo "$dir/libvalgrind_hwy_shim.so"
+}

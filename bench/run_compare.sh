@@ -61,6 +61,7 @@ echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$log"
 
 # Instructions executed by femto::render() (1 thread, 32x32 px, 16 spp), both builds.
 if command -v valgrind >/dev/null; then
+    preload=$(valgrind_preload)
     ins="$results/compare_instructions.csv"
     echo "scene,before_render_instructions,after_render_instructions,after_over_before" >"$ins"
     for scene in cornell-box fog-object; do
@@ -68,8 +69,9 @@ if command -v valgrind >/dev/null; then
         for dir in "$before_build" "$build"; do
             rm -f "$tmp/cg.out"
             # valgrind cannot decode every instruction of every library femto loads (libhwy's
-            # rdtscp, through OpenImageIO, on some systems): no count then, not a failed script.
-            valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" "$dir/bin/femto" render \
+            # rdtscp, through OpenImageIO, on some systems; the preloaded shim avoids it): no
+            # count then, not a failed script.
+            LD_PRELOAD="$preload" valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" "$dir/bin/femto" render \
                 "$root/scenes/$scene/scene.xml" -D res=32 -D spp=16 --threads 1 --quiet \
                 -o "$tmp/cg" >/dev/null 2>&1 || true
             counts+=("$(callgrind_annotate --inclusive=yes "$tmp/cg.out" 2>/dev/null |
