@@ -13,9 +13,9 @@ Vec2 square_to_uniform_disk(Vec2 u) {
     // Both wedges computed and one selected: the choice is a coin flip per sample, which as a
     // branch the CPU mispredicts half the time (the same values either way).
     const bool wide = a * a > b * b;
-    const float over_a = b / a, over_b = a / b;  // one of them may divide by 0: not selected
     const float r = wide ? a : b;
-    const float phi = wide ? (kPi / 4.f) * over_a : (kPi / 2.f) - (kPi / 4.f) * over_b;
+    const float ratio = (wide ? b : a) / r;
+    const float phi = wide ? (kPi / 4.f) * ratio : (kPi / 2.f) - (kPi / 4.f) * ratio;
     return {r * std::cos(phi), r * std::sin(phi)};
 }
 
@@ -98,8 +98,11 @@ AliasTable::AliasTable(const std::vector<double>& weights) {
     // A weight-0 cell's alias must have weight: point such cells at the heaviest entry.
     const uint32_t heaviest =
         uint32_t(std::max_element(weights.begin(), weights.end()) - weights.begin());
-    for (Cell& c : entries_)
+    for (Cell& c : entries_) {
         if (weights[c.alias] == 0) c.alias = heaviest;
+        c.inv_threshold = c.threshold > 0 ? 1.f / c.threshold : 0.f;
+        c.inv_rest = c.threshold < 1 ? 1.f / (1.f - c.threshold) : 0.f;
+    }
 }
 
 uint32_t AliasTable::sample(float& u) const {
@@ -108,11 +111,13 @@ uint32_t AliasTable::sample(float& u) const {
     const uint32_t i = std::min(uint32_t(scaled), n - 1);
     const float f = std::min(float(scaled - double(i)), 0x1.fffffep-1f);
     const Cell& c = entries_[i];
+    // The rescalings multiply by stored reciprocals: a division is slow, and a light sample's
+    // steps wait on each other.
     if (f < c.threshold) {
-        u = std::min(f / c.threshold, 0x1.fffffep-1f);
+        u = std::min(f * c.inv_threshold, 0x1.fffffep-1f);
         return i;
     }
-    u = std::min((f - c.threshold) / (1.f - c.threshold), 0x1.fffffep-1f);
+    u = std::min((f - c.threshold) * c.inv_rest, 0x1.fffffep-1f);
     return c.alias;
 }
 

@@ -179,11 +179,19 @@ void for_each_filter_pixel(const ReconstructionFilter& filter, Vec2 pos, int x0,
     const int xb = std::min(x1 - 1, int(std::floor(pos.x - 0.5f + r)));
     const int ya = std::max(y0, int(std::ceil(pos.y - 0.5f - r)));
     const int yb = std::min(y1 - 1, int(std::floor(pos.y - 0.5f + r)));
+    // The filter is separable: each column's weight is evaluated once per sample, not once
+    // per pixel (a Gaussian's exp per tap was most of a splat's cost).
+    constexpr int kMaxColumns = 64;
+    float wx[kMaxColumns];
+    const int columns = xb - xa + 1;
+    const bool tabulated = columns <= kMaxColumns;
+    if (tabulated)
+        for (int k = 0; k < columns; ++k) wx[k] = filter.eval(float(xa + k) + 0.5f - pos.x);
     for (int y = ya; y <= yb; ++y) {
         const float wy = filter.eval(float(y) + 0.5f - pos.y);
         if (wy == 0) continue;
         for (int x = xa; x <= xb; ++x) {
-            const float w = wy * filter.eval(float(x) + 0.5f - pos.x);
+            const float w = wy * (tabulated ? wx[x - xa] : filter.eval(float(x) + 0.5f - pos.x));
             if (w != 0) f(x, y, w);
         }
     }

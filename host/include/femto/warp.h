@@ -51,6 +51,7 @@ private:
     struct Cell {
         float threshold = 1.f;
         uint32_t alias = 0;
+        float inv_threshold = 1.f, inv_rest = 0.f;  // 1 / threshold, 1 / (1 - threshold)
     };
     std::vector<Cell> entries_;
 };

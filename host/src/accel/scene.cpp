@@ -127,8 +127,10 @@ EmitterSample Scene::sample_emitter(const Vec3& ref, float u_select, Vec2 u) con
     const size_t i = std::min(size_t(u_select * float(n)), n - 1);
     EmitterSample s = emitter_list_[i]->sample_direct(ref, u);
     s.emitter = emitter_list_[i];
-    s.pdf /= float(n);
-    s.weight *= float(n);
+    if (n > 1) {  // (a division costs a light sample's wait even by 1)
+        s.pdf /= float(n);
+        s.weight *= float(n);
+    }
     return s;
 }
 

@@ -29,7 +29,6 @@ public:
     HdrBlock(const ReconstructionFilter& filter, int x0, int y0, int w, int h, int border,
              size_t aovs)
         : filter_(filter),
-          radius_(filter.radius()),
           x0_(x0 - border),
           y0_(y0 - border),
           w_(w + 2 * border),
@@ -42,30 +41,19 @@ public:
         if (!accept_sample(sample, rejected_)) return;
         Color L;
         for (const auto& c : sample.items()) L += c.radiance;
-        // Pixels whose centre lies within the filter radius of pos.
-        const int xa = int(std::ceil(pos.x - 0.5f - radius_)),
-                  xb = int(std::floor(pos.x - 0.5f + radius_));
-        const int ya = int(std::ceil(pos.y - 0.5f - radius_)),
-                  yb = int(std::floor(pos.y - 0.5f + radius_));
-        for (int y = std::max(ya, y0_); y <= std::min(yb, y0_ + h_ - 1); ++y) {
-            const float wy = filter_.eval(float(y) + 0.5f - pos.y);
-            if (wy == 0) continue;
-            for (int x = std::max(xa, x0_); x <= std::min(xb, x0_ + w_ - 1); ++x) {
-                const float w = wy * filter_.eval(float(x) + 0.5f - pos.x);
-                if (w == 0) continue;
+        for_each_filter_pixel(
+            filter_, pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {
                 const size_t i = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
                 PixelSum& p = pixels_[i];
                 for (int c = 0; c < 3; ++c) p.rgb[c] += double(w) * double(L[c]);
-                if (!sample.is_splat()) p.weight += w;  // splats: add_splat_weight()
+                if (!sample.is_splat()) p.weight += w;  // else add_splat_weight()
                 if (aov_count_ > 0 && sample.aovs().size() == aov_count_)
                     for (size_t k = 0; k < aov_count_; ++k)
                         aov_sums_[i * aov_count_ + k] += double(w) * double(sample.aovs()[k]);
-            }
-        }
+            });
     }
 
     const ReconstructionFilter& filter_;
-    float radius_;
     int x0_, y0_, w_, h_;
     size_t aov_count_;
     std::vector<PixelSum> pixels_;
