@@ -7,7 +7,7 @@
 //
 //   build/bin/femto_micro                                   # all, Google Benchmark's defaults
 //   build/bin/femto_micro --benchmark_filter=Splat          # one family
-//   build/bin/femto_micro --benchmark_format=csv > out.csv
+//   build/bin/femto_micro --benchmark_format=json > out.json   (csv needs one counter set)
 //
 // ctest runs it once with a tiny minimum time (bench_micro_smoke): the check is that every
 // routine still runs, never how fast (timed assertions are not tests; docs/architecture.md §8).

@@ -2,7 +2,8 @@
 """Summarises and plots bench/run_compare.sh: compare_runs.csv (`femto bench` rows of both
 builds, every round) -> compare_summary.csv (per scene and variant: median samples/s and rays/s
 of each build, after / before of the medians, and the median of the per-round after / before)
-and compare.png (every run's samples/s per build)."""
+and compare.png (every run's samples/s per build); with compare_raw_rays.csv, each run's ray rate
+over Embree's raw rates (compare_raw_ratios.csv)."""
 import csv
 import os
 import statistics
@@ -47,6 +48,7 @@ def main():
                   f"{med['after']:>10.4g} {ratio:>12.3f}   {pr[0]:.3f} [{pr[1]:.3f}, {pr[2]:.3f}]")
     with open(os.path.join(results, "compare_summary.csv"), "w", newline="") as f:
         csv.writer(f).writerows(out)
+    raw_ratios(results, rows)
     fig, ax = plt.subplots(figsize=(8, 4))
     labels = []
     for i, ((scene, variant), builds) in enumerate(sorted(data.items())):
@@ -60,6 +62,47 @@ def main():
     ax.legend()
     fig.tight_layout()
     fig.savefig(os.path.join(results, "compare.png"), dpi=120)
+
+
+def raw_ratios(results, rows):
+    """With compare_raw_rays.csv (experiments with <raw_rays>): each run's rays per second over
+    Embree's raw rate of each kind measured just before it (same build, round, scene, budget
+    and seed); the median and range per build, written to compare_raw_ratios.csv."""
+    path = os.path.join(results, "compare_raw_rays.csv")
+    if not os.path.exists(path):
+        return
+    raw = {}
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            key = (r["build"], r["round"], r["scene"], r["budget"], r["seed"], r["kind"])
+            raw[key] = float(r["rays"]) / float(r["seconds"])
+    ratios = {}  # (scene, variant, kind) -> build -> [ratio]
+    for r in rows:
+        seconds = float(r["seconds"])
+        if seconds <= 0:
+            continue
+        for kind in ("incoherent", "sorted", "shadow"):
+            base = raw.get((r["build"], r["round"], r["scene"], r["budget"], r["seed"], kind))
+            if base:
+                ratios.setdefault((r["scene"], r["variant"], kind), {}).setdefault(
+                    r["build"], []).append(float(r["rays"]) / seconds / base)
+    out = [["scene", "variant", "raw_kind", "build", "median", "min", "max", "runs"]]
+    print(f"\n{'scene':<16} {'variant':<20} {'over raw':<10} {'before: median [min, max]':>28} "
+          f"{'after: median [min, max]':>28}")
+    for (scene, variant, kind), builds in sorted(ratios.items()):
+        cells = []
+        for b in ("before", "after"):
+            v = builds.get(b, [])
+            if not v:
+                cells.append(f"{'-':>28}")
+                continue
+            m = statistics.median(v)
+            out.append([scene, variant, kind, b, f"{m:.4f}", f"{min(v):.4f}", f"{max(v):.4f}",
+                        len(v)])
+            cells.append(f"{m:>12.3f} [{min(v):.3f}, {max(v):.3f}]")
+        print(f"{scene:<16} {variant:<20} {kind:<10} {cells[0]} {cells[1]}")
+    with open(os.path.join(results, "compare_raw_ratios.csv"), "w", newline="") as f:
+        csv.writer(f).writerows(out)
 
 
 if __name__ == "__main__":

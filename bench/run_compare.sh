@@ -7,6 +7,7 @@
 # on a shared machine). REV needs `femto bench` and every element EXPERIMENT uses.
 #   bench/run_compare.sh REV [ROUNDS] [EXPERIMENT]
 #       e.g. bench/run_compare.sh 4a3e41b 5      (EXPERIMENT: bench/experiments/compare.xml)
+#   FEMTO_BENCH_ARGS="--threads 1" bench/run_compare.sh ...  passes options to `femto bench`
 # Results: bench/results/compare_runs.csv (every run of both builds), compare_summary.csv,
 # compare.png, compare_instructions.csv, compare_run.log.
 set -euo pipefail
@@ -36,14 +37,22 @@ echo "before: $rev, after: working tree; $rounds rounds of $experiment" | tee -a
 runs_csv="$results/compare_runs.csv"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-rm -f "$runs_csv"
+raw_csv="$results/compare_raw_rays.csv"
+rm -f "$runs_csv" "$raw_csv"
 
 # One round of one build: its study in a fresh folder, its rows prefixed with build and round.
 run_one() {
     local label=$1 dir=$2 round=$3
-    "$dir/bin/femto" bench "$experiment" -o "$tmp/$label-$round" -q >>"$log" 2>&1
+    # shellcheck disable=SC2086  # FEMTO_BENCH_ARGS: extra options, e.g. "--threads 1"
+    "$dir/bin/femto" bench "$experiment" -o "$tmp/$label-$round" -q ${FEMTO_BENCH_ARGS:-} \
+        >>"$log" 2>&1
     [[ -f "$runs_csv" ]] || sed -n '1s/^/build,round,/p' "$tmp/$label-$round/results.csv" >"$runs_csv"
     sed -n "2,\$s/^/$label,$round,/p" "$tmp/$label-$round/results.csv" >>"$runs_csv"
+    # Embree's raw rates measured beside the runs (experiments with <raw_rays>).
+    if [[ -f "$tmp/$label-$round/raw_rays.csv" ]]; then
+        [[ -f "$raw_csv" ]] || sed -n '1s/^/build,round,/p' "$tmp/$label-$round/raw_rays.csv" >"$raw_csv"
+        sed -n "2,\$s/^/$label,$round,/p" "$tmp/$label-$round/raw_rays.csv" >>"$raw_csv"
+    fi
 }
 
 for ((r = 0; r < rounds; r++)); do
