@@ -10,8 +10,8 @@ namespace femto::warp {
 Vec2 square_to_uniform_disk(Vec2 u) {
     const float a = 2.f * u.x - 1.f, b = 2.f * u.y - 1.f;
     if (a == 0 && b == 0) return {0, 0};
-    // Both wedges computed and one selected: the choice is a coin flip per sample, which as a
-    // branch the CPU mispredicts half the time (the same values either way).
+    // The wedge's operands are selected, not branched on: the choice is a coin flip per
+    // sample, which as a branch the CPU mispredicts half the time (the same values either way).
     const bool wide = a * a > b * b;
     const float r = wide ? a : b;
     const float ratio = (wide ? b : a) / r;
