@@ -58,7 +58,6 @@ constexpr size_t kInputs = 4096;  // a power of two: inputs cycle with a mask
 // One camera sample's numbers: start(), then `dims` 2D draws (a path of a few vertices takes
 // about 2 + 3 per vertex).
 void SamplerDraw(benchmark::State& state, const std::string& type) {
-    auto scene = cornell_box("hdrfilm");
     Properties props;
     auto sampler =
         std::static_pointer_cast<Sampler>(create_object(PluginKind::Sampler, type, props));
@@ -172,7 +171,7 @@ void HitFill(benchmark::State& state) {
     for (auto _ : state) {
         const Found& f = found[i % found.size()];
         Hit hit;
-        // The barycentrics do not matter for the cost; the hit's own uv stands in for them.
+        // Fixed barycentrics: the fill's cost does not depend on where in the triangle it is.
         f.hit.shape->fill_hit(f.ray, f.hit.t, f.hit.prim, 0.25f, 0.5f, hit);
         benchmark::DoNotOptimize(hit.sh);
         ++i;

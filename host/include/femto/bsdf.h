@@ -97,8 +97,8 @@ public:
     /// instructions on a small scene.
     virtual bool uses_footprint() const { return false; }
     /// True when the material reads hit.dpdu (an oriented material: a BTF's frame, anisotropic
-    /// roughness). Hits on other materials skip it (a triangle's tangent solve costs ~5 % of a
-    /// path tracer's instructions) and leave it zero, unless the ray carries a differential.
+    /// roughness). Hits on other materials may skip it (a triangle's tangent solve costs ~5 %
+    /// of a path tracer's instructions) and leave it zero, unless the ray carries a differential.
     virtual bool uses_tangent() const { return false; }
     /// Adaptive sampling (thesis ch. 3, Fig. 3.15): true when pixel_sample_share() can be
     /// below 1. The renderer then casts one ray through each pixel's centre before rendering.

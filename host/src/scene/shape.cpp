@@ -22,6 +22,16 @@ Ray Hit::spawn_to(const Vec3& target) const {
     return Ray{o, d / dist, 0.f, shadow_ray_length(dist, target)};
 }
 
+namespace {
+// Area of triangle i of `mesh`, in double (summed over a mesh of millions of triangles).
+double triangle_area(const TriangleMesh& mesh, size_t i) {
+    const Vec3& a = mesh.positions[mesh.indices[3 * i]];
+    const Vec3& b = mesh.positions[mesh.indices[3 * i + 1]];
+    const Vec3& c = mesh.positions[mesh.indices[3 * i + 2]];
+    return 0.5 * double(length(cross(b - a, c - a)));
+}
+}  // namespace
+
 std::vector<ParamSpec> Shape::inherited_params() {
     return inherit_params(
         Object::inherited_params(), "Shape",
@@ -86,15 +96,9 @@ void Shape::set_mesh(TriangleMesh mesh) {
         throw SceneError(location_, "the mesh has a different number of uvs and positions");
     mesh_ = std::move(mesh);
     is_sphere_ = false;
-    const size_t n = mesh_.triangle_count();
-    std::vector<double> acc(n + 1, 0.0);
-    for (size_t i = 0; i < n; ++i) {
-        const Vec3& a = mesh_.positions[mesh_.indices[3 * i]];
-        const Vec3& b = mesh_.positions[mesh_.indices[3 * i + 1]];
-        const Vec3& c = mesh_.positions[mesh_.indices[3 * i + 2]];
-        acc[i + 1] = acc[i] + 0.5 * double(length(cross(b - a, c - a)));
-    }
-    area_ = float(acc[n]);
+    double area = 0;
+    for (size_t i = 0; i < mesh_.triangle_count(); ++i) area += triangle_area(mesh_, i);
+    area_ = float(area);
     if (!(area_ > 0)) throw SceneError(location_, "the mesh has zero surface area");
     Bounds3 box;
     for (const Vec3& q : mesh_.positions) box.expand(q);
@@ -404,9 +408,8 @@ const Shape::AreaSampling& Shape::area_sampling() const {
             const Vec3& p0 = mesh_.positions[mesh_.indices[3 * i]];
             const Vec3& p1 = mesh_.positions[mesh_.indices[3 * i + 1]];
             const Vec3& p2 = mesh_.positions[mesh_.indices[3 * i + 2]];
-            const Vec3 c = cross(p1 - p0, p2 - p0);
-            areas[i] = 0.5 * double(length(c));
-            const Vec3 normal = normalize(c);
+            areas[i] = triangle_area(mesh_, i);
+            const Vec3 normal = normalize(cross(p1 - p0, p2 - p0));
             table->normal[i] = flip_normals_ ? -normal : normal;
             table->p_error[i] =
                 kRayOffsetScale *
