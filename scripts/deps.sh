@@ -8,6 +8,7 @@ PACKAGES=(
   libopenimageio-dev openimageio-tools libopenexr-dev libopencolorio-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
+  libopenmpi-dev openmpi-bin
   python3 python3-numpy python3-matplotlib python3-skimage
 )
 missing=()

@@ -11,9 +11,11 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <thread>
 
 #include "bench.h"
 #include "btf.h"
+#include "distributed.h"
 #include "femto/host.h"
 #include "femto/integrator.h"
 #include "femto/log.h"
@@ -33,13 +35,15 @@ constexpr int kExitSignalBase = 128;  // the shell convention: 128 + signal numb
 constexpr const char* kPluginDirHelp =
     "Plugin folder, searched before femto's own plugins (repeatable; the first given wins)";
 
-// Ctrl-C (SIGINT) and SIGTERM (batch schedulers send it before a time limit) stop the render
-// within a few samples' work; what was rendered is written and femto exits 128 + the signal. While
-// the outputs are being written, further signals only say so: stopping then would lose the
-// render and leave a half-written set.
+// Ctrl-C (SIGINT), SIGTERM (batch schedulers send it before a time limit) and SIGUSR1 (what
+// mpirun forwards to every process; Slurm's --signal) stop the render within a few samples'
+// work (in a distributed render: at the end of the current round of passes); what was rendered
+// is written and femto exits 128 + the signal. While the outputs are being written, further
+// signals only say so: stopping then would lose the render and leave a half-written set.
 std::atomic<bool> g_stop{false};
 std::atomic<bool> g_writing{false};
 std::atomic<int> g_first_signal{0};
+std::atomic<int> g_rank{-1};  // in a distributed render; -1: alone
 
 void say(const char* msg, size_t size) {
     [[maybe_unused]] auto n = write(STDERR_FILENO, msg, size);
@@ -65,11 +69,17 @@ extern "C" void on_stop_signal(int sig) {
     static const char msg[] =
         "\nfemto: interrupted, writing what was rendered "
         "(Ctrl-C again to abort without writing)\n";
-    say(msg, sizeof(msg) - 1);
+    static const char msg_distributed[] =
+        "\nfemto: interrupted: every process finishes its pass, then rank 0 writes what was "
+        "rendered\n";
+    if (g_rank.load() < 0)
+        say(msg, sizeof(msg) - 1);
+    else if (g_rank.load() == 0)
+        say(msg_distributed, sizeof(msg_distributed) - 1);
 }
 
 void handle_stop_signals(bool on) {
-    for (int sig : {SIGINT, SIGTERM}) std::signal(sig, on ? on_stop_signal : SIG_DFL);
+    for (int sig : {SIGINT, SIGTERM, SIGUSR1}) std::signal(sig, on ? on_stop_signal : SIG_DFL);
 }
 
 // Creates the output folder and checks it is writable, before spending time on a render.
@@ -248,28 +258,68 @@ std::string strip_output_extension(std::string out_base) {
     return out_base;
 }
 
+// What the film and the integrator accumulate, for a distributed render to combine.
+std::vector<femto::Accumulator> render_totals(femto::Scene& scene) {
+    std::vector<femto::Accumulator> totals = scene.sensor().film().accumulators();
+    for (const femto::Accumulator& a : scene.integrator().accumulators()) totals.push_back(a);
+    return totals;
+}
+
+// A distributed render: adds every process's film into rank 0's and the statistics with it.
+// Returns false in the processes that have nothing to write (all but rank 0).
+bool combine_processes(femto::cli::Distributed& group, femto::Scene& scene,
+                       femto::RenderStats& stats, bool quiet) {
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<femto::Accumulator> totals = render_totals(scene);
+    group.combine(totals);
+    stats = group.combine_stats(stats);
+    if (group.rank() != 0) return false;
+    if (!quiet) {
+        uint64_t bytes = 0;
+        for (const femto::Accumulator& a : totals) bytes += a.count * a.element_bytes();
+        const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+        fmt::print(stderr,
+                   "combined the films of {} processes ({:.1f} MiB from each) in {:.2f} s\n",
+                   group.size(), double(bytes) / double(1 << 20), took.count());
+    }
+    return true;
+}
+
 int cmd_render(const std::string& scene_path, std::string out_base,
                const std::vector<std::string>& defines, uint32_t spp, int threads, uint64_t seed,
-               bool quiet, bool npy, femto::LoadOptions opts) {
+               bool quiet, bool npy, femto::LoadOptions opts, femto::cli::Distributed* group) {
+    const bool root = !group || group->rank() == 0;
+    if (!root) {  // rank 0 speaks for the job
+        quiet = true;
+        femto::silence_log(true);
+    }
     for (const auto& d : defines) opts.defines.push_back(parse_define(d));
     femto::plugin_search_path(opts);  // checks the --plugin-dir folders before any work
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
     out_base = strip_output_extension(out_base);
-    prepare_output(out_base);
+    if (root) prepare_output(out_base);
     // From here on Ctrl-C means "stop rendering and write what was rendered".
     handle_stop_signals(true);
     auto scene = femto::load_scene(scene_path, opts);
+    if (group) render_totals(*scene);  // a film that cannot be combined fails before rendering
     femto::RenderOptions ro;
     ro.spp = spp;
-    ro.threads = threads;
+    ro.threads = threads > 0 || !group ? threads : group->default_threads();
     ro.seed = seed;
-    ro.progress = !quiet && isatty(STDERR_FILENO);
+    ro.progress = !quiet && (isatty(STDERR_FILENO) || group);
+    ro.progress_lines = group != nullptr;  // mpirun's stderr is a pipe: lines, not a bar
     ro.scene_file = scene_path;
     ro.stop = &g_stop;
-    const femto::RenderStats stats = femto::render(*scene, ro);
+    ro.group = group;
+    femto::RenderStats stats = femto::render(*scene, ro);
+    if (group && !combine_processes(*group, *scene, stats, quiet))
+        return g_first_signal.load() ? kExitSignalBase + g_first_signal.load()
+               : stats.interrupted   ? kExitInterrupted
+                                     : kExitOk;
     g_writing.store(true);
     femto::RenderInfo info = femto::make_render_info(*scene, ro, stats);
     info.write_npy = npy;
+    info.processes = group ? uint32_t(group->size()) : 1;
     if (!quiet)
         fmt::print(stderr, "{} {} of {} spp in {:.2f} s ({:.2f} M rays/s); writing {}.* ...\n",
                    stats.interrupted ? "Interrupted after" : "Rendered", stats.spp_done,
@@ -297,7 +347,8 @@ int cmd_render(const std::string& scene_path, std::string out_base,
 
 int main(int argc, char** argv) {
     CLI::App app{"femto: a renderer for time-resolved (transient) light transport"};
-    app.set_version_flag("--version", std::string("femto ") + femto::version());
+    app.set_version_flag("--version", std::string("femto ") + femto::version() + "\n" +
+                                          femto::cli::distributed_support());
     app.require_subcommand(1);
     femto::LoadOptions opts;
 
@@ -348,9 +399,37 @@ int main(int argc, char** argv) {
     } catch (const femto::SceneError& e) {
         return report_bad_input(e.what());
     }
+    // Under mpirun or srun, `femto render` is one process of a distributed render.
+    std::unique_ptr<femto::cli::Distributed> group;
+    if (render->parsed()) {
+        try {
+            group = femto::cli::start_distributed(argc, argv);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "femto: error: %s\n", e.what());
+            return kExitInternal;
+        }
+        if (group) g_rank.store(group->rank());
+    }
+    // A process of a distributed render that fails ends the whole job (the others would wait
+    // for it forever). The others wait a moment first, so that a failure every process meets
+    // (a scene error) is reported once, by rank 0.
+    auto fail = [&](int code, const std::string& message) {
+        if (!group) return std::fprintf(stderr, "femto: %s\n", message.c_str()), code;
+        if (group->rank() != 0) std::this_thread::sleep_for(std::chrono::seconds(2));
+        const std::string who =
+            group->rank() ? fmt::format("femto (process {})", group->rank()) : "femto";
+        std::fprintf(stderr, "%s: %s\n", who.c_str(), message.c_str());
+        std::fflush(stderr);
+        group->abort(code);
+        return code;  // (abort() does not return)
+    };
     try {
-        if (render->parsed())
-            return cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet, npy, opts);
+        if (render->parsed()) {
+            const int code = cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet,
+                                        npy, opts, group.get());
+            femto::cli::finish_distributed(std::move(group));
+            return code;
+        }
         if (plugins->parsed()) return cmd_plugins(plugin_name, markdown, opts);
         if (viz->parsed()) return femto::cli::run_viz_command();
         if (btf->parsed()) return femto::cli::run_btf_command();
@@ -367,10 +446,9 @@ int main(int argc, char** argv) {
             return code;
         }
     } catch (const femto::SceneError& e) {
-        return report_bad_input(e.what());
+        return fail(kExitBadInput, std::string("error: ") + e.what());
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "femto: internal error: %s\n", e.what());
-        return kExitInternal;
+        return fail(kExitInternal, std::string("internal error: ") + e.what());
     }
     return kExitInternal;
 }

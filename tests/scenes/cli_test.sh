@@ -61,7 +61,9 @@ XML
 
 case "$case_name" in
 version)
-  "$femto" --version | grep -Eq '^femto [0-9]+\.[0-9]+\.[0-9]+$' || fail "bad --version";;
+  "$femto" --version > version.txt || fail "exit code"
+  head -1 version.txt | grep -Eq '^femto [0-9]+\.[0-9]+\.[0-9]+$' || fail "bad --version"
+  sed -n 2p version.txt | grep -Eq '^distributed rendering: (yes|no) \(' || fail "no MPI line";;
 plugins_list)
   "$femto" plugins > list.txt || fail "exit code"
   for k in integrator sensor film rfilter sampler shape bsdf emitter texture; do

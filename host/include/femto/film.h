@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "femto/accumulator.h"
 #include "femto/color.h"
 #include "femto/kernel.h"
 #include "femto/math.h"
@@ -167,6 +168,7 @@ struct RenderInfo {
     double render_seconds = 0;
     bool interrupted = false;
     RejectedContributions rejected;  ///< written as femto:rejected_nan / _infinite / _negative
+    uint32_t processes = 1;  ///< of a distributed render (written as femto:processes when > 1)
 };
 
 /// Calls f(x, y, weight) for every pixel of [x0, x1) x [y0, y1) whose centre lies within
@@ -265,6 +267,12 @@ public:
     /// Writes the outputs for `out_base` (no extension), atomically; returns the paths written.
     virtual std::vector<std::string> write(const std::string& out_base,
                                            const RenderInfo& info) const = 0;
+
+    /// The arrays that hold the film's running totals (pixel sums, weights, counts), which
+    /// a distributed render combines across processes before rank 0 writes
+    /// (femto/accumulator.h); nothing else of the film may depend on the samples it merged.
+    /// The default throws a SceneError: the film cannot take part in a distributed render.
+    virtual std::vector<Accumulator> accumulators();
 
     /// Contributions refused so far (NaN, infinite, negative), over every merged block.
     RejectedContributions rejected() const {

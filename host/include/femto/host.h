@@ -50,14 +50,34 @@ std::vector<std::string> loaded_plugin_files();
 /// The folders searched for plugins, in order.
 std::vector<std::string> plugin_search_path(const LoadOptions& options = {});
 
+/// The processes of a distributed render (MPI; docs/distributed.md), as the renderer sees
+/// them: pass p of the render runs in process p % size(), so that every sample is the one a
+/// single process would draw; each process renders into its own film, whose totals
+/// (Film::accumulators()) are combined afterwards.
+class PassGroup {
+public:
+    virtual ~PassGroup() = default;
+    virtual int rank() const = 0;  ///< this process: 0 .. size() - 1
+    virtual int size() const = 0;
+    /// Called by every process after each round of passes (one pass per process): true when
+    /// `stop` is true in any of them, so that all stop after the same round.
+    virtual bool any(bool stop) = 0;
+};
+
 struct RenderOptions {
     uint32_t spp = 0;  ///< 0 = the sampler's sample_count
     int threads = 0;   ///< 0 = all cores
     uint64_t seed = 0;
     bool progress = false;   ///< progress line on stderr
     std::string scene_file;  ///< recorded in the outputs
-    /// When set and becomes true, rendering stops at the end of the current pass.
+    /// When set and becomes true, rendering stops within the current pass (within a few
+    /// samples' work); in a distributed render, at the end of the current round of passes.
     const std::atomic<bool>* stop = nullptr;
+    /// The processes sharing this render's passes; null: this process renders every pass.
+    PassGroup* group = nullptr;
+    /// Progress as one line per round of passes (for logs, e.g. a batch job's output) instead
+    /// of the redrawn bar; only with `progress`.
+    bool progress_lines = false;
 };
 
 struct RenderStats {

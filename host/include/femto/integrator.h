@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "femto/accumulator.h"
 #include "femto/film.h"
 #include "femto/math.h"
 #include "femto/object.h"
@@ -81,6 +82,11 @@ public:
                                            const RenderInfo& /*info*/) const {
         return {};
     }
+    /// The arrays of running totals behind what write() writes (e.g. per-strategy images),
+    /// which a distributed render combines across processes before rank 0 writes
+    /// (femto/accumulator.h). The default lists none: an integrator that writes images of its
+    /// own must list their totals here, or its images hold rank 0's samples only.
+    virtual std::vector<Accumulator> accumulators() { return {}; }
 };
 
 /// Base of integrators that follow paths of bounded depth (Mitsuba's MonteCarloIntegrator):

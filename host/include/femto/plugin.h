@@ -51,7 +51,9 @@ namespace femto {
 /// (23: Bsdf::uses_footprint(): camera rays carry differentials only for such materials.)
 /// (24: Bsdf::uses_tangent(): Hit::dpdu only for such materials; Shape's layout changes with
 ///  its lazily built area-sampling table.)
-inline constexpr uint32_t kPluginAbiVersion = 24;
+/// (25: distributed rendering: Film::accumulators(), Integrator::accumulators() (vtables),
+///  femto/accumulator.h.)
+inline constexpr uint32_t kPluginAbiVersion = 25;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -258,6 +258,15 @@ protected:
     /// Logs a warning when no light arrived within the time window (with the times it arrived
     /// at instead).
     void warn_empty_window() const;
+    /// The accumulators of the base (the arrival statistics of warn_empty_window()) followed
+    /// by the subclass's `totals`: what a subclass returns from accumulators().
+    std::vector<Accumulator> with_window_accumulators(std::vector<Accumulator> totals) {
+        totals.push_back(Accumulator::of_counts(&arrivals_.count, 1));
+        totals.push_back(Accumulator::of_counts(&arrivals_.inside, 1));
+        totals.push_back(Accumulator::of_doubles(&arrivals_.earliest, 1, Accumulator::Op::Min));
+        totals.push_back(Accumulator::of_doubles(&arrivals_.latest, 1, Accumulator::Op::Max));
+        return totals;
+    }
 
     TimeGrid grid_;       ///< its frame is camera or world time (`world_time`)
     float exposure_ = 0;  ///< preview exposure in stops (0: automatic)

@@ -25,7 +25,7 @@ namespace OCIO = OCIO_NAMESPACE;
 namespace femto::io {
 
 Attributes render_attributes(const RenderInfo& info) {
-    return {
+    Attributes attrs = {
         {"femto:version", info.femto_version},
         {"femto:integrator", info.integrator},
         {"femto:scene", info.scene_file},
@@ -38,6 +38,8 @@ Attributes render_attributes(const RenderInfo& info) {
         {"femto:rejected_infinite", std::to_string(info.rejected.infinite)},
         {"femto:rejected_negative", std::to_string(info.rejected.negative)},
     };
+    if (info.processes > 1) attrs.push_back({"femto:processes", std::to_string(info.processes)});
+    return attrs;
 }
 
 Attributes time_resolved_attributes(const TimeGrid& grid, const RenderInfo& info,

@@ -50,11 +50,12 @@ std::string format_duration(double s) {
 
 class Progress {
 public:
-    Progress(bool enabled, uint64_t total)
-        : enabled_(enabled), total_(total), start_(Clock::now()) {}
+    // `lines`: one line per round of passes (round_done()) instead of the redrawn bar.
+    Progress(bool enabled, uint64_t total, bool lines)
+        : enabled_(enabled), lines_(lines), total_(total), start_(Clock::now()) {}
     void advance(uint64_t n) {
         const uint64_t done = done_.fetch_add(n) + n;
-        if (!enabled_) return;
+        if (!enabled_ || lines_) return;
         std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
         if (!lock.owns_lock()) return;
         const auto now = Clock::now();
@@ -62,8 +63,23 @@ public:
         last_print_ = now;
         print(done, now);
     }
+    // Passes [0, passes_done) of `passes` are done in every process.
+    // At most a line per second (and always the last), so that short renders stay brief.
+    void round_done(uint64_t passes_done, uint64_t passes) {
+        if (!enabled_ || !lines_) return;
+        const auto now = Clock::now();
+        if (passes_done < passes && now - last_print_ < std::chrono::seconds(1)) return;
+        last_print_ = now;
+        const double elapsed = std::chrono::duration<double>(now - start_).count();
+        const double frac = double(passes_done) / double(std::max<uint64_t>(1, passes));
+        const double eta = frac > 0 ? elapsed * (1 - frac) / frac : NAN;
+        std::fprintf(stderr, "femto: %llu of %llu passes done (%.1f%%) | %s elapsed | ETA %s\n",
+                     (unsigned long long)passes_done, (unsigned long long)passes, 100.0 * frac,
+                     format_duration(elapsed).c_str(), format_duration(eta).c_str());
+        std::fflush(stderr);
+    }
     void finish() {
-        if (!enabled_) return;
+        if (!enabled_ || lines_) return;
         std::lock_guard<std::mutex> lock(mutex_);
         print(done_.load(), Clock::now());
         std::fputc('\n', stderr);
@@ -84,7 +100,7 @@ private:
         std::fflush(stderr);
     }
 
-    bool enabled_;
+    bool enabled_, lines_;
     uint64_t total_;
     std::atomic<uint64_t> done_{0};
     Clock::time_point start_, last_print_{};
@@ -142,6 +158,12 @@ struct PixelCounts {
 
     uint32_t end(uint64_t pixel, uint32_t s1) const {
         return count.empty() ? s1 : std::min(s1, count[pixel]);
+    }
+    // Samples [s0, s1) of every pixel take (with counts).
+    uint64_t taken(uint32_t s0, uint32_t s1) const {
+        uint64_t n = 0;
+        for (const uint32_t c : count) n += std::min(c, s1) > s0 ? std::min(c, s1) - s0 : 0;
+        return n;
     }
     // Samples [s0, s1) of the pixels of `tile` take, in every row or only in the film's
     // active ones.
@@ -378,24 +400,39 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
 
     // Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
     // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp; camera
-    // integrators that splat keep a pass's splats in memory, so theirs are smaller.
+    // integrators that splat keep a pass's splats in memory, so theirs are smaller. A
+    // distributed render runs pass p in process p % ranks, with about 16 passes per process.
     const uint64_t pixels = uint64_t(W) * uint64_t(H);
+    const uint32_t ranks = options.group ? uint32_t(options.group->size()) : 1;
+    const uint32_t rank = options.group ? uint32_t(options.group->rank()) : 0;
     const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 18 : 22);
+    const uint64_t passes_wanted = uint64_t(16) * ranks;
     const uint32_t pass_spp =
         integrator.samples_per_pass() > 0
             ? integrator.samples_per_pass()
             : uint32_t(std::max<uint64_t>(
-                  1, std::min<uint64_t>((spp + 15) / 16, max_pass_samples / pixels)));
+                  1, std::min<uint64_t>((spp + passes_wanted - 1) / passes_wanted,
+                                        max_pass_samples / pixels)));
+    const uint32_t passes = uint32_t((uint64_t(spp) + pass_spp - 1) / pass_spp);
+    auto pass_range = [&](uint32_t pass) {
+        const uint32_t s0 = uint32_t(uint64_t(pass) * pass_spp);
+        return std::pair<uint32_t, uint32_t>(
+            s0, uint32_t(std::min<uint64_t>(spp, uint64_t(s0) + pass_spp)));
+    };
+    // In a distributed render, a stop request ends the round of passes (every process
+    // finishes its pass, so that the image holds whole passes).
+    const std::atomic<bool>* pass_stop = options.group ? nullptr : options.stop;
     const uint32_t pilot_spp = film.pilot_samples();
     const PixelCounts counts = pixel_counts(scene, spp, splatting);
     // Camera rays need their differentials only for materials that read the footprint.
     const bool differentials = any_material(scene, &Bsdf::uses_footprint);
-    uint64_t image_samples = pixels * uint64_t(spp);  // what the passes take, all rows
-    if (!counts.count.empty()) {
-        image_samples = 0;
-        for (const uint32_t n : counts.count) image_samples += n;
+    // What this process's passes take, all rows.
+    uint64_t my_samples = 0;
+    for (uint32_t pass = rank; pass < passes; pass += ranks) {
+        const auto [s0, s1] = pass_range(pass);
+        my_samples += counts.count.empty() ? pixels * (s1 - s0) : counts.taken(s0, s1);
     }
-    Progress progress(options.progress, image_samples + pixels * pilot_spp);
+    Progress progress(options.progress, my_samples + pixels * pilot_spp, options.progress_lines);
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
         [&] { return prototype.clone(); });
     tbb::enumerable_thread_specific<ContributionList> lists;
@@ -417,7 +454,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                 SplatList* splats = splatting ? &tile_splats[t] : nullptr;
                 if (splats) splats->clear();
                 taken += render_tile(scene, tiles[t], seed, s0, s1, counts, differentials,
-                                     *samplers.local(), lists.local(), splats, options.stop);
+                                     *samplers.local(), lists.local(), splats, pass_stop);
                 progress.advance(counts.in(tiles[t], W, s0, s1, nullptr));
             });
             if (!splatting) continue;
@@ -443,13 +480,13 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                 const uint64_t a = first + c * kChunk, b = std::min(total, a + kChunk);
                 chunk_splats[c].clear();
                 taken += trace_light_paths(scene, seed, s0, pixels, a, b, *samplers.local(),
-                                           chunk_splats[c], options.stop);
+                                           chunk_splats[c], pass_stop);
                 progress.advance(b - a);
             });
             std::vector<const SplatList*> in_order;
             for (uint64_t c = 0; c < chunks; ++c) in_order.push_back(&chunk_splats[c]);
             merger.merge(film, in_order);
-            if (options.stop && options.stop->load()) break;
+            if (pass_stop && pass_stop->load()) break;
         }
         // Normalise the pass's splats as as many camera samples per pixel would be (a pilot
         // pass only collects arrival times).
@@ -474,15 +511,21 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         run_pass(pilot_seed, 0, pilot_spp, true);
         film.end_pilot();  // a stopped pilot still leaves the film a usable (rougher) estimate
     }
-    uint32_t pass = 0;
-    for (uint32_t s0 = 0; s0 < spp && !stopped(); s0 += pass_spp, ++pass) {
-        const uint32_t s1 = std::min(spp, s0 + pass_spp);
-        film.start_pass(pass);
-        scene.refresh_time_window();
-        scene.integrator().begin_pass(scene, PassInfo{pass, options.seed, s0, s1, false});
-        const double share = run_pass(options.seed, s0, s1, false);
-        // Stopped within the pass, some pixels have s1 samples and others s0: the mean.
-        stats.spp_done = share >= 1 ? s1 : s0 + uint32_t(double(s1 - s0) * share);
+    for (uint32_t round = 0; uint64_t(round) * ranks < passes; ++round) {
+        const uint32_t pass = round * ranks + rank;
+        if (pass < passes && !(pass_stop && stopped())) {
+            const auto [s0, s1] = pass_range(pass);
+            film.start_pass(pass);
+            scene.refresh_time_window();
+            scene.integrator().begin_pass(scene, PassInfo{pass, options.seed, s0, s1, false});
+            const double share = run_pass(options.seed, s0, s1, false);
+            // Stopped within the pass, some pixels have s1 samples and others s0: the mean.
+            stats.spp_done = share >= 1 ? s1 : s0 + uint32_t(double(s1 - s0) * share);
+        }
+        const uint64_t passes_done = std::min<uint64_t>(passes, uint64_t(round + 1) * ranks);
+        if (options.group) stats.spp_done = pass_range(uint32_t(passes_done - 1)).second;
+        progress.round_done(passes_done, passes);
+        if (options.group ? options.group->any(stopped()) : stopped()) break;
     }
     stats.interrupted = stats.spp_done < spp;  // only a stop request ends the loop early
     progress.finish();

@@ -89,6 +89,12 @@ void Film::add_splat_weight(double) {
     throw SceneError(location(), type_name() + " does not accept splats from a light tracer");
 }
 
+std::vector<Accumulator> Film::accumulators() {
+    throw SceneError(location(), type_name() +
+                                     " cannot take part in a distributed (MPI) render: it does "
+                                     "not list its running totals (Film::accumulators())");
+}
+
 void Film::prepare_aovs(const std::vector<std::string>& names, const Object& integrator) {
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;

@@ -141,6 +141,11 @@ public:
         return out;
     }
 
+    std::vector<Accumulator> accumulators() override {
+        static_assert(sizeof(PixelSum) == 4 * sizeof(double));
+        return {Accumulator::of_doubles(pixels_), Accumulator::of(aov_sums_)};
+    }
+
     std::vector<float> steady_image() const override {
         std::vector<float> rgb(pixels_.size() * 3);
         for (size_t i = 0; i < pixels_.size(); ++i)

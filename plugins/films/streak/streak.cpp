@@ -153,6 +153,10 @@ public:
         add_expected_weight(samples_per_pixel, sums_, &rows_);
     }
 
+    std::vector<Accumulator> accumulators() override {
+        return with_window_accumulators({Accumulator::of(data_), Accumulator::of_doubles(sums_)});
+    }
+
     bool row_active(int y) const override {
         return y >= 0 && y < height_ && active_[size_t(y)] != 0;
     }

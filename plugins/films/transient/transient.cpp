@@ -236,6 +236,12 @@ public:
         block.clean_ = true;
     }
 
+    std::vector<Accumulator> accumulators() override {
+        // count_ and sq_ are empty unless their AOVs are on.
+        return with_window_accumulators({Accumulator::of(cube_), Accumulator::of(count_),
+                                         Accumulator::of(sq_), Accumulator::of_doubles(weights_)});
+    }
+
     std::vector<float> steady_image() const override {
         const size_t pixels = size_t(width_) * size_t(height_), T = size_t(grid_.bins);
         std::vector<float> rgb(pixels * 3, 0.f);

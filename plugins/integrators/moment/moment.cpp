@@ -95,6 +95,13 @@ public:
         }
     }
 
+    std::vector<Accumulator> accumulators() override {
+        std::vector<Accumulator> all;
+        for (const auto& n : nested_)
+            for (const Accumulator& a : n->accumulators()) all.push_back(a);
+        return all;
+    }
+
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {
         std::vector<std::string> paths;

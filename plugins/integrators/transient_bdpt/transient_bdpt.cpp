@@ -252,6 +252,15 @@ public:
         if (connecting_) place_and_connect(scene, sampler, paths, out);
     }
 
+    // A distributed render adds every process's strategy images (atomics of doubles: the
+    // reduction runs after the threads are done).
+    std::vector<Accumulator> accumulators() override {
+        static_assert(sizeof(std::atomic<double>) == sizeof(double));
+        if (!images_.enabled) return {};
+        return {Accumulator::of_doubles(reinterpret_cast<double*>(images_.sums.data()),
+                                        images_.sums.size())};
+    }
+
     // strategy_images: one steady EXR per strategy (docs/outputs.md).
     std::vector<std::string> write(const std::string& out_base,
                                    const RenderInfo& info) const override {

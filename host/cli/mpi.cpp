@@ -1,0 +1,161 @@
+// `femto render` over MPI: passes shared round-robin (the renderer's PassGroup), films combined
+// into rank 0 with point-to-point messages in a fixed order (render/combine.h), so that a job
+// of N processes gives the same image on every run.
+#include <fmt/format.h>
+#include <mpi.h>
+#include <sched.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "distributed.h"
+#include "render/combine.h"
+
+namespace femto::cli {
+
+namespace {
+
+constexpr int kTotalsTag = 7;
+// Chunks of 4 MiB: large enough that latency is negligible, small enough that rank 0 holds
+// little beyond its own film (one chunk of doubles and one receive buffer).
+constexpr size_t kChunkBytes = size_t(4) << 20;
+
+// The launchers' environment: Open MPI's mpirun, PMIx (srun --mpi=pmix, Open MPI 4+), PMI-1/2
+// (MPICH, srun --mpi=pmi2).
+int launched_size() {
+    for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_SIZE", "PMI_SIZE", "MPI_LOCALNRANKS"})
+        if (const char* v = std::getenv(name)) return std::atoi(v);
+    if (std::getenv("PMIX_RANK") || std::getenv("PMI_RANK")) return 2;  // size unknown: ask MPI
+    return 0;
+}
+
+void check(int rc, const char* what) {
+    if (rc != MPI_SUCCESS) throw std::runtime_error(fmt::format("MPI: {} failed ({})", what, rc));
+}
+
+class MpiGroup final : public Distributed {
+public:
+    MpiGroup() {
+        check(MPI_Comm_rank(MPI_COMM_WORLD, &rank_), "MPI_Comm_rank");
+        check(MPI_Comm_size(MPI_COMM_WORLD, &size_), "MPI_Comm_size");
+    }
+    int rank() const override { return rank_; }
+    int size() const override { return size_; }
+
+    bool any(bool stop) override {
+        int flag = stop ? 1 : 0;
+        check(MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD),
+              "MPI_Allreduce");
+        return flag != 0;
+    }
+
+    uint64_t combine(const std::vector<Accumulator>& totals) override {
+        check_same_layout(totals);
+        uint64_t sent = 0;
+        if (rank_ == 0) {
+            combine_accumulators(totals, size_, kChunkBytes, [](int r, void* buffer, size_t n) {
+                check(MPI_Recv(buffer, int(n), MPI_BYTE, r, kTotalsTag, MPI_COMM_WORLD,
+                               MPI_STATUS_IGNORE),
+                      "MPI_Recv");
+            });
+        } else {
+            send_accumulators(totals, kChunkBytes, [&](const void* data, size_t n) {
+                check(MPI_Send(data, int(n), MPI_BYTE, 0, kTotalsTag, MPI_COMM_WORLD), "MPI_Send");
+                sent += n;
+            });
+        }
+        return sent;
+    }
+
+    RenderStats combine_stats(const RenderStats& mine) override {
+        RenderStats all = mine;
+        uint64_t counts[4] = {mine.rays, mine.rejected.nan, mine.rejected.infinite,
+                              mine.rejected.negative};
+        uint64_t sums[4] = {0, 0, 0, 0};
+        check(MPI_Reduce(counts, sums, 4, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD), "MPI_Reduce");
+        check(MPI_Reduce(&mine.seconds, &all.seconds, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD),
+              "MPI_Reduce");
+        if (rank_ != 0) return mine;
+        all.rays = sums[0];
+        all.rejected = {sums[1], sums[2], sums[3]};
+        return all;
+    }
+
+    int default_threads() const override {
+        MPI_Comm node;
+        int local = 1;
+        if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL,
+                                &node) == MPI_SUCCESS) {
+            MPI_Comm_size(node, &local);
+            MPI_Comm_free(&node);
+        }
+        cpu_set_t mask;
+        const int machine = int(std::max(1u, std::thread::hardware_concurrency()));
+        const int allowed =
+            sched_getaffinity(0, sizeof(mask), &mask) == 0 ? CPU_COUNT(&mask) : machine;
+        // Bound by mpirun (fewer cores than the machine's): those cores are this process's.
+        if (allowed < machine) return std::max(1, allowed);
+        return std::max(1, machine / std::max(1, local));
+    }
+
+    [[noreturn]] void abort(int exit_code) override {
+        MPI_Abort(MPI_COMM_WORLD, exit_code);
+        std::_Exit(exit_code);  // MPI_Abort does not return; this keeps the promise if it did
+    }
+
+private:
+    // Every process must list the same arrays (the same scene): a mismatch would pair the
+    // wrong elements.
+    void check_same_layout(const std::vector<Accumulator>& totals) {
+        unsigned long long bytes = 0;
+        for (const Accumulator& a : totals) bytes = bytes * 31 + a.count * a.element_bytes() + 1;
+        unsigned long long lo = bytes, hi = bytes;
+        check(MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD),
+              "MPI_Allreduce");
+        check(MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD),
+              "MPI_Allreduce");
+        if (lo != hi)
+            throw std::runtime_error(
+                "the processes of this MPI job built different films (did they load different "
+                "scene files?)");
+    }
+
+    int rank_ = 0, size_ = 1;
+};
+
+}  // namespace
+
+std::unique_ptr<Distributed> start_distributed(int& argc, char**& argv) {
+    if (launched_size() < 2) return nullptr;
+    int provided = 0;
+    // TBB's worker threads never call MPI: the main thread alone does.
+    check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+    auto group = std::make_unique<MpiGroup>();
+    if (group->size() < 2) {
+        MPI_Finalize();
+        return nullptr;
+    }
+    return group;
+}
+
+void finish_distributed(std::unique_ptr<Distributed> group) {
+    if (group) MPI_Finalize();
+}
+
+std::string distributed_support() {
+    char text[MPI_MAX_LIBRARY_VERSION_STRING];
+    int length = 0;
+    MPI_Get_library_version(text, &length);
+    std::string library(text, size_t(length));
+    if (const size_t comma = library.find(','); comma != std::string::npos) library.resize(comma);
+    while (!library.empty() && (library.back() == '\n' || library.back() == ' '))
+        library.pop_back();
+    return "distributed rendering: yes (" + library + "; mpirun -np N femto render ...)";
+}
+
+}  // namespace femto::cli
