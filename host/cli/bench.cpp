@@ -8,7 +8,9 @@
 
 #include "bench/experiment.h"
 #include "bench/runner.h"
+#include "distributed.h"
 #include "femto/host.h"
+#include "femto/log.h"
 
 namespace fs = std::filesystem;
 
@@ -21,6 +23,7 @@ struct BenchArgs {
     int threads = 0;
     std::vector<std::string> plugin_dirs;
     bool quiet = false;
+    int runs_per_machine = 1;
 } g_args;
 
 struct BenchRunArgs {
@@ -47,10 +50,21 @@ CLI::App* add_bench_command(CLI::App& app) {
     bench->add_option("--plugin-dir", g_args.plugin_dirs,
                       "Plugin folder searched first by every variant (repeatable)");
     bench->add_flag("-q,--quiet", g_args.quiet, "No line per run");
+    bench
+        ->add_option("--runs-per-machine", g_args.runs_per_machine,
+                     "Under mpirun: processes of each machine that take runs at the same time "
+                     "(default 1, so that timed runs never share a machine; the others help "
+                     "render references)")
+        ->check(CLI::Range(1, 4096));
     return bench;
 }
 
-int run_bench_command(const std::atomic<bool>& stop) {
+int run_bench_command(const std::atomic<bool>& stop, Distributed* group) {
+    const bool root = !group || group->rank() == 0;
+    if (!root) {  // rank 0 speaks for the study
+        g_args.quiet = true;
+        femto::silence_log(true);
+    }
     const bench::Experiment e = bench::load_experiment(g_args.experiment);
     bench::RunnerOptions options;
     options.out_dir = g_args.out_dir.empty()
@@ -64,6 +78,9 @@ int run_bench_command(const std::atomic<bool>& stop) {
     options.stop = &stop;
     std::error_code ec;
     options.executable = fs::read_symlink("/proc/self/exe", ec).string();
+    std::unique_ptr<bench::StudyGroup> study =
+        group ? make_study_group(*group, g_args.runs_per_machine) : nullptr;
+    options.group = study.get();
     bool complete = false;
     try {
         complete = bench::run_experiment(e, options);

@@ -12,8 +12,9 @@ namespace femto::cli {
 /// Adds the `bench` subcommand to `app`.
 CLI::App* add_bench_command(CLI::App& app);
 /// Runs the parsed `bench` subcommand; `stop` is raised by Ctrl-C. Returns the exit code (130
-/// when stopped: the finished runs are kept and reported). Bad input throws SceneError.
-int run_bench_command(const std::atomic<bool>& stop);
+/// when stopped: the finished runs are kept and reported). Bad input throws SceneError. With a
+/// `group` (under mpirun), this process is one of a distributed study (docs/bench.md).
+int run_bench_command(const std::atomic<bool>& stop, class Distributed* group);
 
 /// Adds the hidden `bench-run` subcommand: one render of a study in a child process
 /// (<isolation value="process"/>), started by `femto bench` itself.

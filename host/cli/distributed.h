@@ -30,6 +30,18 @@ public:
     [[noreturn]] virtual void abort(int exit_code) = 0;
 };
 
+}  // namespace femto::cli
+
+namespace femto::bench {
+class StudyGroup;
+}
+
+namespace femto::cli {
+
+/// The processes of `group` as a distributed `femto bench` study sees them: the first
+/// `runs_per_machine` processes of each machine take runs.
+std::unique_ptr<bench::StudyGroup> make_study_group(Distributed& group, int runs_per_machine);
+
 /// Starts MPI when this process was launched by an MPI launcher (mpirun, srun) as part of a
 /// job of more than one process; otherwise returns null and femto renders alone.
 std::unique_ptr<Distributed> start_distributed(int& argc, char**& argv);

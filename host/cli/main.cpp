@@ -399,9 +399,10 @@ int main(int argc, char** argv) {
     } catch (const femto::SceneError& e) {
         return report_bad_input(e.what());
     }
-    // Under mpirun or srun, `femto render` is one process of a distributed render.
+    // Under mpirun or srun, `femto render` is one process of a distributed render, `femto
+    // bench` one of a distributed study.
     std::unique_ptr<femto::cli::Distributed> group;
-    if (render->parsed()) {
+    if (render->parsed() || bench->parsed()) {
         try {
             group = femto::cli::start_distributed(argc, argv);
         } catch (const std::exception& e) {
@@ -435,7 +436,8 @@ int main(int argc, char** argv) {
         if (btf->parsed()) return femto::cli::run_btf_command();
         if (bench->parsed()) {
             handle_stop_signals(true);  // Ctrl-C: stop after the current run, keep the rows
-            const int code = femto::cli::run_bench_command(g_stop);
+            const int code = femto::cli::run_bench_command(g_stop, group.get());
+            femto::cli::finish_distributed(std::move(group));
             if (const int sig = g_first_signal.load()) return kExitSignalBase + sig;
             return code;
         }

@@ -7,12 +7,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <thread>
 
+#include "bench/runner.h"
 #include "distributed.h"
 #include "render/combine.h"
 
@@ -38,6 +40,29 @@ void check(int rc, const char* what) {
     if (rc != MPI_SUCCESS) throw std::runtime_error(fmt::format("MPI: {} failed ({})", what, rc));
 }
 
+// Waits for a non-blocking operation without spinning: Open MPI's blocking calls poll at full
+// speed, which would take a core from the processes still rendering on the same machine (a
+// process that finished its pass early, a study's idle processes beside a timed run).
+void wait_politely(MPI_Request& request) {
+    for (int done = 0;;) {
+        check(MPI_Test(&request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+        if (done) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+}
+
+void broadcast_bytes(void* data, size_t bytes) {
+    constexpr size_t kMaxMessage = size_t(1) << 30;  // MPI counts are ints
+    for (size_t offset = 0; offset < bytes; offset += kMaxMessage) {
+        MPI_Request request;
+        check(MPI_Ibcast(static_cast<char*>(data) + offset,
+                         int(std::min(kMaxMessage, bytes - offset)), MPI_BYTE, 0, MPI_COMM_WORLD,
+                         &request),
+              "MPI_Ibcast");
+        wait_politely(request);
+    }
+}
+
 class MpiGroup final : public Distributed {
 public:
     MpiGroup() {
@@ -49,8 +74,10 @@ public:
 
     bool any(bool stop) override {
         int flag = stop ? 1 : 0;
-        check(MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD),
-              "MPI_Allreduce");
+        MPI_Request request;
+        check(MPI_Iallreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD, &request),
+              "MPI_Iallreduce");
+        wait_politely(request);
         return flag != 0;
     }
 
@@ -128,7 +155,91 @@ private:
     int rank_ = 0, size_ = 1;
 };
 
+// A distributed `femto bench`: the lowest ranks of each machine take runs (by default one, so
+// that no two timed runs share a machine), rank 0 among them; the others only help render
+// references.
+class MpiStudy final : public bench::StudyGroup {
+public:
+    MpiStudy(MpiGroup& group, int runs_per_machine) : group_(group) {
+        MPI_Comm node;
+        check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, group.rank(), MPI_INFO_NULL,
+                                  &node),
+              "MPI_Comm_split_type");
+        int local = 0;
+        MPI_Comm_rank(node, &local);
+        MPI_Comm_free(&node);
+        const bool worker = local < runs_per_machine;
+        MPI_Comm workers;
+        check(MPI_Comm_split(MPI_COMM_WORLD, worker ? 0 : MPI_UNDEFINED, group.rank(), &workers),
+              "MPI_Comm_split");
+        if (workers != MPI_COMM_NULL) {
+            MPI_Comm_rank(workers, &worker_index_);
+            MPI_Comm_free(&workers);
+        }
+        int is_worker = worker ? 1 : 0;
+        check(MPI_Allreduce(&is_worker, &workers_, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD),
+              "MPI_Allreduce");
+    }
+    int rank() const override { return group_.rank(); }
+    int workers() const override { return workers_; }
+    int worker_index() const override { return worker_index_; }
+    int default_threads() const override { return group_.default_threads(); }
+    PassGroup& everyone() override { return group_; }
+    void combine(const std::vector<Accumulator>& totals) override { group_.combine(totals); }
+
+    void broadcast(std::string& text) override {
+        uint64_t size = text.size();
+        broadcast_bytes(&size, sizeof(size));
+        text.resize(size);
+        broadcast_bytes(text.data(), size);
+    }
+    void broadcast(std::vector<float>& values) override {
+        uint64_t size = values.size();
+        broadcast_bytes(&size, sizeof(size));
+        values.resize(size);
+        broadcast_bytes(values.data(), size * sizeof(float));
+    }
+
+    void send_run(const std::string& text) override {
+        check(MPI_Send(text.data(), int(text.size()), MPI_CHAR, 0, kRunTag, MPI_COMM_WORLD),
+              "MPI_Send");
+    }
+    void receive_runs(bool until_done,
+                      const std::function<void(const std::string&)>& receive) override {
+        while (!until_done || finished_ < workers_ - 1) {
+            int pending = 0;
+            MPI_Status status;
+            check(MPI_Iprobe(MPI_ANY_SOURCE, kRunTag, MPI_COMM_WORLD, &pending, &status),
+                  "MPI_Iprobe");
+            if (!pending) {
+                if (!until_done) return;
+                std::this_thread::sleep_for(std::chrono::milliseconds(5));
+                continue;
+            }
+            int size = 0;
+            MPI_Get_count(&status, MPI_CHAR, &size);
+            std::string text(size_t(size), '\0');
+            check(MPI_Recv(text.data(), size, MPI_CHAR, status.MPI_SOURCE, kRunTag, MPI_COMM_WORLD,
+                           MPI_STATUS_IGNORE),
+                  "MPI_Recv");
+            if (text.empty())
+                ++finished_;  // that worker has no more runs
+            else
+                receive(text);
+        }
+    }
+
+private:
+    static constexpr int kRunTag = 8;
+    MpiGroup& group_;
+    int workers_ = 1, worker_index_ = -1, finished_ = 0;
+};
+
 }  // namespace
+
+std::unique_ptr<bench::StudyGroup> make_study_group(Distributed& group, int runs_per_machine) {
+    return std::make_unique<MpiStudy>(static_cast<MpiGroup&>(group), runs_per_machine);
+}
 
 std::unique_ptr<Distributed> start_distributed(int& argc, char**& argv) {
     if (launched_size() < 2) return nullptr;

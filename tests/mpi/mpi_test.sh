@@ -109,6 +109,25 @@ scene_error)  # every process meets the same error: exit code 2, reported once
   [ "$code" -eq 2 ] || { cat stderr.txt >&2; fail "exit code $code, expected 2"; }
   [ "$(grep -c 'femto.*error' stderr.txt)" -eq 1 ] || { cat stderr.txt >&2; fail "not reported once"; }
   grep -q 'bad.xml:1' stderr.txt || { cat stderr.txt >&2; fail "no location"; };;
+bench_np3)  # a distributed study: 3 workers take the runs, all 3 render the reference
+  experiment="$src/bench/experiments/fog-point-connections.xml"
+  "$femto" bench "$experiment" -o one -q || fail "single-process study failed"
+  mpirun -np 3 "$femto" bench "$experiment" -o many --runs-per-machine 3 2> many.log ||
+    { cat many.log >&2; fail "distributed study failed"; }
+  grep -q "with 3 processes" many.log || fail "the reference was not rendered by 3 processes"
+  grep -q "(worker 1)" many.log && grep -q "(worker 2)" many.log || fail "runs not shared"
+  [ "$(wc -l < many/results.csv)" = 19 ] && [ "$(wc -l < many/frames.csv)" = "$(wc -l < one/frames.csv)" ] ||
+    fail "results.csv or frames.csv incomplete"
+  [ -s many/report.md ] && [ -s many/plot.svg ] || fail "report missing"
+  # The same runs (scene..samples) with the same errors (relmse..relmse_raw) to 1e-6.
+  grep -v '^scene,' one/results.csv | sort > a.csv; grep -v '^scene,' many/results.csv | sort > b.csv
+  paste -d, a.csv b.csv | awk -F, -v n="$(head -1 one/results.csv | tr ',' '\n' | wc -l)" '
+    { for (i = 1; i <= 6; ++i) if ($i != $(i + n)) { print "run differs: " $0; bad = 1 }
+             for (i = 11; i <= 15; ++i) { a = $i; b = $(i + n); d = a - b; if (d < 0) d = -d
+               s = (a < 0 ? -a : a); if (d > 1e-6 * s) { print "error differs: " $0; bad = 1 } } }
+    END { exit bad }' || fail "the distributed study measured other errors"
+  mpirun -np 3 "$femto" bench "$experiment" -o many --runs-per-machine 3 -q || fail "resume failed"
+  [ "$(wc -l < many/results.csv)" = 19 ] || fail "resuming added rows";;
 *) fail "unknown case";;
 esac
 echo "PASS [$case_name]"

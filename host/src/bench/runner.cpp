@@ -27,6 +27,7 @@
 #include "bench/report.h"
 #include "femto/host.h"
 #include "femto/image_io.h"
+#include "femto/integrator.h"
 #include "femto/sensor.h"
 #include "femto/tfilter.h"
 #include "util/strings.h"
@@ -156,12 +157,16 @@ double peak_resident_mb() {
 // run is then discarded: a render stopped within a pass has pixels with fewer samples). With
 // `measure`, the film's cube is read back (through `scratch`); with a `child_stem` instead, the
 // film's outputs are written there and only the cube's shape is kept.
+// With a `group`, every process of a distributed study renders a share of the passes and only
+// rank 0's result holds the cube.
 Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t seed, uint32_t spp,
                     int threads, const RunnerOptions& options, const fs::path& scratch,
-                    bool measure = true, const std::string& child_stem = {}) {
+                    bool measure = true, const std::string& child_stem = {},
+                    StudyGroup* group = nullptr) {
     auto scene = load_scene(file, lo);
     std::atomic<bool> stop{false};
     RenderOptions ro;
+    if (group) ro.group = &group->everyone();
     ro.seed = seed;
     ro.threads = threads;
     ro.progress = false;
@@ -195,7 +200,15 @@ Rendered render_run(const std::string& file, const LoadOptions& lo, uint64_t see
     }
     r.cpu_seconds = process_cpu_seconds() - cpu_before;
     finish_watcher();
-    r.stopped = r.stats.interrupted || (options.stop && options.stop->load());
+    if (group) {
+        std::vector<Accumulator> totals = scene->sensor().film().accumulators();
+        for (const Accumulator& a : scene->integrator().accumulators()) totals.push_back(a);
+        group->combine(totals);
+        r.stopped = r.stats.interrupted;  // the same in every process
+        if (group->rank() != 0) return r;
+    } else {
+        r.stopped = r.stats.interrupted || (options.stop && options.stop->load());
+    }
     if (!r.stopped && !child_stem.empty())
         r.cube = write_film_npy(*scene, ro, r.stats, child_stem);
     else if (!r.stopped && measure)
@@ -303,11 +316,31 @@ std::string csv_header(const Experiment& e) {
 
 std::string number_text(double v) { return std::isfinite(v) ? fmt::format("{:.9g}", v) : "nan"; }
 
-// Appends a row with one write (a kill leaves at most a last line without its newline, which
-// read_results() drops).
-void append_row(const fs::path& csv, const Experiment& e, const RunRow& r) {
+// A finished run's lines of results.csv, frames.csv and profiles.csv (the last two empty
+// without a reference), kept as text so that a worker of a distributed study can hand them to
+// rank 0, which alone writes files. `progress` is its line for the terminal.
+struct RunLines {
+    std::string row, frames, profiles, progress;
+
+    // One message: the four parts separated by the ASCII record separator (never in a CSV).
+    std::string joined() const {
+        return row + '\x1e' + frames + '\x1e' + profiles + '\x1e' + progress;
+    }
+    static RunLines split(const std::string& text) {
+        RunLines l;
+        std::string* parts[] = {&l.row, &l.frames, &l.profiles, &l.progress};
+        size_t start = 0;
+        for (std::string* part : parts) {
+            const size_t end = std::min(text.find('\x1e', start), text.size());
+            *part = text.substr(start, end - start);
+            start = end + 1;
+        }
+        return l;
+    }
+};
+
+std::string row_line(const RunRow& r) {
     std::ostringstream line;
-    if (!fs::exists(csv) || fs::file_size(csv) == 0) line << csv_header(e) << "\n";
     line << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << r.spp << ","
          << r.samples << "," << number_text(r.seconds) << "," << number_text(r.cores_used) << ","
          << r.rays << "," << number_text(r.peak_mb) << "," << number_text(r.rel_mse) << ","
@@ -316,31 +349,46 @@ void append_row(const fs::path& csv, const Experiment& e, const RunRow& r) {
     for (double w : r.windows) line << "," << number_text(w);
     for (double p : r.pixels) line << "," << number_text(p);
     line << "\n";
-    std::ofstream out(csv, std::ios::app);
-    out << line.str();
-    out.flush();
-    if (!out) throw SceneError(fmt::format("cannot write \"{}\"", csv.string()));
+    return line.str();
 }
 
-void append_frames(const fs::path& csv, const RunRow& r, const std::vector<double>& frames) {
-    const bool fresh = !fs::exists(csv);
-    std::ofstream out(csv, std::ios::app);
-    if (fresh) out << "scene,variant,budget,seed,frame,relmse\n";
+// Appends `text` to `file` with one write (a kill leaves at most a last line without its
+// newline, which read_results() drops), after `header` when the file is new or empty.
+void append_lines(const fs::path& file, const std::string& header, const std::string& text) {
+    if (text.empty()) return;
+    const bool fresh = !fs::exists(file) || fs::file_size(file) == 0;
+    std::ofstream out(file, std::ios::app);
+    out << (fresh ? header + "\n" : std::string()) << text;
+    out.flush();
+    if (!out) throw SceneError(fmt::format("cannot write \"{}\"", file.string()));
+}
+
+// The row first: the run counts as done once it is there, and the per-frame and per-pixel lines
+// follow it (a kill between leaves them short, never doubled by the re-run).
+void append_run(const fs::path& dir, const Experiment& e, const RunLines& lines) {
+    append_lines(dir / "results.csv", csv_header(e), lines.row);
+    append_lines(dir / "frames.csv", "scene,variant,budget,seed,frame,relmse", lines.frames);
+    append_lines(dir / "profiles.csv", "scene,variant,budget,seed,pixel,frame,time,value",
+                 lines.profiles);
+}
+
+std::string frame_lines(const RunRow& r, const std::vector<double>& frames) {
+    std::ostringstream out;
     for (size_t t = 0; t < frames.size(); ++t)
         out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << t << ","
             << number_text(frames[t]) << "\n";
+    return out.str();
 }
 
-// Pixel p's time profile of a run, appended to profiles.csv (time = the bin's centre).
-void append_profile(const fs::path& csv, const RunRow& r, const PixelSpec& p, const Cube& c) {
-    const bool fresh = !fs::exists(csv);
-    std::ofstream out(csv, std::ios::app);
-    if (fresh) out << "scene,variant,budget,seed,pixel,frame,time,value\n";
+// Pixel p's time profile of a run, for profiles.csv (time = the bin's centre).
+std::string profile_lines(const RunRow& r, const PixelSpec& p, const Cube& c) {
+    std::ostringstream out;
     const std::vector<double> profile = pixel_profile(c, p.x, p.y);
     for (size_t t = 0; t < profile.size(); ++t)
         out << r.scene << "," << r.variant << "," << r.budget << "," << r.seed << "," << p.name
             << "," << t << "," << number_text(c.start + (double(t) + 0.5) * c.bin_width) << ","
             << number_text(profile[t]) << "\n";
+    return out.str();
 }
 
 // The reference's profiles of the experiment's pixels, with their standard deviation where the
@@ -416,6 +464,34 @@ void prepare_out_dir(const std::string& setup, const fs::path& dir) {
     std::ofstream(digest) << setup << "\n";
 }
 
+std::optional<Cube> render_reference(const Experiment& e, const SceneSpec& scene,
+                                     const RunnerOptions& options, int threads,
+                                     const fs::path& dir);
+
+// Where a run's film writes its cube for the study to read: one folder per process of a
+// distributed study, whose workers on one machine may share the results folder.
+fs::path scratch_folder(const fs::path& dir, const RunnerOptions& options) {
+    return options.group ? dir / fmt::format("scratch-{}", options.group->rank()) : dir / "scratch";
+}
+
+void write_reference_cache(const Cube& r, const std::string& mean_file,
+                           const std::string& variance_file) {
+    const std::vector<size_t> shape{r.H, r.W, r.T, r.C};
+    // write_npy writes atomically; the mean last, since the cache is read only when both exist.
+    io::write_npy(variance_file, shape, r.variance.data());
+    io::write_npy(mean_file, shape, r.data.data());
+}
+
+// Rank 0's cube (shape, time grid, values and variance) to every process of a study.
+void share_cube(StudyGroup& group, Cube& c) {
+    std::string shape =
+        fmt::format("{} {} {} {} {:.17g} {:.17g}", c.H, c.W, c.T, c.C, c.start, c.bin_width);
+    group.broadcast(shape);
+    std::istringstream(shape) >> c.H >> c.W >> c.T >> c.C >> c.start >> c.bin_width;
+    group.broadcast(c.data);
+    group.broadcast(c.variance);
+}
+
 // The scene's reference: the experiment's file, or its reference variant rendered in two
 // independent halves (seeds seed and seed + 1, spp / 2 each): their mean is the reference and
 // (a - b)^2 / 4 per voxel the variance of that mean (valid for any sampler), which the measures
@@ -427,23 +503,48 @@ std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
     if (!e.reference.file.empty()) return read_reference_file(e.reference.file);
     const std::string stem = (dir / "cache" / ("reference-" + scene.name + "-" + key)).string();
     const std::string mean_file = stem + "-mean.npy", variance_file = stem + "-variance.npy";
-    if (fs::exists(mean_file) && fs::exists(variance_file)) {
-        Cube c = read_reference_file(mean_file);
-        c.variance = read_reference_file(variance_file).data;
-        return c;
+    // A distributed study: rank 0 keeps the cache, every process renders, all get the cube.
+    StudyGroup* group = options.group;
+    const bool root = !group || group->rank() == 0;
+    std::string cached = root && fs::exists(mean_file) && fs::exists(variance_file) ? "yes" : "";
+    if (group) group->broadcast(cached);
+    std::optional<Cube> r;
+    if (!cached.empty()) {
+        if (root) {
+            r = read_reference_file(mean_file);
+            r->variance = read_reference_file(variance_file).data;
+        }
+    } else {
+        if (options.progress && root)
+            fmt::print(stderr,
+                       "rendering the reference of {}: {} at {} spp in two halves (cached in "
+                       "{}-*.npy){}\n",
+                       scene.name, e.reference.variant, e.reference.spp, stem,
+                       group ? fmt::format(" with {} processes", group->everyone().size()) : "");
+        r = render_reference(e, scene, options, threads, dir);
+        if (!r) return std::nullopt;
+        if (root) write_reference_cache(*r, mean_file, variance_file);
     }
-    if (options.progress)
-        fmt::print(stderr,
-                   "rendering the reference of {}: {} at {} spp in two halves (cached in "
-                   "{}-*.npy)\n",
-                   scene.name, e.reference.variant, e.reference.spp, stem);
+    if (group) {
+        if (!r) r.emplace();  // filled by rank 0's
+        share_cube(*group, *r);
+    }
+    return r;
+}
+
+// The reference variant rendered in two halves (a distributed render each in a distributed
+// study, whose result only rank 0 holds); empty when the user stopped it.
+std::optional<Cube> render_reference(const Experiment& e, const SceneSpec& scene,
+                                     const RunnerOptions& options, int threads,
+                                     const fs::path& dir) {
     const LoadOptions lo = load_options(scene, *e.find_variant(e.reference.variant), options);
     const uint32_t half = std::max<uint32_t>(1, e.reference.spp / 2);
-    Rendered a =
-        render_run(scene.file, lo, e.reference.seed, half, threads, options, dir / "scratch");
+    if (options.group && threads == 0) threads = options.group->default_threads();
+    Rendered a = render_run(scene.file, lo, e.reference.seed, half, threads, options,
+                            scratch_folder(dir, options), true, {}, options.group);
     if (a.stopped) return std::nullopt;
-    Rendered b =
-        render_run(scene.file, lo, e.reference.seed + 1, half, threads, options, dir / "scratch");
+    Rendered b = render_run(scene.file, lo, e.reference.seed + 1, half, threads, options,
+                            scratch_folder(dir, options), true, {}, options.group);
     if (b.stopped) return std::nullopt;
     Cube r = std::move(a.cube);
     r.variance.resize(r.data.size());
@@ -452,10 +553,6 @@ std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
         r.data[i] = float(0.5 * (x + y));
         r.variance[i] = float(0.25 * (x - y) * (x - y));
     }
-    const std::vector<size_t> shape{r.H, r.W, r.T, r.C};
-    // write_npy writes atomically; the mean last, since the cache is read only when both exist.
-    io::write_npy(variance_file, shape, r.variance.data());
-    io::write_npy(mean_file, shape, r.data.data());
     return r;
 }
 
@@ -497,7 +594,7 @@ Rendered render_budget(const Experiment& e, const SceneSpec& scene, const Varian
                        const fs::path& dir) {
     const LoadOptions lo = load_options(scene, v, options);
     const uint32_t spp = e.timed() ? spp_for_seconds(scene.file, lo, seed, e.time_budgets[budget],
-                                                     threads, options, dir / "scratch")
+                                                     threads, options, scratch_folder(dir, options))
                                    : e.spp_budgets[budget];
     if (spp == 0) {
         Rendered stopped;
@@ -505,8 +602,9 @@ Rendered render_budget(const Experiment& e, const SceneSpec& scene, const Varian
         return stopped;
     }
     if (e.child_processes)
-        return render_in_child(scene.file, lo, seed, spp, threads, options, dir / "scratch");
-    return render_run(scene.file, lo, seed, spp, threads, options, dir / "scratch",
+        return render_in_child(scene.file, lo, seed, spp, threads, options,
+                               scratch_folder(dir, options));
+    return render_run(scene.file, lo, seed, spp, threads, options, scratch_folder(dir, options),
                       e.has_reference());
 }
 
@@ -551,14 +649,28 @@ private:
     std::unique_ptr<RawRays> rays_;
 };
 
-void print_progress(size_t index, size_t total, const RunRow& row) {
+std::string progress_line(size_t index, size_t total, const RunRow& row, int worker) {
     const std::string measured =
         std::isfinite(row.rel_mse)
             ? fmt::format("relMSE {:.4g}", row.rel_mse)
             : fmt::format("{:.4g} samples/s", double(row.samples) / std::max(row.seconds, 1e-9));
-    fmt::print(stderr, "[{}/{}] {} {} budget {} seed {}: {} in {:.2f} s{}\n", index, total,
-               row.scene, row.variant, row.budget, row.seed, measured, row.seconds,
-               std::isfinite(row.peak_mb) ? fmt::format(", peak {:.0f} MB", row.peak_mb) : "");
+    return fmt::format(
+        "[{}/{}] {} {} budget {} seed {}: {} in {:.2f} s{}{}\n", index, total, row.scene,
+        row.variant, row.budget, row.seed, measured, row.seconds,
+        std::isfinite(row.peak_mb) ? fmt::format(", peak {:.0f} MB", row.peak_mb) : "",
+        worker > 0 ? fmt::format(" (worker {})", worker) : "");
+}
+
+// A finished run's lines for the study's files.
+RunLines run_lines(const Experiment& e, const RunRow& row, const Rendered& r,
+                   const Cube* reference) {
+    RunLines lines;
+    lines.row = row_line(row);
+    if (reference) {
+        lines.frames = frame_lines(row, frame_rel_mse(r.cube, *reference));
+        for (const PixelSpec& p : e.pixels) lines.profiles += profile_lines(row, p, r.cube);
+    }
+    return lines;
 }
 
 }  // namespace
@@ -615,31 +727,67 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
     return rows;
 }
 
+// The runs a results folder already holds, as keys of run_key(); in a distributed study rank 0
+// reads them and tells every process.
+std::string run_key(const std::string& scene, const std::string& variant, const std::string& budget,
+                    uint64_t seed) {
+    return scene + "\n" + variant + "\n" + budget + "\n" + std::to_string(seed);
+}
+
+std::set<std::string> runs_done(const Experiment& e, const fs::path& csv, StudyGroup* group) {
+    std::string text;
+    if (!group || group->rank() == 0)
+        for (const RunRow& r : read_results(csv.string(), e))
+            text += run_key(r.scene, r.variant, r.budget, r.seed) + '\x1f';
+    if (group) group->broadcast(text);
+    std::set<std::string> done;
+    for (size_t start = 0, end; (end = text.find('\x1f', start)) != std::string::npos;
+         start = end + 1)
+        done.insert(text.substr(start, end - start));
+    return done;
+}
+
+// Rank 0 writes what the other workers of a distributed study have finished (with
+// `until_done`, everything they will send).
+void write_received_runs(const RunnerOptions& options, const Experiment& e, const fs::path& dir,
+                         bool until_done) {
+    if (!options.group || options.group->rank() != 0) return;
+    options.group->receive_runs(until_done, [&](const std::string& text) {
+        const RunLines lines = RunLines::split(text);
+        append_run(dir, e, lines);
+        if (options.progress) fmt::print(stderr, "{}", lines.progress);
+    });
+}
+
 bool run_experiment(const Experiment& e, const RunnerOptions& options) {
+    StudyGroup* group = options.group;
+    const bool root = !group || group->rank() == 0;
+    if (group && e.raw_rays_seconds > 0)
+        throw SceneError(
+            "<raw_rays> measures Embree on one machine: run this experiment "
+            "without mpirun");
     const fs::path dir(options.out_dir);
     const int threads = options.threads > 0 ? options.threads : e.threads;
     const std::vector<std::string> keys = reference_keys(e, options);
-    prepare_out_dir(setup_digest(e, options, threads, keys), dir);
-    const fs::path csv = dir / "results.csv";
-    std::vector<RunRow> rows = read_results(csv.string(), e);
-    std::set<std::string> done;
-    auto key = [](const std::string& s, const std::string& v, const std::string& b, uint64_t seed) {
-        return s + "\n" + v + "\n" + b + "\n" + std::to_string(seed);
-    };
-    for (const RunRow& r : rows) done.insert(key(r.scene, r.variant, r.budget, r.seed));
+    if (root) prepare_out_dir(setup_digest(e, options, threads, keys), dir);
+    const std::set<std::string> done = runs_done(e, dir / "results.csv", group);
     const std::vector<std::string> labels = e.budget_labels();
     const size_t total = e.scenes.size() * labels.size() * e.seeds.size() * e.variants.size();
     const Machine machine = Machine::now(threads);
-    size_t index = 0;
+    size_t index = 0, to_do = 0;  // to_do: runs not done yet, in order (a distributed study's
+                                  // worker takes every workers()-th)
     bool stopped = false;
-    for (size_t s = 0; s < e.scenes.size() && !stopped; ++s) {
+    for (size_t s = 0; s < e.scenes.size(); ++s) {
         const SceneSpec& scene = e.scenes[s];
+        const bool stop_now = options.stop && options.stop->load();
+        stopped = group ? group->everyone().any(stop_now || stopped) : stop_now || stopped;
+        if (stopped) break;
         std::optional<Cube> reference;
         if (e.has_reference()) {
             reference = reference_cube(e, e.reference_scene(scene), keys[s], options, threads, dir);
             stopped = !reference;
             if (stopped) break;
-            write_reference_profiles(e, scene, *reference, dir);
+            if (root) write_reference_profiles(e, scene, *reference, dir);
         }
         std::unique_ptr<RawRayMeter> raw;
         if (e.raw_rays_seconds > 0) raw = std::make_unique<RawRayMeter>(e, scene, options, threads);
@@ -651,32 +799,36 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
                 // Embree's raw rate first in each (budget, seed) group with a run to do.
                 if (raw && k % e.variants.size() == 0 &&
                     std::any_of(e.variants.begin(), e.variants.end(), [&](const Variant& w) {
-                        return !done.count(key(scene.name, w.name, labels[b], seed));
+                        return !done.count(run_key(scene.name, w.name, labels[b], seed));
                     }))
                     raw->measure(labels[b], seed, dir / "raw_rays.csv");
                 ++index;
-                if (done.count(key(scene.name, v.name, labels[b], seed))) continue;
+                if (done.count(run_key(scene.name, v.name, labels[b], seed))) continue;
+                if (group && int(to_do++ % size_t(group->workers())) != group->worker_index())
+                    continue;
                 stopped = options.stop && options.stop->load();
                 if (stopped) break;
                 const Rendered r = render_budget(e, scene, v, b, seed, threads, options, dir);
                 stopped = r.stopped;
                 if (stopped) break;
-                RunRow row = measured_row(e, scene, v, labels[b], seed, r,
-                                          reference ? &*reference : nullptr);
-                // The row first: the run counts as done once it is there, and the per-frame and
-                // per-pixel files follow it (a kill between leaves them short, never doubled by
-                // the re-run).
-                append_row(csv, e, row);
-                if (reference) {
-                    append_frames(dir / "frames.csv", row, frame_rel_mse(r.cube, *reference));
-                    for (const PixelSpec& p : e.pixels)
-                        append_profile(dir / "profiles.csv", row, p, r.cube);
+                const RunRow row = measured_row(e, scene, v, labels[b], seed, r,
+                                                reference ? &*reference : nullptr);
+                RunLines lines = run_lines(e, row, r, reference ? &*reference : nullptr);
+                lines.progress =
+                    progress_line(index, total, row, group ? group->worker_index() : 0);
+                if (!root) {
+                    group->send_run(lines.joined());
+                    continue;
                 }
-                if (options.progress) print_progress(index, total, row);
-                rows.push_back(std::move(row));
+                append_run(dir, e, lines);
+                if (options.progress) fmt::print(stderr, "{}", lines.progress);
+                write_received_runs(options, e, dir, false);
             }
     }
-    write_report(e, rows, machine.finish(), dir);
+    if (group && !root && group->worker_index() >= 0) group->send_run("");  // no more runs
+    write_received_runs(options, e, dir, true);
+    if (!root) return !stopped;
+    write_report(e, read_results((dir / "results.csv").string(), e), machine.finish(), dir);
     return !stopped;
 }
 

@@ -3,12 +3,43 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "bench/experiment.h"
+#include "femto/accumulator.h"
+#include "femto/host.h"
 
 namespace femto::bench {
+
+/// The processes of a study run under MPI (`mpirun -np N femto bench`, docs/bench.md): rank 0
+/// writes every file; the runs go to one process per machine (the workers), so that no two
+/// timed runs share a machine; references render with every process.
+class StudyGroup {
+public:
+    virtual ~StudyGroup() = default;
+    virtual int rank() const = 0;
+    virtual int workers() const = 0;
+    /// This process's index among the workers (rank 0 is worker 0); -1 when it takes no runs.
+    virtual int worker_index() const = 0;
+    /// Threads of a process rendering a reference when the study names none.
+    virtual int default_threads() const = 0;
+    /// Every process: the group that shares a reference's passes.
+    virtual PassGroup& everyone() = 0;
+    /// Every process: adds everyone's `totals` (a reference's film) into rank 0's.
+    virtual void combine(const std::vector<Accumulator>& totals) = 0;
+    /// Every process: rank 0's value replaces everyone else's.
+    virtual void broadcast(std::string& text) = 0;
+    virtual void broadcast(std::vector<float>& values) = 0;
+    /// A worker other than rank 0: hands rank 0 a finished run's lines; an empty text says
+    /// that this worker has no more runs.
+    virtual void send_run(const std::string& text) = 0;
+    /// Rank 0: calls `receive` with every run that workers have sent so far; with `until_done`,
+    /// waits until every other worker has sent its last.
+    virtual void receive_runs(bool until_done,
+                              const std::function<void(const std::string&)>& receive) = 0;
+};
 
 struct RunnerOptions {
     std::string out_dir;
@@ -19,6 +50,8 @@ struct RunnerOptions {
     /// The `femto` program, which runs each render of an <isolation value="process"/> study
     /// (`femto bench-run`, run_child()).
     std::string executable;
+    /// The processes of an MPI job sharing the study; null: this process runs it all.
+    StudyGroup* group = nullptr;
 };
 
 /// One finished run: a row of results.csv.
