@@ -107,7 +107,8 @@ for ax, workload in zip(axes, ["path-hdrfilm", "transient-1024"]):
            0.4, label="whole command")
     ax.bar([i + 0.2 for i in x], [med["1x1"]["render_s"] / med[c]["render_s"] for c in configs],
            0.4, label="render only")
-    ax.set_xticks(list(x), [f"{c} (procs x threads)" for c in configs])
+    ax.set_xticks(list(x), configs)
+    ax.set_xlabel("processes x threads")
     ax.axhline(2, color="gray", lw=0.5, ls="--")
     ax.set_ylabel("speedup vs 1 x 1")
     ax.set_title(workload)
