@@ -9,6 +9,7 @@ case_name=$1 femto=$2 compare=$3 src=$4 work=$5
 rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
 fail() { echo "FAIL [$case_name]: $*" >&2; exit 1; }
 skip() { echo "SKIP [$case_name]: $*"; exit 77; }
+[ -x "$femto" ] || fail "no femto program at $femto"
 command -v mpirun > /dev/null || skip "mpirun not found (Debian: openmpi-bin)"
 "$femto" --version | grep -q "distributed rendering: yes" || skip "femto was built without MPI"
 # CI runs as root, which Open MPI refuses unless told; oversubscribe: 3 processes on 2 cores.
@@ -58,6 +59,28 @@ light_np2)
   render 0 one "$cornell" "${args[@]}"
   render 2 many "$cornell" "${args[@]}"
   same one.npy many.npy 1e-6;;
+streak_np2)  # a streak film (two recorded rows) over a lit plane with a kernel filter
+  cat > streak.xml <<'XML'
+<scene version="3.0.0">
+  <integrator type="transient_path"/>
+  <sensor type="perspective">
+    <float name="fov" value="60"/>
+    <transform name="to_world"><lookat origin="0,-3,4" target="0,0,0" up="0,0,1"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    <film type="streak">
+      <integer name="width" value="32"/><integer name="height" value="24"/>
+      <string name="rows" value="5, 12"/>
+      <float name="start" value="6"/><float name="bin_width" value="0.1"/><integer name="bins" value="40"/>
+      <tfilter type="kernel"/>
+    </film>
+  </sensor>
+  <shape type="rectangle"><transform name="to_world"><scale value="3"/></transform></shape>
+  <emitter type="point"><point name="position" x="0" y="0" z="2"/><rgb name="intensity" value="5"/></emitter>
+</scene>
+XML
+  render 0 one streak.xml
+  render 2 many streak.xml
+  for row in 0005 0012; do same one_row$row.exr many_row$row.exr 1e-6; done;;
 ppm_np2|beams_np3)  # photon passes: each pass (photon map and camera samples) in one process
   integrator=transient_${case_name%_np*} np=${case_name##*_np}
   args=(-D integrator=$integrator -D res=32 -D spp=8 -D bins=40 --npy)
