@@ -325,6 +325,9 @@ int cmd_render(const std::string& scene_path, std::string out_base,
                    stats.interrupted ? "Interrupted after" : "Rendered", stats.spp_done,
                    stats.spp_requested, stats.seconds,
                    stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0, out_base);
+    if (!quiet && stats.pilot_seconds > 0)
+        fmt::print(stderr, "(the temporal filter's pilot pass took {:.2f} s of it)\n",
+                   stats.pilot_seconds);
     if (!quiet && stats.adaptive) {
         const femto::Film& film = scene->sensor().film();
         fmt::print(stderr, "adaptive sampling: {:.1f} samples per pixel on average\n",

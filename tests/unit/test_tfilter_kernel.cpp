@@ -79,7 +79,7 @@ TEST(KernelFilter, BinWeightsAreTheKernelIntegratedOverEachBin) {
         SCOPED_TRACE(kernel);
         EXPECT_NEAR(kernel_integral(kernel, 1.0, 0.0, -1.0, 1.0), 1.0, 1e-6);  // normalised
         auto f = make_kernel({{"kernel", kernel, 's'}, {"bandwidth", "0.37", 'f'}});
-        f->prepare(g, 4);
+        f->prepare(g, 4, 1);
         // Inside, across both edges, and (partly) outside the window.
         for (double t : {3.0, 3.013, 1.05, 0.8, 5.9, 6.2, 0.5, 6.5}) {
             SCOPED_TRACE(t);
@@ -129,7 +129,7 @@ TEST(KernelFilter, BandwidthShrinksAsEq547) {
         auto f = make_kernel({{"kernel", "box", 's'},
                               {"bandwidth", "1", 'f'},
                               {"alpha", std::to_string(alpha), 'f'}});
-        f->prepare(g, 1);
+        f->prepare(g, 1, 1);
         long double product = 1.0L;
         for (uint32_t j = 1; j <= 20000; ++j) {
             if (j == 1 || j == 2 || j == 10 || j == 4096 || j == 4097 || j == 20000) {
@@ -159,9 +159,10 @@ std::vector<PilotArrival> arrivals_at(const std::vector<double>& times, float en
 
 TEST(KernelFilter, PilotBandwidthIsTheDistanceToTheKthNearestArrival) {
     const TimeGrid g = grid(0.0, 0.001, 1000);  // window [0, 1)
+    // Each pixel on its own (the default); pooling neighbours is tested below.
     auto f = make_kernel({{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}});
     EXPECT_EQ(f->pilot_samples(), 64u);  // default pilot
-    f->prepare(g, 4);
+    f->prepare(g, 4, 1);
     // Pixel 0: 1000 equal arrivals evenly spread over [0, 1): the 40th nearest neighbour of a
     // time in the middle is 40 / 2 spacings away, 0.02. (The plugin keeps 128 energy
     // quantiles, 1/128 apart here, with k scaled to round(40 * 128 / 1000) = 5: 2.5 of their
@@ -210,12 +211,69 @@ TEST(KernelFilter, PilotBandwidthIsTheDistanceToTheKthNearestArrival) {
     EXPECT_NEAR(f->max_radius(), 0.125, 1e-12);
 }
 
+// The bandwidth a box kernel gives pixel `pixel` at time t (a full bin holds width / (2 T)).
+double box_bandwidth(const TemporalFilter& f, const TimeGrid& g, uint64_t pixel, double t) {
+    std::vector<BinWeight> out;
+    f.splat(g, pixel, 0, t, out);
+    double max_weight = 0;
+    for (const BinWeight& bw : out) max_weight = std::max(max_weight, double(bw.weight));
+    return g.bin_width / (2.0 * max_weight);
+}
+
+TEST(KernelFilter, PilotPoolsTheNeighboursArrivals) {
+    // A 3x3 image whose pixels each saw 125 of 1125 arrivals evenly spread over [0, 1)
+    // (interleaved: pixel i took arrivals i, i + 9, ...). Pooled (pilot_radius 1), the centre
+    // pixel sees all 1125, and the 40th nearest of a time in the middle is 20 spacings away,
+    // 20 / 1125; on its own it sees 125 and the 40th nearest is 20 of its spacings away, 9x
+    // wider. A corner pools 4 pixels (500 arrivals): 20 / 500.
+    const TimeGrid g = grid(0.0, 0.0005, 2000);  // window [0, 1)
+    auto pooled = make_kernel(
+        {{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}, {"pilot_radius", "1", 'i'}});
+    auto alone = make_kernel({{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}});
+    for (auto* f : {pooled.get(), alone.get()}) {
+        f->prepare(g, 3, 3);
+        for (uint64_t pixel = 0; pixel < 9; ++pixel) {
+            std::vector<PilotArrival> arrivals;
+            for (size_t i = pixel; i < 1125; i += 9) arrivals.push_back({(i + 0.5) / 1125.0, 1.f});
+            f->pilot_pixel(pixel, arrivals);
+        }
+        f->end_pilot();
+    }
+    // The plugin keeps 128 quantiles (1/128 apart here) and scales k to them: within one
+    // quantile's spacing of the exact distance. Alone, 20 / 125 = 0.16 is clamped to 1/8 of the
+    // window.
+    EXPECT_NEAR(box_bandwidth(*pooled, g, 4, 0.5), 20.0 / 1125, 1.0 / 128);
+    EXPECT_NEAR(box_bandwidth(*pooled, g, 0, 0.5), 20.0 / 500, 1.0 / 128);
+    EXPECT_NEAR(box_bandwidth(*alone, g, 4, 0.5), 0.125, 1e-6);  // (float bin weights)
+}
+
+TEST(KernelFilter, PoolingWeighsNeighboursByEnergy) {
+    // Two pixels side by side (pilot_radius 1 pools both): pixel 0 saw a bright peak at 0.3
+    // (100 arrivals of energy 1), pixel 1 a dim spread (1000 arrivals of energy 1e-4 over
+    // [0, 1)). Pooled by energy, the peak is ~99.9 % of the light: both pixels keep a narrow
+    // kernel there (the lower clamp, half a bin), and the dim background a wide one.
+    const TimeGrid g = grid(0.0, 0.001, 1000);
+    auto f = make_kernel(
+        {{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}, {"pilot_radius", "1", 'i'}});
+    f->prepare(g, 2, 1);
+    std::vector<PilotArrival> peak, spread;
+    for (int i = 0; i < 100; ++i) peak.push_back({0.3005 + 1e-7 * i, 1.f});
+    for (int i = 0; i < 1000; ++i) spread.push_back({(i + 0.5) / 1000.0, 1e-4f});
+    f->pilot_pixel(0, peak);
+    f->pilot_pixel(1, spread);
+    f->end_pilot();
+    for (uint64_t pixel : {0u, 1u}) {
+        EXPECT_NEAR(box_bandwidth(*f, g, pixel, 0.3005), 0.5 * g.bin_width, 1e-9) << pixel;
+        EXPECT_GT(box_bandwidth(*f, g, pixel, 0.8), 0.05) << pixel;
+    }
+}
+
 TEST(KernelFilter, WithoutPilotDataItActsAsAHistogram) {
     // Before the pilot has run (or for pixels the film never sent to it) nothing is known
     // about the arrivals: the contribution lands in its own bin, so energy is never lost.
     const TimeGrid g = grid(0.0, 0.1, 10);
     auto f = make_kernel({});
-    f->prepare(g, 1);
+    f->prepare(g, 1, 1);
     std::vector<BinWeight> out;
     f->splat(g, 0, 0, 0.55, out);
     ASSERT_EQ(out.size(), 1u);
@@ -241,6 +299,11 @@ TEST(KernelFilter, RejectsBadParameters) {
     EXPECT_NE(error({{"bandwidth", "inf", 'f'}}).find("bandwidth"), std::string::npos);
     EXPECT_NE(error({{"k_neighbors", "0", 'i'}}).find("k_neighbors"), std::string::npos);
     EXPECT_NE(error({{"pilot_spp", "-3", 'i'}}).find("pilot_spp"), std::string::npos);
+    EXPECT_NE(error({{"pilot_radius", "-1", 'i'}}).find("pilot_radius"), std::string::npos);
+    EXPECT_NE(error({{"pilot_radius", "17", 'i'}}).find("pilot_radius"), std::string::npos);
+    EXPECT_NE(
+        error({{"bandwidth", "1", 'f'}, {"pilot_radius", "2", 'i'}}).find("cannot be combined"),
+        std::string::npos);
     EXPECT_NE(
         error({{"bandwidth", "1", 'f'}, {"k_neighbors", "10", 'i'}}).find("cannot be combined"),
         std::string::npos);
@@ -280,7 +343,7 @@ double mse_slope(const std::string& kernel, double alpha, uint64_t seed) {
         at[size_t(k)] = grid(t0 - 0.5 * kWidth, kWidth, 1);
         truth[size_t(k)] = 0.5 * M_PI * std::sin(M_PI * t0);
     }
-    f->prepare(at[0], 1);
+    f->prepare(at[0], 1, 1);
     std::vector<int> checkpoints;
     for (int n = 64; n <= kMaxPasses; n *= 2) checkpoints.push_back(n);
     std::vector<double> mse(checkpoints.size(), 0.0);

@@ -84,6 +84,7 @@ struct RenderStats {
     uint32_t spp_done = 0;
     uint32_t spp_requested = 0;
     double seconds = 0;
+    double pilot_seconds = 0;  ///< of `seconds`: a temporal filter's pilot pass
     uint64_t rays = 0;
     /// Camera samples taken over the image: pixels x spp_done, fewer with adaptive sampling
     /// (Bsdf::pixel_sample_share()).

@@ -31,9 +31,9 @@ class TemporalFilter : public Object {
 public:
     PluginKind kind() const override { return PluginKind::TemporalFilter; }
 
-    /// Called once by the film before anything else, with its time grid and pixel count
+    /// Called once by the film before anything else, with its time grid and size in pixels
     /// (pixels are indexed y * width + x).
-    virtual void prepare(const TimeGrid& /*grid*/, uint64_t /*pixels*/) {}
+    virtual void prepare(const TimeGrid& /*grid*/, int /*width*/, int /*height*/) {}
 
     /// Appends the bins that a unit contribution at time t reaches in pixel `pixel`, with the
     /// integral of the filter's kernel over each bin. `sample_index` is the camera sample's

@@ -510,6 +510,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         scene.integrator().begin_pass(scene, PassInfo{0, pilot_seed, 0, pilot_spp, true});
         run_pass(pilot_seed, 0, pilot_spp, true);
         film.end_pilot();  // a stopped pilot still leaves the film a usable (rougher) estimate
+        stats.pilot_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     }
     for (uint32_t round = 0; uint64_t(round) * ranks < passes; ++round) {
         const uint32_t pass = round * ranks + rank;

@@ -66,7 +66,7 @@ TimeResolvedFilm::TimeResolvedFilm(const Properties& props)
     prune_paths_ = props.get_bool("prune_paths", true);
     tfilter_ = std::static_pointer_cast<TemporalFilter>(
         props.child(PluginKind::TemporalFilter, "histogram"));
-    tfilter_->prepare(grid_, uint64_t(width_) * uint64_t(height_));
+    tfilter_->prepare(grid_, width_, height_);
 }
 
 void TimeResolvedFilm::end_pilot() {

@@ -22,12 +22,24 @@
 // peaks: bench/README.md). Each kernel is still normalised, so energy is kept (a
 // "sample-point" adaptive estimate). T_1 is clamped to [half a bin, 1/8 of the window].
 // Pixels with fewer than two pilot arrivals use the median bandwidth of the others.
+//
+// With `pilot_radius` r > 0 the pilot is shared across pixels: each pixel's arrivals are
+// pooled with those of its neighbours within r pixels before its quantiles are taken, so a
+// short pilot (8 spp over 3x3: 72 samples' arrivals) costs a fraction of a 64-spp pilot of the
+// pixel's own. It is off by default: pooling widens the spread of times the nearest neighbours
+// see (neighbours' paths differ in length), and bench/README.md measured the trade (faster
+// errors at small budgets, worse cube or frame errors at large ones, depending on k).
 
 #include "femto/kernel.h"
+
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <queue>
+#include <utility>
+#include <vector>
 
 #include "femto/plugin.h"
 #include "femto/tfilter.h"
@@ -54,16 +66,23 @@ public:
         const int64_t pilot = props.get_int("pilot_spp", 64);
         if (pilot < 1 || pilot > 65536) props.fail("pilot_spp", "pilot_spp must lie in [1, 65536]");
         pilot_spp_ = uint32_t(pilot);
-        if (fixed_bandwidth_ > 0 && (props.has("k_neighbors") || props.has("pilot_spp")))
-            props.fail(props.has("k_neighbors") ? "k_neighbors" : "pilot_spp",
-                       "k_neighbors and pilot_spp choose the bandwidth from a pilot pass; they "
-                       "cannot be combined with a given bandwidth");
+        const int64_t radius = props.get_int("pilot_radius", 0);
+        if (radius < 0 || radius > 16)
+            props.fail("pilot_radius", "pilot_radius must lie in [0, 16]");
+        pilot_radius_ = int(radius);
+        for (const char* pilot_param : {"k_neighbors", "pilot_spp", "pilot_radius"})
+            if (fixed_bandwidth_ > 0 && props.has(pilot_param))
+                props.fail(pilot_param,
+                           "k_neighbors, pilot_spp and pilot_radius choose the bandwidth from a "
+                           "pilot pass; they cannot be combined with a given bandwidth");
         schedule_.resize(4096);
         for (size_t j = 0; j < schedule_.size(); ++j) schedule_[j] = closed_form(uint32_t(j));
     }
 
-    void prepare(const TimeGrid& grid, uint64_t pixels) override {
+    void prepare(const TimeGrid& grid, int width, int height) override {
         grid_ = grid;
+        width_ = width, height_ = height;
+        const size_t pixels = size_t(width) * size_t(height);
         if (fixed_bandwidth_ > 0) {
             max_t1_ = fixed_bandwidth_;
         } else {
@@ -124,6 +143,8 @@ public:
         double total = 0;
         for (const PilotArrival& a : arrivals) total += double(a.energy);
         PixelPilot& pp = pilot_[size_t(pixel)];
+        pp.seen = uint32_t(std::min<size_t>(n, UINT32_MAX));
+        pp.energy = float(total);
         float* kept = &arrivals_[size_t(pixel) * kMaxArrivals];
         if (total > 0) {
             // m quantiles of the energy-weighted arrival times: where the pixel's energy
@@ -147,6 +168,7 @@ public:
     }
 
     void end_pilot() override {
+        if (pilot_radius_ > 0) pool_neighbours();
         // Fallback for pixels without pilot arrivals: the median over pixels of the bandwidth
         // at their median arrival.
         std::vector<double> typical;
@@ -165,6 +187,80 @@ public:
     }
 
 private:
+    static constexpr size_t kMaxArrivals = 128;
+    struct PixelPilot {
+        uint32_t count = 0;  // arrivals kept (sorted) in arrivals_
+        uint32_t k = 0;      // neighbours counted among them
+        uint32_t seen = 0;   // arrivals the pilot recorded (count keeps at most 128 of them)
+        float energy = 0;    // their total energy
+        float fallback = 0;  // T_1 when the pixel had fewer than two arrivals
+    };
+
+    // Replaces every pixel's kept quantiles by those of the arrivals of the pixels within
+    // pilot_radius_ (clipped at the image's edges). Each pixel kept m quantiles of equal
+    // energy, so a quantile of pixel q stands for energy_q / m_q of the pool (or, where the pool
+    // holds no energy, seen_q / m_q arrivals); merged in time order, they give the pool's own m
+    // quantiles, and k counts among the pool's arrivals.
+    void pool_neighbours() {
+        std::vector<float> pooled(arrivals_.size());
+        std::vector<PixelPilot> pooled_pilot(pilot_.size());
+        tbb::parallel_for(0, height_, [&](int y) {
+            for (int x = 0; x < width_; ++x) {
+                const size_t p = size_t(y) * size_t(width_) + size_t(x);
+                pool_pixel(x, y, &pooled[p * kMaxArrivals], pooled_pilot[p]);
+            }
+        });
+        arrivals_.swap(pooled);
+        pilot_.swap(pooled_pilot);
+    }
+
+    void pool_pixel(int x, int y, float* out, PixelPilot& result) const {
+        struct Source {
+            const float* times;
+            const PixelPilot* pilot;
+            double weight = 0;  // of each of its quantiles
+        };
+        std::vector<Source> sources;
+        double energy = 0, seen = 0;
+        size_t kept = 0;
+        const int r = pilot_radius_;
+        for (int yy = std::max(0, y - r); yy <= std::min(height_ - 1, y + r); ++yy)
+            for (int xx = std::max(0, x - r); xx <= std::min(width_ - 1, x + r); ++xx) {
+                const size_t q = size_t(yy) * size_t(width_) + size_t(xx);
+                if (pilot_[q].count < 2) continue;
+                sources.push_back({&arrivals_[q * kMaxArrivals], &pilot_[q]});
+                energy += pilot_[q].energy, seen += pilot_[q].seen, kept += pilot_[q].count;
+            }
+        if (sources.empty()) return;
+        for (Source& src : sources)
+            src.weight = (energy > 0 ? double(src.pilot->energy) : double(src.pilot->seen)) /
+                         src.pilot->count;
+        const double total = energy > 0 ? energy : seen;
+        const size_t m = std::min(kept, kMaxArrivals);
+        // Merge the sorted sources in time order (a heap of each source's next quantile) and
+        // emit the pool's m quantiles of equal weight.
+        using Next = std::pair<float, size_t>;  // (time, source)
+        std::priority_queue<Next, std::vector<Next>, std::greater<Next>> heap;
+        std::vector<uint32_t> read(sources.size(), 0);
+        for (size_t i = 0; i < sources.size(); ++i) heap.push({sources[i].times[0], i});
+        double below = 0;
+        size_t q = 0;
+        while (!heap.empty() && q < m) {
+            const auto [time, i] = heap.top();
+            heap.pop();
+            below += sources[i].weight;
+            while (q < m && (double(q) + 0.5) / double(m) * total <= below) out[q++] = time;
+            if (++read[i] < sources[i].pilot->count) heap.push({sources[i].times[read[i]], i});
+        }
+        for (; q < m; ++q) out[q] = out[q - 1];  // the last level, lost to rounding
+        result.count = uint32_t(m);
+        result.seen = uint32_t(std::min(seen, double(UINT32_MAX)));
+        result.energy = float(energy);
+        // k of the pool's arrivals, scaled to the m kept; at least 1 and at most m - 1.
+        result.k = uint32_t(std::clamp<size_t>(
+            size_t(std::lround(double(k_neighbors_) * double(m) / std::max(seen, 1.0))), 1, m - 1));
+    }
+
     double clamp_bandwidth(double t) const {
         const double lo = 0.5 * grid_.bin_width,
                      hi = std::max(lo, 0.125 * grid_.bin_width * grid_.bins);
@@ -176,14 +272,10 @@ private:
     double fixed_bandwidth_ = 0.0;
     size_t k_neighbors_ = 40;
     uint32_t pilot_spp_ = 64;
+    int pilot_radius_ = 0;
+    int width_ = 0, height_ = 0;
     TimeGrid grid_;
-    std::vector<double> schedule_;  // T_j / T_1 for the first sample indices
-    static constexpr size_t kMaxArrivals = 128;
-    struct PixelPilot {
-        uint32_t count = 0;  // arrivals kept (sorted) in arrivals_
-        uint32_t k = 0;      // neighbours counted among them
-        float fallback = 0;  // T_1 when the pixel had fewer than two arrivals
-    };
+    std::vector<double> schedule_;   // T_j / T_1 for the first sample indices
     std::vector<PixelPilot> pilot_;  // per pixel
     std::vector<float> arrivals_;    // [pixel][kMaxArrivals]
     double max_t1_ = 0.0;
@@ -203,4 +295,7 @@ FEMTO_PLUGIN(
       "T_1 per pixel"},
      {"k_neighbors", "integer", "40",
       "pilot: T_1 at time t is the distance from t to its k-th nearest pilot arrival"},
-     {"pilot_spp", "integer", "64", "pilot: samples per pixel of the pilot pass"}})
+     {"pilot_spp", "integer", "64", "pilot: samples per pixel of the pilot pass"},
+     {"pilot_radius", "integer", "0",
+      "pilot: each pixel pools the pilot arrivals of the pixels within this many pixels "
+      "(1: 3x3), so that a shorter pilot gives it as many (0: its own only)"}})
