@@ -52,7 +52,7 @@ namespace femto {
 /// (24: Bsdf::uses_tangent(): Hit::dpdu only for such materials; Shape's layout changes with
 ///  its lazily built area-sampling table.)
 /// (25: distributed rendering: Film::accumulators(), Integrator::accumulators() (vtables),
-///  femto/accumulator.h.)
+///  femto/accumulator.h; TemporalFilter::prepare() takes the film's width and height.)
 inline constexpr uint32_t kPluginAbiVersion = 25;
 
 struct PluginDescriptor {
