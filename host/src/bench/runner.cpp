@@ -774,8 +774,9 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
     const std::vector<std::string> labels = e.budget_labels();
     const size_t total = e.scenes.size() * labels.size() * e.seeds.size() * e.variants.size();
     const Machine machine = Machine::now(threads);
-    size_t index = 0, to_do = 0;  // to_do: runs not done yet, in order (a distributed study's
-                                  // worker takes every workers()-th)
+    // A distributed study gives each (scene, budget, seed) group, all its variants, to one
+    // worker in turn: the variants compared in a group run on the same machine, interleaved.
+    size_t index = 0, groups = 0;
     bool stopped = false;
     for (size_t s = 0; s < e.scenes.size(); ++s) {
         const SceneSpec& scene = e.scenes[s];
@@ -803,8 +804,9 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
                     }))
                     raw->measure(labels[b], seed, dir / "raw_rays.csv");
                 ++index;
+                if (k % e.variants.size() == 0) ++groups;
                 if (done.count(run_key(scene.name, v.name, labels[b], seed))) continue;
-                if (group && int(to_do++ % size_t(group->workers())) != group->worker_index())
+                if (group && int((groups - 1) % size_t(group->workers())) != group->worker_index())
                     continue;
                 stopped = options.stop && options.stop->load();
                 if (stopped) break;
