@@ -4,12 +4,16 @@
 #include <fmt/format.h>
 #include <mpi.h>
 #include <sched.h>
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -17,6 +21,7 @@
 #include "bench/runner.h"
 #include "distributed.h"
 #include "render/combine.h"
+#include "watch.h"
 
 namespace femto::cli {
 
@@ -61,6 +66,38 @@ void broadcast_bytes(void* data, size_t bytes) {
               "MPI_Ibcast");
         wait_politely(request);
     }
+}
+
+// A process of the job that dies (killed for memory, a crash) would leave mpirun to end the
+// job with its own status (128 + the signal) and a message about a rank, not a render. So the
+// process the launcher started becomes a watcher (cli/watch.h): it runs femto again as its
+// child (exec'd, not just forked: libraries' threads do not survive a fork), which is the MPI
+// process and renders, and then turns itself into the small femto-watch program beside femto
+// (exec keeps the child), or, if that is missing, waits as femto.
+constexpr const char* kWatchedVariable = "FEMTO_MPI_WATCHED";
+
+void watch_the_render_process(char** argv) {
+    if (std::getenv(kWatchedVariable)) return;  // this is the watched process
+    std::error_code error;
+    const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+    // The program's own path, so that the child is named femto in ps and top (not "exe").
+    const std::string femto = error ? "/proc/self/exe" : self.string();
+    const std::string watch = (self.parent_path() / "femto-watch").string();
+    std::fflush(nullptr);  // buffered output must not be written twice
+    const pid_t render = fork();
+    if (render < 0) return;  // cannot fork: render unwatched
+    if (render == 0) {
+        setenv(kWatchedVariable, "1", 1);
+        execv(femto.c_str(), argv);
+        std::fprintf(stderr, "femto: error: cannot run femto again (%s)\n", std::strerror(errno));
+        std::_Exit(1);
+    }
+    const std::string pid = std::to_string(render);
+    char* watch_argv[] = {const_cast<char*>(watch.c_str()), const_cast<char*>(pid.c_str()),
+                          nullptr};
+    execv(watch.c_str(), watch_argv);
+    prctl(PR_SET_NAME, "femto-watch");
+    watch_render_process(render);
 }
 
 class MpiGroup final : public Distributed {
@@ -243,6 +280,7 @@ std::unique_ptr<bench::StudyGroup> make_study_group(Distributed& group, int runs
 
 std::unique_ptr<Distributed> start_distributed(int& argc, char**& argv) {
     if (launched_size() < 2) return nullptr;
+    watch_the_render_process(argv);
     int provided = 0;
     // TBB's worker threads never call MPI: the main thread alone does.
     check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
