@@ -8,6 +8,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -43,7 +44,8 @@ constexpr const char* kPluginDirHelp =
 std::atomic<bool> g_stop{false};
 std::atomic<bool> g_writing{false};
 std::atomic<int> g_first_signal{0};
-std::atomic<int> g_rank{-1};  // in a distributed render; -1: alone
+std::atomic<int> g_rank{-1};                       // in a distributed render; -1: alone
+std::atomic<const char*> g_stop_message{nullptr};  // said on the first stop signal, if set
 
 void say(const char* msg, size_t size) {
     [[maybe_unused]] auto n = write(STDERR_FILENO, msg, size);
@@ -66,19 +68,22 @@ extern "C" void on_stop_signal(int sig) {
         return;
     }
     g_stop.store(true);
-    static const char msg[] =
-        "\nfemto: interrupted, writing what was rendered "
-        "(Ctrl-C again to abort without writing)\n";
-    static const char msg_distributed[] =
-        "\nfemto: interrupted: every process finishes its pass, then rank 0 writes what was "
-        "rendered\n";
-    if (g_rank.load() < 0)
-        say(msg, sizeof(msg) - 1);
-    else if (g_rank.load() == 0)
-        say(msg_distributed, sizeof(msg_distributed) - 1);
+    if (const char* msg = g_rank.load() <= 0 ? g_stop_message.load() : nullptr)
+        say(msg, std::strlen(msg));
 }
 
-void handle_stop_signals(bool on) {
+// What a stop signal means to each command, said when the first one arrives.
+constexpr const char* kRenderStopMessage =
+    "\nfemto: interrupted, writing what was rendered (Ctrl-C again to abort without writing)\n";
+constexpr const char* kDistributedRenderStopMessage =
+    "\nfemto: interrupted: every process finishes its pass, then rank 0 writes what was "
+    "rendered\n";
+constexpr const char* kStudyStopMessage =
+    "\nfemto: interrupted: the study stops after the runs in progress and keeps every finished "
+    "run (Ctrl-C again to stop at once)\n";
+
+void handle_stop_signals(bool on, const char* message = nullptr) {
+    g_stop_message.store(message);
     for (int sig : {SIGINT, SIGTERM, SIGUSR1}) std::signal(sig, on ? on_stop_signal : SIG_DFL);
 }
 
@@ -299,7 +304,7 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     out_base = strip_output_extension(out_base);
     if (root) prepare_output(out_base);
     // From here on Ctrl-C means "stop rendering and write what was rendered".
-    handle_stop_signals(true);
+    handle_stop_signals(true, group ? kDistributedRenderStopMessage : kRenderStopMessage);
     auto scene = femto::load_scene(scene_path, opts);
     if (group) render_totals(*scene);  // a film that cannot be combined fails before rendering
     femto::RenderOptions ro;
@@ -438,7 +443,7 @@ int main(int argc, char** argv) {
         if (viz->parsed()) return femto::cli::run_viz_command();
         if (btf->parsed()) return femto::cli::run_btf_command();
         if (bench->parsed()) {
-            handle_stop_signals(true);  // Ctrl-C: stop after the current run, keep the rows
+            handle_stop_signals(true, kStudyStopMessage);  // stop after the current runs
             const int code = femto::cli::run_bench_command(g_stop, group.get());
             femto::cli::finish_distributed(std::move(group));
             if (const int sig = g_first_signal.load()) return kExitSignalBase + sig;

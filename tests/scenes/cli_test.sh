@@ -96,6 +96,22 @@ bench_example)
   grep -q '^| equiangular | 9 (9 fitted) | ' out/b/report.md || fail "report row"
   "$femto" bench "$src/bench/experiments/fog-point-connections.xml" -o out/b -q || fail "resume"
   [ "$(wc -l < out/b/results.csv)" = 19 ] || fail "resuming added rows";;
+bench_sigint)
+  # Ctrl-C stops a study after the run in progress, keeps the finished rows and says so; the
+  # same command resumes it to the end.
+  experiment="$src/bench/experiments/fog-point-connections.xml"
+  "$femto" bench "$experiment" -o out/b 2> err.txt &
+  pid=$!
+  for _ in $(seq 600); do [ "$(wc -l < out/b/results.csv 2>/dev/null)" -ge 3 ] && break; sleep 0.1; done
+  kill -INT $pid
+  wait $pid; code=$?
+  [ "$code" -eq 130 ] || { cat err.txt >&2; fail "exit code $code after SIGINT, expected 130"; }
+  grep -q 'the study stops after the runs in progress and keeps every finished run' err.txt ||
+    { cat err.txt >&2; fail "no message"; }
+  rows=$(wc -l < out/b/results.csv)
+  [ "$rows" -ge 3 ] && [ "$rows" -lt 19 ] || fail "results.csv has $rows lines after the stop"
+  "$femto" bench "$experiment" -o out/b -q || fail "resume"
+  [ "$(wc -l < out/b/results.csv)" = 19 ] || fail "the resumed study has $(wc -l < out/b/results.csv) lines";;
 bench_bad_input)
   printf '<experiment>\n<scenery/>\n</experiment>\n' > e.xml
   expect_exit 2 'e\.xml:2:1: unknown element <scenery> in <experiment>' -- "$femto" bench e.xml
