@@ -84,7 +84,14 @@ void watch_the_render_process(char** argv) {
     const std::string femto = error ? "/proc/self/exe" : self.string();
     const std::string watch = (self.parent_path() / "femto-watch").string();
     std::fflush(nullptr);  // buffered output must not be written twice
+    // Stop signals wait until the watcher ignores them (a Ctrl-C in between must not end it);
+    // the render process gets them as before.
+    sigset_t stop_signals, before;
+    sigemptyset(&stop_signals);
+    for (int sig : kStopSignals) sigaddset(&stop_signals, sig);
+    sigprocmask(SIG_BLOCK, &stop_signals, &before);
     const pid_t render = fork();
+    if (render <= 0) sigprocmask(SIG_SETMASK, &before, nullptr);
     if (render < 0) return;  // cannot fork: render unwatched
     if (render == 0) {
         setenv(kWatchedVariable, "1", 1);

@@ -4,6 +4,7 @@
 // holds ~1 MB, not femto's libraries) and by femto itself where femto-watch is missing.
 #pragma once
 
+#include <signal.h>
 #include <sys/wait.h>
 
 #include <cerrno>
@@ -20,8 +21,18 @@ namespace femto::cli {
 /// status (not 128 + the signal) and a message about the render. Stop signals reach `render`
 /// through the process group (mpirun, srun and scancel signal the group), so the watcher
 /// ignores them and outlives the render.
+inline constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGUSR1};
+
 [[noreturn]] inline void watch_render_process(pid_t render) {
-    for (int sig : {SIGINT, SIGTERM, SIGUSR1}) std::signal(sig, SIG_IGN);
+    // Ignored, then unblocked (femto blocks them across the fork and the exec): a stop signal
+    // sent in between is dropped here and has reached the render process through the group.
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    for (int sig : kStopSignals) {
+        std::signal(sig, SIG_IGN);
+        sigaddset(&stop_signals, sig);
+    }
+    sigprocmask(SIG_UNBLOCK, &stop_signals, nullptr);
     int status = 0;
     while (waitpid(render, &status, 0) < 0)
         if (errno != EINTR) {
@@ -32,7 +43,8 @@ namespace femto::cli {
     if (WIFEXITED(status)) std::_Exit(WEXITSTATUS(status));
     const int sig = WTERMSIG(status);
     // A second Ctrl-C aborts the render on purpose: the job ends as a single process would.
-    if (sig == SIGINT || sig == SIGTERM || sig == SIGUSR1) std::_Exit(128 + sig);
+    for (int stop : kStopSignals)
+        if (sig == stop) std::_Exit(128 + sig);
     const char* rank = std::getenv("OMPI_COMM_WORLD_RANK");
     if (!rank) rank = std::getenv("PMIX_RANK");
     if (!rank) rank = std::getenv("PMI_RANK");
