@@ -17,6 +17,8 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "bench/runner.h"
 #include "distributed.h"
@@ -242,6 +244,27 @@ public:
         broadcast_bytes(&size, sizeof(size));
         values.resize(size);
         broadcast_bytes(values.data(), size * sizeof(float));
+    }
+
+    std::vector<std::string> gather_from_workers(const std::string& mine) override {
+        const std::string text = worker_index_ >= 0 ? mine : std::string();
+        const int size = int(text.size());
+        std::vector<int> sizes(size_t(group_.size())), offsets(size_t(group_.size()));
+        check(MPI_Gather(&size, 1, MPI_INT, sizes.data(), 1, MPI_INT, 0, MPI_COMM_WORLD),
+              "MPI_Gather");
+        int total = 0;
+        for (size_t r = 0; r < sizes.size(); ++r)
+            offsets[r] = std::exchange(total, total + sizes[r]);
+        std::string all(size_t(total), '\0');
+        check(MPI_Gatherv(text.data(), size, MPI_CHAR, all.data(), sizes.data(), offsets.data(),
+                          MPI_CHAR, 0, MPI_COMM_WORLD),
+              "MPI_Gatherv");
+        std::vector<std::string> texts;
+        if (group_.rank() != 0) return texts;
+        // Workers are numbered in rank order (MPI_Comm_split keyed by rank).
+        for (size_t r = 0; r < sizes.size(); ++r)
+            if (sizes[r] > 0) texts.push_back(all.substr(size_t(offsets[r]), size_t(sizes[r])));
+        return texts;
     }
 
     void send_run(const std::string& text) override {

@@ -152,6 +152,8 @@ bench_np3)  # a distributed study: 3 workers take the runs, all 3 render the ref
   [ "$(wc -l < many/results.csv)" = 19 ] && [ "$(wc -l < many/frames.csv)" = "$(wc -l < one/frames.csv)" ] ||
     fail "results.csv or frames.csv incomplete"
   [ -s many/report.md ] && [ -s many/plot.svg ] || fail "report missing"
+  [ "$(grep -o "the runs went to 3 workers.*: .*\. The machine above" many/report.md | grep -o ' cores, load average' | wc -l)" = 3 ] ||
+    { cat many/report.md >&2; fail "the report does not describe the 3 workers"; }
   # The same runs (scene..samples) with the same errors (relmse..relmse_raw) to 1e-6.
   grep -v '^scene,' one/results.csv | sort > a.csv; grep -v '^scene,' many/results.csv | sort > b.csv
   paste -d, a.csv b.csv | awk -F, -v n="$(head -1 one/results.csv | tr ',' '\n' | wc -l)" '

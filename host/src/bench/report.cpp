@@ -3,6 +3,7 @@
 #include "bench/report.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -328,6 +329,8 @@ std::string svg_panel(const Experiment& e, const std::vector<RunRow>& rows, cons
 
 Machine Machine::now(int threads) {
     Machine m;
+    char host[256] = {};
+    if (gethostname(host, sizeof host - 1) == 0) m.host = host;
     m.cpu = first_line_of("/proc/cpuinfo", "model name");
     m.cores = std::thread::hardware_concurrency();
     m.threads = threads;
@@ -338,6 +341,10 @@ Machine Machine::now(int threads) {
     m.date = buf;
     m.load_before = load_average();
     return m;
+}
+
+std::string Machine::describe() const {
+    return fmt::format("{} ({}, {} cores, load average {} before)", host, cpu, cores, load_before);
 }
 
 Machine Machine::finish() const {
@@ -362,6 +369,12 @@ void write_report(const Experiment& e, const std::vector<RunRow>& rows, const Ma
         e.child_processes ? "; peak MB: each run's child process's peak resident memory "
                             "(loading, rendering and writing the film's outputs)"
                           : "");
+    if (machine.workers.size() > 1)
+        md += fmt::format(
+            "Distributed study: the runs went to {} workers (one process per machine unless "
+            "`--runs-per-machine` said more), each (scene, budget, seed) group to one of them: "
+            "{}. The machine above is rank 0's.\n\n",
+            machine.workers.size(), detail::join(machine.workers, "; "));
     const std::map<std::string, RawRates> raw = read_raw_rates(dir / "raw_rays.csv");
     for (const SceneSpec& scene : e.scenes) {
         const auto found = raw.find(scene.name);

@@ -12,10 +12,14 @@ namespace femto::bench {
 
 /// Where and when the runs were measured: CPU, cores, threads used, load before and after.
 struct Machine {
-    std::string cpu, date, femto_version, load_before, load_after;
+    std::string host, cpu, date, femto_version, load_before, load_after;
     unsigned cores = 0;
     int threads = 0;  ///< 0: all cores
+    /// A distributed study: each worker's describe(), in worker order (rank 0's first).
+    std::vector<std::string> workers;
     static Machine now(int threads);
+    /// "host (cpu, N cores, load average L before)": a worker's line in the report.
+    std::string describe() const;
     /// A copy with the load average read now.
     Machine finish() const;
 };

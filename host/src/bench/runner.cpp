@@ -773,7 +773,8 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
     const std::set<std::string> done = runs_done(e, dir / "results.csv", group);
     const std::vector<std::string> labels = e.budget_labels();
     const size_t total = e.scenes.size() * labels.size() * e.seeds.size() * e.variants.size();
-    const Machine machine = Machine::now(threads);
+    Machine machine = Machine::now(threads);
+    if (group) machine.workers = group->gather_from_workers(machine.describe());
     // A distributed study gives each (scene, budget, seed) group, all its variants, to one
     // worker in turn: the variants compared in a group run on the same machine, interleaved.
     size_t index = 0, groups = 0;

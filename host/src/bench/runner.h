@@ -32,6 +32,9 @@ public:
     /// Every process: rank 0's value replaces everyone else's.
     virtual void broadcast(std::string& text) = 0;
     virtual void broadcast(std::vector<float>& values) = 0;
+    /// Every process: rank 0 receives each worker's `mine`, in worker order (the texts of
+    /// processes that take no runs are dropped); the others receive nothing.
+    virtual std::vector<std::string> gather_from_workers(const std::string& mine) = 0;
     /// A worker other than rank 0: hands rank 0 a finished run's lines; an empty text says
     /// that this worker has no more runs.
     virtual void send_run(const std::string& text) = 0;
