@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -79,28 +80,47 @@ void broadcast_bytes(void* data, size_t bytes) {
 constexpr const char* kWatchedVariable = "FEMTO_MPI_WATCHED";
 
 void watch_the_render_process(char** argv) {
-    if (std::getenv(kWatchedVariable)) return;  // this is the watched process
+    if (const char* value = std::getenv(kWatchedVariable); value && value == std::string("1"))
+        return;  // this is the watched process (or the user asked for no watcher)
     std::error_code error;
     const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
     // The program's own path, so that the child is named femto in ps and top (not "exe").
     const std::string femto = error ? "/proc/self/exe" : self.string();
     const std::string watch = (self.parent_path() / "femto-watch").string();
-    std::fflush(nullptr);  // buffered output must not be written twice
+    // The child's environment, made before the fork (the child only calls exec).
+    const std::string watched = std::string(kWatchedVariable) + "=";
+    std::vector<std::string> environment{watched + "1"};
+    for (char** variable = environ; *variable; ++variable)
+        if (!std::string_view(*variable).starts_with(watched)) environment.emplace_back(*variable);
+    std::vector<char*> envp;
+    for (std::string& variable : environment) envp.push_back(variable.data());
+    envp.push_back(nullptr);
+    std::signal(SIGCHLD, SIG_DFL);  // an inherited SIG_IGN would reap the child before waitpid
+    std::fflush(nullptr);           // buffered output must not be written twice
     // Stop signals wait until the watcher ignores them (a Ctrl-C in between must not end it);
-    // the render process gets them as before.
+    // one that arrives meanwhile is passed on to the render process below.
     sigset_t stop_signals, before;
     sigemptyset(&stop_signals);
     for (int sig : kStopSignals) sigaddset(&stop_signals, sig);
     sigprocmask(SIG_BLOCK, &stop_signals, &before);
+    const pid_t watcher = getpid();
     const pid_t render = fork();
     if (render <= 0) sigprocmask(SIG_SETMASK, &before, nullptr);
     if (render < 0) return;  // cannot fork: render unwatched
     if (render == 0) {
-        setenv(kWatchedVariable, "1", 1);
-        execv(femto.c_str(), argv);
-        std::fprintf(stderr, "femto: error: cannot run femto again (%s)\n", std::strerror(errno));
+        // Where the launcher signals only the process it started, killing the watcher must
+        // not leave the render running on its own.
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != watcher) std::_Exit(1);
+        execve(femto.c_str(), argv, envp.data());
+        static const char message[] = "femto: error: cannot run femto again\n";
+        [[maybe_unused]] auto n = write(STDERR_FILENO, message, sizeof(message) - 1);
         std::_Exit(1);
     }
+    sigset_t pending;
+    if (sigpending(&pending) == 0)
+        for (int sig : kStopSignals)
+            if (sigismember(&pending, sig)) kill(render, sig);
     const std::string pid = std::to_string(render);
     char* watch_argv[] = {const_cast<char*>(watch.c_str()), const_cast<char*>(pid.c_str()),
                           nullptr};
@@ -250,15 +270,18 @@ public:
         const std::string text = worker_index_ >= 0 ? mine : std::string();
         const int size = int(text.size());
         std::vector<int> sizes(size_t(group_.size())), offsets(size_t(group_.size()));
-        check(MPI_Gather(&size, 1, MPI_INT, sizes.data(), 1, MPI_INT, 0, MPI_COMM_WORLD),
-              "MPI_Gather");
+        MPI_Request request;
+        check(MPI_Igather(&size, 1, MPI_INT, sizes.data(), 1, MPI_INT, 0, MPI_COMM_WORLD, &request),
+              "MPI_Igather");
+        wait_politely(request);
         int total = 0;
         for (size_t r = 0; r < sizes.size(); ++r)
             offsets[r] = std::exchange(total, total + sizes[r]);
         std::string all(size_t(total), '\0');
-        check(MPI_Gatherv(text.data(), size, MPI_CHAR, all.data(), sizes.data(), offsets.data(),
-                          MPI_CHAR, 0, MPI_COMM_WORLD),
-              "MPI_Gatherv");
+        check(MPI_Igatherv(text.data(), size, MPI_CHAR, all.data(), sizes.data(), offsets.data(),
+                           MPI_CHAR, 0, MPI_COMM_WORLD, &request),
+              "MPI_Igatherv");
+        wait_politely(request);
         std::vector<std::string> texts;
         if (group_.rank() != 0) return texts;
         // Workers are numbered in rank order (MPI_Comm_split keyed by rank).

@@ -23,8 +23,8 @@ namespace femto::cli {
 inline constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGUSR1};
 
 [[noreturn]] inline void watch_render_process(pid_t render) {
-    // Ignored, then unblocked (femto blocks them across the fork and the exec): a stop signal
-    // sent in between is dropped here and has reached the render process through the group.
+    // Ignored, then unblocked (femto blocks them across the fork and the exec, and passes on
+    // to the render process one that arrived before the fork): dropped here.
     sigset_t stop_signals;
     sigemptyset(&stop_signals);
     for (int sig : kStopSignals) {

@@ -102,7 +102,12 @@ bench_sigint)
   experiment="$src/bench/experiments/fog-point-connections.xml"
   "$femto" bench "$experiment" -o out/b 2> err.txt &
   pid=$!
-  for _ in $(seq 600); do [ "$(wc -l < out/b/results.csv 2>/dev/null)" -ge 3 ] && break; sleep 0.1; done
+  for _ in $(seq 600); do
+    [ -f out/b/results.csv ] && [ "$(wc -l < out/b/results.csv)" -ge 3 ] && break
+    sleep 0.1
+  done
+  [ -f out/b/results.csv ] && [ "$(wc -l < out/b/results.csv)" -ge 3 ] ||
+    fail "no two runs recorded after 60 s"
   kill -INT $pid
   wait $pid; code=$?
   [ "$code" -eq 130 ] || { cat err.txt >&2; fail "exit code $code after SIGINT, expected 130"; }
