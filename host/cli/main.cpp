@@ -21,6 +21,7 @@
 #include "femto/integrator.h"
 #include "femto/log.h"
 #include "femto/sensor.h"
+#include "stop_signals.h"
 #include "util/strings.h"
 #include "viz.h"
 
@@ -84,7 +85,7 @@ constexpr const char* kStudyStopMessage =
 
 void handle_stop_signals(bool on, const char* message = nullptr) {
     g_stop_message.store(message);
-    for (int sig : {SIGINT, SIGTERM, SIGUSR1}) std::signal(sig, on ? on_stop_signal : SIG_DFL);
+    for (int sig : femto::cli::kStopSignals) std::signal(sig, on ? on_stop_signal : SIG_DFL);
 }
 
 // Creates the output folder and checks it is writable, before spending time on a render.

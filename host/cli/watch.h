@@ -13,6 +13,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "stop_signals.h"
+
 namespace femto::cli {
 
 /// Waits for `render` and exits as it did; if a signal other than a stop signal killed it, says
@@ -20,8 +22,6 @@ namespace femto::cli {
 /// status (not 128 + the signal) and a message about the render. Stop signals reach `render`
 /// through the process group (mpirun, srun and scancel signal the group), so the watcher
 /// ignores them and outlives the render.
-inline constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGUSR1};
-
 [[noreturn]] inline void watch_render_process(pid_t render) {
     // Ignored, then unblocked (femto blocks them across the fork and the exec, and passes on
     // to the render process one that arrived before the fork): dropped here.
