@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <utility>
 #include <vector>
 
@@ -249,6 +250,10 @@ protected:
     /// Adds the block's refused contributions (and its arrivals) to the film's.
     void merge_rejected(const TimeResolvedBlock& block) {
         add_rejected(block.rejected());
+        // Blocks of tiles that do not overlap merge at the same time; these few sums are the
+        // only state they share. (A static lock: the class's layout is part of the plugin ABI.)
+        static std::mutex arrivals_mutex;
+        std::lock_guard<std::mutex> lock(arrivals_mutex);
         arrivals_ += block.arrivals();
     }
     /// Film::add_splat_weight() for pixel sums `sums` kept row by row (width() per row): of

@@ -9,6 +9,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 #include <xmmintrin.h>
 
@@ -18,6 +19,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -141,6 +144,84 @@ std::array<std::vector<Tile>, 4> tiles_by_colour(int W, int H, int tile) {
     return by_colour;
 }
 
+// The tiles of a camera pass without splats, rendered in one parallel loop with no barrier
+// between the colours. Workers take the tiles in colour order from a shared counter, and a
+// tile's block merges once the tiles of earlier colours whose filter borders overlap it have
+// merged: every pixel receives its blocks in the order the four colour phases give, so images
+// stay bit-identical at any thread count, while a worker done with the last tiles of a colour
+// goes on to the next colour instead of waiting for the slowest tile (with 16 tiles per colour
+// and 32 threads, half of them idled in every phase). A worker waits only for tiles taken
+// before its own, which other workers are rendering, so the loop cannot deadlock; memory holds
+// one block per worker, as the phases did.
+class TileSchedule {
+public:
+    TileSchedule(const std::array<std::vector<Tile>, 4>& by_colour, int W, int H, int tile,
+                 int border) {
+        const int columns = (W + tile - 1) / tile, rows = (H + tile - 1) / tile;
+        std::vector<size_t> at(size_t(columns) * size_t(rows));  // grid cell -> tiles_ index
+        std::vector<int> colour;
+        for (int c = 0; c < 4; ++c)
+            for (const Tile& t : by_colour[size_t(c)]) {
+                at[size_t(t.y0 / tile) * size_t(columns) + size_t(t.x0 / tile)] = tiles_.size();
+                tiles_.push_back(t);
+                colour.push_back(c);
+            }
+        predecessors_.resize(tiles_.size());
+        for (size_t i = 0; i < tiles_.size() && border > 0; ++i) {
+            // Borders are narrower than a tile: only the 8 adjacent tiles overlap this one.
+            const int tx = tiles_[i].x0 / tile, ty = tiles_[i].y0 / tile;
+            for (int y = std::max(0, ty - 1); y <= std::min(rows - 1, ty + 1); ++y)
+                for (int x = std::max(0, tx - 1); x <= std::min(columns - 1, tx + 1); ++x) {
+                    const size_t j = at[size_t(y) * size_t(columns) + size_t(x)];
+                    if (colour[j] < colour[i]) predecessors_[i].push_back(j);
+                }
+        }
+        merged_ = std::make_unique<std::atomic<bool>[]>(tiles_.size());
+    }
+
+    const std::vector<Tile>& tiles() const { return tiles_; }
+
+    /// Runs render(tile) -> std::unique_ptr<FilmBlock> for every tile and merges the blocks
+    /// into `film` in the order above. An exception from a tile ends the loop (every tile taken
+    /// is still marked done, so that no worker waits for it) and is rethrown.
+    template <typename Render>
+    void run(Film& film, Render&& render) {
+        for (size_t i = 0; i < tiles_.size(); ++i) merged_[i].store(false);
+        std::atomic<size_t> next{0};
+        std::atomic<bool> failed{false};
+        std::exception_ptr error;
+        std::mutex error_mutex;
+        const int workers = tbb::this_task_arena::max_concurrency();
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, workers, 1),
+            [&](const tbb::blocked_range<int>&) {
+                for (size_t i; !failed && (i = next.fetch_add(1)) < tiles_.size();) {
+                    try {
+                        // Isolated: a plugin's nested TBB loop must not let this thread pick
+                        // up another worker, whose wait would then block the tile below it.
+                        std::unique_ptr<FilmBlock> block;
+                        tbb::this_task_arena::isolate([&] { block = render(tiles_[i]); });
+                        for (const size_t p : predecessors_[i]) merged_[p].wait(false);
+                        film.merge(*block);
+                    } catch (...) {
+                        std::lock_guard<std::mutex> lock(error_mutex);
+                        if (!error) error = std::current_exception();
+                        failed = true;
+                    }
+                    merged_[i].store(true);
+                    merged_[i].notify_all();
+                }
+            },
+            tbb::simple_partitioner());
+        if (error) std::rethrow_exception(error);
+    }
+
+private:
+    std::vector<Tile> tiles_;
+    std::vector<std::vector<size_t>> predecessors_;  // overlapping tiles of earlier colours
+    std::unique_ptr<std::atomic<bool>[]> merged_;
+};
+
 // A camera sample's film position in pixel (x, y) for a jitter in [0, 1)^2: inside [x, x + 1) x
 // [y, y + 1) even where x + jitter rounds up to x + 1 in float (a jitter within 2^-24 x of 1),
 // so that the film gives it to the pixel it was taken for (a 1-spp pixel would stay black).
@@ -229,15 +310,20 @@ PixelCounts pixel_counts(const Scene& scene, uint32_t spp, bool splatting) {
 }
 
 // Samples [s0, s1) of every pixel of `tile`: each camera sample's numbers come from (seed,
-// pixel, sample index) alone. The tile's block is merged into the film at the end. A stop
-// request ends the tile early (Ctrl-C takes effect within a few samples' work, whatever the
-// pass size): the samples taken are merged, so the pixels keep valid, if unequal, estimates.
+// pixel, sample index) alone. A stop request ends the tile early (Ctrl-C takes effect within a
+// few samples' work, whatever the pass size): the samples taken are in the block, so the pixels
+// keep valid, if unequal, estimates.
 // With adaptive sampling a pixel stops at its own count. Camera rays carry differentials when
 // `differentials` (some material reads the footprint). Returns the number of camera samples
-// taken.
-uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0, uint32_t s1,
-                     const PixelCounts& counts, bool differentials, Sampler& sampler,
-                     ContributionList& list, SplatList* splats, const std::atomic<bool>* stop) {
+// taken and the tile's block of the film, which the caller merges (a stopped tile's too).
+struct RenderedTile {
+    uint64_t taken = 0;  // camera samples
+    std::unique_ptr<FilmBlock> block;
+};
+RenderedTile render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32_t s0,
+                         uint32_t s1, const PixelCounts& counts, bool differentials,
+                         Sampler& sampler, ContributionList& list, SplatList* splats,
+                         const std::atomic<bool>* stop) {
     const Sensor& sensor = scene.sensor();
     Film& film = sensor.film();
     const Integrator& integrator = scene.integrator();
@@ -252,10 +338,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
             const uint64_t pixel = uint64_t(y) * uint64_t(film.width()) + uint64_t(x);
             const uint32_t end = counts.end(pixel, s1);
             for (uint32_t s = s0; s < end; ++s) {
-                if (stop && stop->load(std::memory_order_relaxed)) {
-                    film.merge(*block);
-                    return taken;
-                }
+                if (stop && stop->load(std::memory_order_relaxed)) return {taken, std::move(block)};
                 ++taken;
                 sampler.start(seed, pixel, s);
                 const Vec2 pos = pixel_position(x, y, sampler.next_2d());
@@ -277,8 +360,7 @@ uint64_t render_tile(const Scene& scene, const Tile& tile, uint64_t seed, uint32
             }
         }
     }
-    film.merge(*block);
-    return taken;
+    return {taken, std::move(block)};
 }
 
 // The tiles of the film in a grid (tile index = row * columns + column), each with its colour
@@ -438,29 +520,36 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     tbb::enumerable_thread_specific<ContributionList> lists;
     SplatMerger merger(W, H, tile);
 
-    // Camera samples [s0, s1) of every pixel, tiles of one colour at a time, the splats of each
-    // colour's tiles merged after it; returns the share of the pass's samples taken (1 unless
-    // stopped).
+    // Camera samples [s0, s1) of every pixel: the tiles in TileSchedule's order, or, for an
+    // integrator that splats, one colour at a time with the splats of each colour's tiles merged
+    // after it; returns the share of the pass's samples taken (1 unless stopped).
     std::vector<SplatList> tile_splats;
+    TileSchedule schedule(by_colour, W, H, tile, film.filter_border());
     auto run_camera_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1) {
         std::atomic<uint64_t> taken{0};
         uint64_t expected = 0;  // in the film's active rows
-        for (const auto& tiles : by_colour)
-            for (const Tile& t : tiles) expected += counts.in(t, W, s0, s1, &film);
-        for (const auto& tiles : by_colour) {
-            if (splatting) tile_splats.resize(std::max(tile_splats.size(), tiles.size()));
-            tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
-                enable_flush_to_zero();
-                SplatList* splats = splatting ? &tile_splats[t] : nullptr;
-                if (splats) splats->clear();
-                taken += render_tile(scene, tiles[t], seed, s0, s1, counts, differentials,
-                                     *samplers.local(), lists.local(), splats, pass_stop);
-                progress.advance(counts.in(tiles[t], W, s0, s1, nullptr));
-            });
-            if (!splatting) continue;
-            std::vector<const SplatList*> in_order;
-            for (size_t t = 0; t < tiles.size(); ++t) in_order.push_back(&tile_splats[t]);
-            merger.merge(film, in_order);
+        for (const Tile& t : schedule.tiles()) expected += counts.in(t, W, s0, s1, &film);
+        auto render_one = [&](const Tile& t, SplatList* splats) {
+            enable_flush_to_zero();
+            RenderedTile r = render_tile(scene, t, seed, s0, s1, counts, differentials,
+                                         *samplers.local(), lists.local(), splats, pass_stop);
+            taken += r.taken;
+            progress.advance(counts.in(t, W, s0, s1, nullptr));
+            return std::move(r.block);
+        };
+        if (!splatting) {
+            schedule.run(film, [&](const Tile& t) { return render_one(t, nullptr); });
+        } else {  // splats land anywhere: each colour's tiles, then their splats in tile order
+            for (const auto& tiles : by_colour) {
+                tile_splats.resize(std::max(tile_splats.size(), tiles.size()));
+                tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
+                    tile_splats[t].clear();
+                    film.merge(*render_one(tiles[t], &tile_splats[t]));
+                });
+                std::vector<const SplatList*> in_order;
+                for (size_t t = 0; t < tiles.size(); ++t) in_order.push_back(&tile_splats[t]);
+                merger.merge(film, in_order);
+            }
         }
         // (A pass in which no pixel has samples left, adaptive sampling's, is complete.)
         return expected == 0 ? 1.0 : double(taken.load()) / double(expected);
