@@ -219,7 +219,8 @@ public:
     /// Workspace for pixels [x0, x0+w) x [y0, y0+h) plus the filter's border.
     virtual std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const = 0;
     /// Adds a finished block into the film. The renderer never merges overlapping blocks
-    /// at the same time, so films need no lock for this.
+    /// at the same time, so the pixels need no lock; state outside the block's pixels (counts,
+    /// statistics) is shared by concurrent merges and needs its own (atomics or a mutex).
     virtual void merge(const FilmBlock& block) = 0;
     /// Called before each render pass (pass 0, 1, ...) starts.
     virtual void start_pass(uint32_t /*pass*/) {}

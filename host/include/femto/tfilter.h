@@ -54,7 +54,8 @@ public:
 
     /// Samples per pixel of a pilot pass this filter needs (0: none). After the pilot, the
     /// film calls pilot_pixel() once for every pixel the pilot reached (concurrently for
-    /// different pixels) and then end_pilot() once.
+    /// different pixels, from the merges of the pilot's tiles, while other tiles still render)
+    /// and then end_pilot() once.
     virtual uint32_t pilot_samples() const { return 0; }
     /// The contributions of the pilot samples in `pixel`: recorded time and energy (mean over
     /// the colour channels), unordered; the filter may reorder them.
@@ -251,7 +252,7 @@ protected:
     void merge_rejected(const TimeResolvedBlock& block) {
         add_rejected(block.rejected());
         // Blocks of tiles that do not overlap merge at the same time; these few sums are the
-        // only state they share. (A static lock: the class's layout is part of the plugin ABI.)
+        // only state they share (a static lock: the class layout is part of the plugin ABI).
         static std::mutex arrivals_mutex;
         std::lock_guard<std::mutex> lock(arrivals_mutex);
         arrivals_ += block.arrivals();

@@ -1,9 +1,10 @@
 // The renderer: passes over image tiles, run in parallel with TBB.
 //
 // Determinism: a camera sample's random numbers depend only on (seed, pixel, sample index),
-// and tiles are merged in four phases of a 2x2 colouring, so that tiles merged at the same
-// time never overlap (their filter borders are narrower than a tile) and every pixel receives
-// its neighbours' splats in the same order whatever the thread count or schedule.
+// and tiles are ordered by a 2x2 colouring: tiles of one colour never overlap (their filter
+// borders are narrower than a tile), and a tile's block merges after the overlapping blocks of
+// earlier colours (TileSchedule; splats after each colour's tiles), so every pixel receives its
+// blocks and splats in the same order whatever the thread count or schedule.
 #include <fmt/format.h>
 #include <pmmintrin.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -197,12 +198,14 @@ public:
             [&](const tbb::blocked_range<int>&) {
                 for (size_t i; !failed && (i = next.fetch_add(1)) < tiles_.size();) {
                     try {
-                        // Isolated: a plugin's nested TBB loop must not let this thread pick
-                        // up another worker, whose wait would then block the tile below it.
-                        std::unique_ptr<FilmBlock> block;
-                        tbb::this_task_arena::isolate([&] { block = render(tiles_[i]); });
-                        for (const size_t p : predecessors_[i]) merged_[p].wait(false);
-                        film.merge(*block);
+                        // Isolated: a nested TBB loop in a plugin (integrator, film, temporal
+                        // filter) must not let this thread pick up another worker, whose wait
+                        // would then block the tile below it on the same stack.
+                        tbb::this_task_arena::isolate([&] {
+                            const std::unique_ptr<FilmBlock> block = render(tiles_[i]);
+                            for (const size_t p : predecessors_[i]) merged_[p].wait(false);
+                            film.merge(*block);
+                        });
                     } catch (...) {
                         std::lock_guard<std::mutex> lock(error_mutex);
                         if (!error) error = std::current_exception();

@@ -94,7 +94,8 @@ public:
         return std::make_unique<HdrBlock>(*rfilter_, x0, y0, w, h, border_, aov_names_.size());
     }
 
-    // The renderer never merges overlapping blocks concurrently, so no lock is needed here.
+    // The renderer never merges overlapping blocks concurrently, so the pixels need no lock
+    // (the rejected counts are atomics).
     void merge(const FilmBlock& block_in) override {
         const auto& block = static_cast<const HdrBlock&>(block_in);
         add_rejected(block.rejected_);
