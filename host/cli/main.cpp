@@ -334,6 +334,9 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     if (!quiet && stats.pilot_seconds > 0)
         fmt::print(stderr, "(the temporal filter's pilot pass took {:.2f} s of it)\n",
                    stats.pilot_seconds);
+    if (!quiet && stats.pilot_image_spp > 0)
+        fmt::print(stderr, "(the temporal filter's pilot was the image's first {} spp)\n",
+                   stats.pilot_image_spp);
     if (!quiet && stats.adaptive) {
         const femto::Film& film = scene->sensor().film();
         fmt::print(stderr, "adaptive sampling: {:.1f} samples per pixel on average\n",

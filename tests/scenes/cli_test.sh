@@ -274,15 +274,20 @@ sigint_partial)
   no_temp_files out || fail "temporary files left";;
 sigint_latency)
   # Ctrl-C takes effect within a few samples' work, not at the end of a pass: one pixel whose
-  # pass holds 2^22 volumetric samples (~10 s), and a kernel filter's 65536-spp pilot pass.
-  sed 's|<tfilter type="$tfilter"/>|<tfilter type="kernel"><integer name="pilot_spp" value="65536"/></tfilter>|' \
+  # pass holds 2^22 volumetric samples (~10 s), a kernel filter's separate 65536-spp pilot
+  # pass, and a 4096-spp pilot that is the image's first samples (a pass of the image).
+  sed 's|<tfilter type="$tfilter"/>|<tfilter type="kernel"><integer name="pilot_spp" value="$pilot_spp"/><boolean name="pilot_in_image" value="$in_image"/></tfilter>|' \
     "$scene" > "$src/scenes/cornell-box/.pilot-$$.xml"
   trap 'rm -f "$src/scenes/cornell-box/.pilot-$$.xml"' EXIT
-  for run in fog pilot; do
+  for run in fog pilot pilot_image; do
     if [ $run = fog ]; then
       "$femto" render "$src/scenes/fog-object/scene.xml" -o out/$run -D res=1 --spp 67108864 -q 2> err.txt &
+    elif [ $run = pilot ]; then
+      "$femto" render "$src/scenes/cornell-box/.pilot-$$.xml" -o out/$run -D res=32 \
+        -D pilot_spp=65536 -D in_image=false -q 2> err.txt &
     else
-      "$femto" render "$src/scenes/cornell-box/.pilot-$$.xml" -o out/$run -D res=32 -q 2> err.txt &
+      "$femto" render "$src/scenes/cornell-box/.pilot-$$.xml" -o out/$run -D res=32 \
+        -D pilot_spp=4096 -D in_image=true --spp 65536 -q 2> err.txt &
     fi
     pid=$!
     wait_for_sigint_handler $pid

@@ -163,7 +163,13 @@ TEST(Render, SameImageAtAnyThreadCountWithOverlappingTiles) {
           "<film type=\"transient\"><integer name=\"width\" value=\"64\"/><integer "
           "name=\"height\" value=\"48\"/><float name=\"start\" value=\"0\"/><float "
           "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"40\"/><rfilter "
-          "type=\"gaussian\"/></film>"}) {
+          "type=\"gaussian\"/></film>",
+          // The kernel's pilot in the image: its 2 samples merge as each tile's pilot is done.
+          "<film type=\"transient\"><integer name=\"width\" value=\"64\"/><integer "
+          "name=\"height\" value=\"48\"/><float name=\"start\" value=\"0\"/><float "
+          "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"40\"/><rfilter "
+          "type=\"gaussian\"/><tfilter type=\"kernel\"><integer name=\"pilot_spp\" "
+          "value=\"2\"/></tfilter></film>"}) {
         const std::string xml =
             femto::test::scene_xml("<sensor type=\"perspective\">" + film + "</sensor>" + body);
         auto render_with = [&](int threads) {
@@ -183,6 +189,52 @@ TEST(Render, SameImageAtAnyThreadCountWithOverlappingTiles) {
         EXPECT_TRUE(render_with(2) == one) << film;            // bit for bit
         for (int run = 0; run < 3; ++run) EXPECT_TRUE(render_with(8) == one) << film;
     }
+}
+
+// The kernel filter's pilot is, by default, the image's first samples: a render costs the
+// image's samples alone (a separate pilot of as many samples doubles the paths), reports no
+// pilot time, and stops like any pass.
+TEST(Render, KernelPilotInTheImageCostsNoExtraPaths) {
+    auto xml = [](const std::string& in_image) {
+        return femto::test::scene_xml(
+            "<sensor type=\"perspective\"><film type=\"transient\"><integer name=\"width\" "
+            "value=\"32\"/><integer name=\"height\" value=\"24\"/><float name=\"start\" "
+            "value=\"0\"/><float name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" "
+            "value=\"40\"/><tfilter type=\"kernel\"><integer name=\"pilot_spp\" "
+            "value=\"8\"/><boolean name=\"pilot_in_image\" value=\"" +
+            in_image +
+            "\"/></tfilter></film></sensor>"
+            "<shape type=\"sphere\"><point name=\"center\" x=\"0.3\" y=\"-0.2\" z=\"4\"/>"
+            "<emitter type=\"area\"><float name=\"radiance\" value=\"2\"/></emitter></shape>"
+            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/>"
+            "<translate z=\"6\"/></transform></shape>");
+    };
+    auto render_with = [&](const std::string& in_image, uint32_t spp, bool stop_first) {
+        auto scene = load_scene_string(xml(in_image));
+        std::atomic<bool> stop{stop_first};
+        RenderOptions opt;
+        opt.spp = spp;
+        opt.stop = &stop;
+        return render(*scene, opt);
+    };
+    const RenderStats in_image = render_with("true", 8, false);
+    const RenderStats separate = render_with("false", 8, false);
+    EXPECT_EQ(in_image.spp_done, 8u);
+    EXPECT_EQ(separate.spp_done, 8u);
+    EXPECT_EQ(in_image.pilot_seconds, 0.0);
+    EXPECT_GT(separate.pilot_seconds, 0.0);
+    // Both trace 8 samples' paths per pixel for the image; the separate pilot as many again.
+    const double ratio = double(separate.rays) / double(in_image.rays);
+    EXPECT_GT(ratio, 1.8);
+    EXPECT_LT(ratio, 2.2);
+    // More samples than the pilot's: the passes after it take the rest.
+    const RenderStats longer = render_with("true", 20, false);
+    EXPECT_EQ(longer.spp_done, 20u);
+    EXPECT_NEAR(double(longer.rays) / double(in_image.rays), 2.5, 0.25);
+    // Stopped before it starts: not a sample.
+    const RenderStats stopped = render_with("true", 20, true);
+    EXPECT_TRUE(stopped.interrupted);
+    EXPECT_EQ(stopped.spp_done, 0u);
 }
 
 TEST(Render, StopFlagTakesEffectWithinAPass) {

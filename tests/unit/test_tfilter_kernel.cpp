@@ -24,7 +24,7 @@ using namespace femto;
 struct Param {
     std::string name;
     std::string value;  // parsed by type below
-    char type;          // 'f' float, 'i' integer, 's' string
+    char type;          // 'f' float, 'i' integer, 's' string, 'b' boolean
 };
 
 std::shared_ptr<TemporalFilter> make_kernel(const std::vector<Param>& params) {
@@ -33,6 +33,7 @@ std::shared_ptr<TemporalFilter> make_kernel(const std::vector<Param>& params) {
         if (p.type == 'f') props.set_float(p.name, std::stod(p.value));
         if (p.type == 'i') props.set_int(p.name, std::stoll(p.value));
         if (p.type == 's') props.set_string(p.name, p.value);
+        if (p.type == 'b') props.set_bool(p.name, p.value == "true");
     }
     return std::static_pointer_cast<TemporalFilter>(
         create_object(PluginKind::TemporalFilter, "kernel", props));
@@ -171,23 +172,23 @@ TEST(KernelFilter, PilotBandwidthIsTheDistanceToTheKthNearestArrival) {
     for (size_t i = 0; i < uniform.size(); ++i) uniform[i] = (double(i) + 0.5) / 1000.0;
     std::shuffle(uniform.begin(), uniform.end(), std::mt19937(3));
     auto pixel0 = arrivals_at(uniform, 1.f);
-    f->pilot_pixel(0, pixel0);
+    f->pilot_pixel(0, 64, pixel0);
     // Pixel 1: a sharp peak of 500 arrivals at 0.3 on the same background: the kernel there
     // must stay narrow (at the lower clamp of half a bin), while the background keeps a
     // wide one.
     auto pixel1 = arrivals_at(uniform, 1.f);
     for (int i = 0; i < 500; ++i) pixel1.push_back({0.3 + 1e-7 * i, 1.f});
-    f->pilot_pixel(1, pixel1);
+    f->pilot_pixel(1, 64, pixel1);
     // Pixel 2: no arrivals: the median of the others' bandwidths.
     std::vector<PilotArrival> none;
-    f->pilot_pixel(2, none);
+    f->pilot_pixel(2, 64, none);
     // Pixel 3: neighbours count by energy. 1000 dim arrivals (total energy 1) and only 10
     // bright ones at 0.6 (total 10): counted by samples the peak would be 1 % of the
     // arrivals and get a wide kernel; by energy it is 10/11 of the pixel's light and stays
     // sharp, while the dim background (1/11 of the quantiles) is smoothed more widely still.
     auto pixel3 = arrivals_at(uniform, 1e-3f);
     for (int i = 0; i < 10; ++i) pixel3.push_back({0.6005 + 1e-7 * i, 1.f});
-    f->pilot_pixel(3, pixel3);
+    f->pilot_pixel(3, 64, pixel3);
     f->end_pilot();
 
     auto bandwidth_at = [&](uint64_t pixel, double t) {
@@ -220,6 +221,29 @@ double box_bandwidth(const TemporalFilter& f, const TimeGrid& g, uint64_t pixel,
     return g.bin_width / (2.0 * max_weight);
 }
 
+TEST(KernelFilter, KCountsAmongTheArrivalsOfAFullPilot) {
+    // k_neighbors counts among the arrivals of pilot_spp (64) samples. A pixel whose pilot had
+    // only 16 samples (a 16-spp render's pilot in the image) takes the same share of its own
+    // arrivals: k = 10. 128 arrivals evenly spread over [0, 1) are kept as they are (128
+    // quantiles), so the k-th nearest of t = 0.5 is k / 2 of their spacings away.
+    const TimeGrid g = grid(0.0, 0.001, 4000);  // window [0, 4): the clamp is 0.5
+    auto f = make_kernel({{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}});
+    f->prepare(g, 4, 1);
+    for (const auto& [pixel, samples] :
+         std::vector<std::pair<uint64_t, uint32_t>>{{0, 64}, {1, 16}, {2, 0}, {3, 256}}) {
+        std::vector<PilotArrival> arrivals;
+        for (int i = 0; i < 128; ++i) arrivals.push_back({(i + 0.5) / 128.0, 1.f});
+        f->pilot_pixel(pixel, samples, arrivals);
+    }
+    f->end_pilot();
+    EXPECT_NEAR(box_bandwidth(*f, g, 0, 0.5), 20.0 / 128, 0.6 / 128);
+    EXPECT_NEAR(box_bandwidth(*f, g, 1, 0.5), 5.0 / 128, 0.6 / 128);
+    // A light pass's splats are not counted (0): the full k. More samples than the pilot's
+    // cannot happen in a pilot; they keep the full k as well.
+    EXPECT_NEAR(box_bandwidth(*f, g, 2, 0.5), 20.0 / 128, 0.6 / 128);
+    EXPECT_NEAR(box_bandwidth(*f, g, 3, 0.5), 20.0 / 128, 0.6 / 128);
+}
+
 TEST(KernelFilter, PilotPoolsTheNeighboursArrivals) {
     // A 3x3 image whose pixels each saw 125 of 1125 arrivals evenly spread over [0, 1)
     // (interleaved: pixel i took arrivals i, i + 9, ...). Pooled (pilot_radius 1), the centre
@@ -235,7 +259,7 @@ TEST(KernelFilter, PilotPoolsTheNeighboursArrivals) {
         for (uint64_t pixel = 0; pixel < 9; ++pixel) {
             std::vector<PilotArrival> arrivals;
             for (size_t i = pixel; i < 1125; i += 9) arrivals.push_back({(i + 0.5) / 1125.0, 1.f});
-            f->pilot_pixel(pixel, arrivals);
+            f->pilot_pixel(pixel, 64, arrivals);
         }
         f->end_pilot();
     }
@@ -259,8 +283,8 @@ TEST(KernelFilter, PoolingWeighsNeighboursByEnergy) {
     std::vector<PilotArrival> peak, spread;
     for (int i = 0; i < 100; ++i) peak.push_back({0.3005 + 1e-7 * i, 1.f});
     for (int i = 0; i < 1000; ++i) spread.push_back({(i + 0.5) / 1000.0, 1e-4f});
-    f->pilot_pixel(0, peak);
-    f->pilot_pixel(1, spread);
+    f->pilot_pixel(0, 64, peak);
+    f->pilot_pixel(1, 64, spread);
     f->end_pilot();
     for (uint64_t pixel : {0u, 1u}) {
         EXPECT_NEAR(box_bandwidth(*f, g, pixel, 0.3005), 0.5 * g.bin_width, 1e-9) << pixel;
@@ -279,7 +303,14 @@ TEST(KernelFilter, WithoutPilotDataItActsAsAHistogram) {
     ASSERT_EQ(out.size(), 1u);
     EXPECT_EQ(out[0].bin, 5);
     EXPECT_FLOAT_EQ(out[0].weight, 1.f);
-    EXPECT_DOUBLE_EQ(f->max_radius(), 0.0);  // the pilot's paths stop at the window's end
+    // A pilot in the image (the default) is spread as the image is: its paths run on past the
+    // window's end by the widest bandwidth. A separate pilot's paths stop at the window's end.
+    EXPECT_TRUE(f->pilot_in_image());
+    EXPECT_DOUBLE_EQ(f->max_radius(), 0.125);
+    auto separate = make_kernel({{"pilot_in_image", "false", 'b'}});
+    separate->prepare(g, 1, 1);
+    EXPECT_FALSE(separate->pilot_in_image());
+    EXPECT_DOUBLE_EQ(separate->max_radius(), 0.0);
 }
 
 TEST(KernelFilter, RejectsBadParameters) {
@@ -307,6 +338,13 @@ TEST(KernelFilter, RejectsBadParameters) {
     EXPECT_NE(
         error({{"bandwidth", "1", 'f'}, {"k_neighbors", "10", 'i'}}).find("cannot be combined"),
         std::string::npos);
+    EXPECT_NE(error({{"bandwidth", "1", 'f'}, {"pilot_in_image", "false", 'b'}})
+                  .find("cannot be combined"),
+              std::string::npos);
+    EXPECT_NE(error({{"pilot_radius", "1", 'i'}, {"pilot_in_image", "true", 'b'}})
+                  .find("cannot be pooled"),
+              std::string::npos);
+    EXPECT_EQ(error({{"pilot_radius", "1", 'i'}}), "no error");  // pooled: a separate pilot
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -226,10 +226,17 @@ public:
     virtual void start_pass(uint32_t /*pass*/) {}
     /// Samples per pixel of a pilot pass this film needs before rendering (0: none), e.g. for
     /// a temporal filter that estimates its bandwidth from the pilot's arrival times. The
-    /// renderer then calls begin_pilot(), runs that pass (with its own random streams) through
-    /// make_block()/merge(), and calls end_pilot(); pilot samples are not part of the image.
+    /// renderer then calls begin_pilot(), runs that pass through make_block()/merge(), and
+    /// calls end_pilot().
     virtual uint32_t pilot_samples() const { return 0; }
-    virtual void begin_pilot() {}
+    /// True when the film can keep the pilot's samples and add them to the image once the
+    /// pilot has seen them (the pilot is then the image's first samples, not extra work).
+    virtual bool pilot_in_image() const { return false; }
+    /// `into_image` false: the pilot has its own random streams and its samples are not part
+    /// of the image. True (only when pilot_in_image()): its samples are the image's samples
+    /// [0, n) of every pixel, drawn with the image's streams, and the film adds them to the
+    /// image as each tile's pilot is done; the renderer's image passes then start at n.
+    virtual void begin_pilot(bool /*into_image*/) {}
     virtual void end_pilot() {}
     /// Latest path length (scene units, camera time) this film records; paths beyond it may
     /// stop.

@@ -85,6 +85,9 @@ struct RenderStats {
     uint32_t spp_requested = 0;
     double seconds = 0;
     double pilot_seconds = 0;  ///< of `seconds`: a temporal filter's pilot pass
+    /// A temporal filter's pilot that was the image's first samples: how many per pixel (its
+    /// time is image time, not in pilot_seconds).
+    uint32_t pilot_image_spp = 0;
     uint64_t rays = 0;
     /// Camera samples taken over the image: pixels x spp_done, fewer with adaptive sampling
     /// (Bsdf::pixel_sample_share()).

@@ -53,7 +53,10 @@ namespace femto {
 ///  its lazily built area-sampling table.)
 /// (25: distributed rendering: Film::accumulators(), Integrator::accumulators() (vtables),
 ///  femto/accumulator.h; TemporalFilter::prepare() takes the film's width and height.)
-inline constexpr uint32_t kPluginAbiVersion = 25;
+/// (26: a pilot in the image: Film::pilot_in_image(), Film::begin_pilot(bool),
+///  TemporalFilter::pilot_in_image(), pilot_pixel() takes the pixel's sample count; PilotBlock's
+///  layout.)
+inline constexpr uint32_t kPluginAbiVersion = 26;
 
 struct PluginDescriptor {
     uint32_t abi_version;

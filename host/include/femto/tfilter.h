@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -57,9 +58,17 @@ public:
     /// different pixels, from the merges of the pilot's tiles, while other tiles still render)
     /// and then end_pilot() once.
     virtual uint32_t pilot_samples() const { return 0; }
-    /// The contributions of the pilot samples in `pixel`: recorded time and energy (mean over
-    /// the colour channels), unordered; the filter may reorder them.
-    virtual void pilot_pixel(uint64_t /*pixel*/, std::vector<PilotArrival>& /*arrivals*/) {}
+    /// True when the pilot's samples may be the image's first samples: splat() must then work
+    /// for a pixel as soon as its own pilot_pixel() has returned, before end_pilot() (the film
+    /// adds a tile's pilot samples to the image right after handing the tile's pixels to the
+    /// filter). Renderers fall back to a separate pilot pass where they cannot (integrators
+    /// that splat or fix their samples per pass).
+    virtual bool pilot_in_image() const { return false; }
+    /// The contributions of the `samples` pilot samples (camera samples; 0 for a light pass's
+    /// splats, which are not counted) that fell in `pixel`: recorded time and energy (mean
+    /// over the colour channels), unordered; the filter may reorder them.
+    virtual void pilot_pixel(uint64_t /*pixel*/, uint32_t /*samples*/,
+                             std::vector<PilotArrival>& /*arrivals*/) {}
     virtual void end_pilot() {}
 };
 
@@ -102,17 +111,32 @@ Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t 
 
 /// Film block for a temporal filter's pilot pass: keeps, for every pixel of its tile, the
 /// arrivals (time, energy) of the contributions of the samples that fall in the pixel, and
-/// hands them to the filter in deliver() (call it from the film's merge()).
+/// hands them to the filter in deliver() (call it from the film's merge()). In a pilot that is
+/// part of the image it also keeps the samples themselves, and deliver() then puts them into
+/// `image`, the film's own block for the tile, and hands that block back for merging.
 class PilotBlock final : public FilmBlock {
 public:
-    PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time);
+    PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time,
+               std::unique_ptr<FilmBlock> image = nullptr);
     void put(Vec2 pos, const ContributionList& sample) override;
-    void deliver(TemporalFilter& filter) const;
+    /// Hands every pixel's arrivals to the filter; then, in a pilot in the image, puts the
+    /// kept samples into the image block (in the order they came) and returns that block.
+    std::unique_ptr<FilmBlock> deliver(TemporalFilter& filter) const;
 
 private:
+    struct KeptSample {  // a sample of a pilot in the image, its contributions in kept_
+        Vec2 pos;
+        uint32_t sample_index, first, count;
+        double sensor_distance;
+        bool splat;
+    };
     int x0_, y0_, w_, h_, film_width_;
     bool world_time_;
     mutable std::vector<std::vector<PilotArrival>> arrivals_;  // [h_][w_]
+    std::vector<uint32_t> samples_;                            // camera samples per pixel
+    mutable std::unique_ptr<FilmBlock> image_;
+    std::vector<KeptSample> kept_samples_;
+    std::vector<Contribution> kept_;
 };
 
 /// The sums a time-resolved film keeps per pixel next to its bins (doubles: they add up many
@@ -186,7 +210,9 @@ protected:
     /// reconstruction filter's reach (weight w) that `storage` holds, adds w (unless the sample
     /// is a splat: ContributionList::is_splat()) and the sample's sensor distance when it hit
     /// something to the pixel's PixelSums and w x the temporal
-    /// filter's bin values (splat_sample) to its bins. `Storage` provides
+    /// filter's bin values (splat_sample) to its bins. The temporal filter spreads the sample
+    /// as its home pixel (the one `pos` lies in) asks, in every pixel it reaches: a pixel's
+    /// bandwidth is then known once its own pilot is, whatever its neighbours'. `Storage` provides
     ///     size_t slot(int x, int y);        // pixel (x, y) in the storage; SIZE_MAX: not held
     ///     PixelSums& sums(size_t slot);
     ///     void add(size_t slot, int bin, float w, const Color& v);   // bin += w * v
@@ -221,11 +247,16 @@ private:
 ///     if (auto b = make_pilot_block(x0, y0, w, h)) return b;   // in make_block()
 ///     if (merge_pilot(block)) return;                           // in merge()
 ///     merge_rejected(static_cast<const MyBlock&>(block));      // then, in merge()
-/// and calls warn_empty_window() when it writes.
+/// and calls warn_empty_window() when it writes. (In a pilot in the image, make_pilot_block()
+/// calls make_block() again for the tile's own block, and merge_pilot() calls merge() with it.)
 class TimeResolvedFilm : public Film {
 public:
     uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
-    void begin_pilot() override { pilot_ = true; }
+    bool pilot_in_image() const override { return tfilter_->pilot_in_image(); }
+    void begin_pilot(bool into_image) override {
+        pilot_ = true;
+        pilot_into_image_ = into_image;
+    }
     void end_pilot() override;
     /// The grid's end plus the filter's reach in camera time; unbounded in world time (the
     /// sensor segment is subtracted after the path ends, so the integrator cannot cut it).
@@ -280,6 +311,7 @@ protected:
 
 private:
     bool pilot_ = false;  // between begin_pilot() and end_pilot()
+    bool pilot_into_image_ = false;
     bool prune_paths_ = true;
     TimeResolvedBlock::Arrivals arrivals_;
 };
@@ -299,6 +331,9 @@ void TimeResolvedBlock::splat(Vec2 pos, const ContributionList& sample, Storage&
     const TemporalFilter& tfilter = film_.tfilter();
     const TimeGrid& grid = film_.grid();
     const bool world_time = film_.world_time();
+    const int home_x = std::clamp(int(std::floor(pos.x)), 0, film_.width() - 1),
+              home_y = std::clamp(int(std::floor(pos.y)), 0, film_.height() - 1);
+    const uint64_t pixel = uint64_t(home_y) * uint64_t(film_.width()) + uint64_t(home_x);
     for (const Contribution& c : sample.items()) {  // for the empty-window warning
         const double t = recorded_time(c.time, sensor, world_time);
         arrivals_.add(t, grid.bin_of(t) >= 0);
@@ -316,7 +351,6 @@ void TimeResolvedBlock::splat(Vec2 pos, const ContributionList& sample, Storage&
                 sums.depth_sum += w * sensor;
                 sums.depth_weight += w;
             }
-            const uint64_t pixel = uint64_t(y) * uint64_t(film_.width()) + uint64_t(x);
             Color spill;
             bool added = false;
             if constexpr (requires { storage.add_total(slot, 0, w, spill, 1); }) {

@@ -40,6 +40,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr int kTileSize = 32;
+constexpr uint64_t kMaxKeptPilotSamples = uint64_t(1) << 17;
 
 struct Tile {
     int x0, y0, w, h;
@@ -490,24 +491,39 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     const uint64_t pixels = uint64_t(W) * uint64_t(H);
     const uint32_t ranks = options.group ? uint32_t(options.group->size()) : 1;
     const uint32_t rank = options.group ? uint32_t(options.group->rank()) : 0;
+    // A temporal filter's pilot: the image's first samples when the film can keep them (not
+    // for integrators that splat or fix their samples per pass), else a pass of its own.
+    // A tile keeps its pilot samples (~200 bytes each) until its pilot is done: at most
+    // kMaxKeptPilotSamples (32 MiB; a 32x32 tile of 128 spp).
+    const uint32_t pilot_spp = film.pilot_samples();
+    const bool pilot_fits =
+        uint64_t(tile) * uint64_t(tile) * std::min(pilot_spp, spp) <= kMaxKeptPilotSamples;
+    const bool pilot_in_image = pilot_spp > 0 && !splatting && integrator.samples_per_pass() == 0 &&
+                                film.pilot_in_image() && pilot_fits;
+    if (pilot_spp > 0 && film.pilot_in_image() && !pilot_fits)
+        log_note(SourceLocation{},
+                 fmt::format("the temporal filter's pilot of {} spp is too large to keep in the "
+                             "image ({}x{} pixel tiles; at most {} samples per tile): it runs as "
+                             "a separate pass",
+                             std::min(pilot_spp, spp), tile, tile, kMaxKeptPilotSamples));
+    const uint32_t first_spp = pilot_in_image ? std::min(pilot_spp, spp) : 0;
     const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 18 : 22);
     const uint64_t passes_wanted = uint64_t(16) * ranks;
     const uint32_t pass_spp =
         integrator.samples_per_pass() > 0
             ? integrator.samples_per_pass()
             : uint32_t(std::max<uint64_t>(
-                  1, std::min<uint64_t>((spp + passes_wanted - 1) / passes_wanted,
+                  1, std::min<uint64_t>((spp - first_spp + passes_wanted - 1) / passes_wanted,
                                         max_pass_samples / pixels)));
-    const uint32_t passes = uint32_t((uint64_t(spp) + pass_spp - 1) / pass_spp);
+    const uint32_t passes = uint32_t((uint64_t(spp - first_spp) + pass_spp - 1) / pass_spp);
     auto pass_range = [&](uint32_t pass) {
-        const uint32_t s0 = uint32_t(uint64_t(pass) * pass_spp);
+        const uint32_t s0 = uint32_t(first_spp + uint64_t(pass) * pass_spp);
         return std::pair<uint32_t, uint32_t>(
             s0, uint32_t(std::min<uint64_t>(spp, uint64_t(s0) + pass_spp)));
     };
     // In a distributed render, a stop request ends the round of passes (every process
     // finishes its pass, so that the image holds whole passes).
     const std::atomic<bool>* pass_stop = options.group ? nullptr : options.stop;
-    const uint32_t pilot_spp = film.pilot_samples();
     const PixelCounts counts = pixel_counts(scene, spp, splatting);
     // Camera rays need their differentials only for materials that read the footprint.
     const bool differentials = any_material(scene, &Bsdf::uses_footprint);
@@ -517,7 +533,10 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         const auto [s0, s1] = pass_range(pass);
         my_samples += counts.count.empty() ? pixels * (s1 - s0) : counts.taken(s0, s1);
     }
-    Progress progress(options.progress, my_samples + pixels * pilot_spp, options.progress_lines);
+    const uint64_t pilot_samples =
+        pilot_in_image ? (counts.count.empty() ? pixels * first_spp : counts.taken(0, first_spp))
+                       : pixels * pilot_spp;
+    Progress progress(options.progress, my_samples + pilot_samples, options.progress_lines);
     tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
         [&] { return prototype.clone(); });
     tbb::enumerable_thread_specific<ContributionList> lists;
@@ -594,10 +613,20 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     RenderStats stats;
     stats.spp_requested = spp;
     auto stopped = [&] { return options.stop && options.stop->load(); };
-    if (pilot_spp > 0) {
+    if (pilot_in_image) {
+        // The image's samples [0, first_spp), which every process traces (each needs the
+        // bandwidths) and only rank 0 keeps in its image.
+        film.begin_pilot(rank == 0);
+        scene.refresh_time_window();
+        scene.integrator().begin_pass(scene, PassInfo{0, options.seed, 0, first_spp, rank != 0});
+        const double share = run_pass(options.seed, 0, first_spp, false);
+        film.end_pilot();
+        stats.spp_done = share >= 1 ? first_spp : uint32_t(double(first_spp) * share);
+        stats.pilot_image_spp = first_spp;
+    } else if (pilot_spp > 0) {
         // The pilot's random streams are independent of the image's (another seed).
         const uint64_t pilot_seed = options.seed ^ 0x9E3779B97F4A7C15ull;
-        film.begin_pilot();
+        film.begin_pilot(false);
         scene.refresh_time_window();
         scene.integrator().begin_pass(scene, PassInfo{0, pilot_seed, 0, pilot_spp, true});
         run_pass(pilot_seed, 0, pilot_spp, true);

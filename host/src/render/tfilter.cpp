@@ -14,35 +14,59 @@
 
 namespace femto {
 
-PilotBlock::PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time)
+PilotBlock::PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_time,
+                       std::unique_ptr<FilmBlock> image)
     : x0_(x0),
       y0_(y0),
       w_(w),
       h_(h),
       film_width_(film_width),
       world_time_(world_time),
-      arrivals_(size_t(w) * size_t(h)) {}
+      arrivals_(size_t(w) * size_t(h)),
+      samples_(size_t(w) * size_t(h), 0),
+      image_(std::move(image)) {}
 
 void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
+    if (image_) {  // a pilot in the image: the sample waits for its pixel's bandwidth
+        kept_samples_.push_back({pos, sample.sample_index(), uint32_t(kept_.size()),
+                                 uint32_t(sample.items().size()), sample.sensor_distance(),
+                                 sample.is_splat()});
+        kept_.insert(kept_.end(), sample.items().begin(), sample.items().end());
+    }
     // The pixel that holds the sample (no reconstruction filter: the pilot only measures how
     // arrivals spread in time).
     const int x = int(std::floor(pos.x)), y = int(std::floor(pos.y));
     if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) return;
-    auto& arrivals = arrivals_[size_t(y - y0_) * size_t(w_) + size_t(x - x0_)];
+    const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
+    if (!sample.is_splat()) ++samples_[local];
+    auto& arrivals = arrivals_[local];
     for (const Contribution& c : sample.items())
         if (c.radiance.is_finite() && std::isfinite(c.time))
             arrivals.push_back({recorded_time(c.time, sample.sensor_distance(), world_time_),
                                 std::max(0.f, (c.radiance.r + c.radiance.g + c.radiance.b) / 3.f)});
 }
 
-void PilotBlock::deliver(TemporalFilter& filter) const {
+std::unique_ptr<FilmBlock> PilotBlock::deliver(TemporalFilter& filter) const {
     for (int y = 0; y < h_; ++y)
         for (int x = 0; x < w_; ++x) {
-            auto& arrivals = arrivals_[size_t(y) * size_t(w_) + size_t(x)];
+            const size_t local = size_t(y) * size_t(w_) + size_t(x);
+            auto& arrivals = arrivals_[local];
             filter.pilot_pixel(uint64_t(y0_ + y) * uint64_t(film_width_) + uint64_t(x0_ + x),
-                               arrivals);
+                               samples_[local], arrivals);
             std::vector<PilotArrival>().swap(arrivals);
         }
+    if (!image_) return nullptr;
+    ContributionList sample;
+    for (const KeptSample& k : kept_samples_) {
+        sample.clear();
+        for (uint32_t i = k.first; i < k.first + k.count; ++i)
+            sample.add(kept_[i].radiance, kept_[i].time, kept_[i].kernel);
+        sample.set_sensor_distance(k.sensor_distance);
+        sample.set_sample_index(k.sample_index);
+        sample.set_is_splat(k.splat);
+        image_->put(k.pos, sample);
+    }
+    return std::move(image_);
 }
 
 std::vector<ParamSpec> TimeResolvedFilm::inherited_params() {
@@ -84,9 +108,23 @@ double TimeResolvedFilm::max_world_time() const {
                         : std::numeric_limits<double>::infinity();
 }
 
+// Set while make_pilot_block() asks the subclass's make_block() for the tile's own block.
+thread_local bool making_image_block = false;
+
 std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, int w, int h) const {
-    if (!pilot_) return nullptr;
-    return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time());
+    if (!pilot_ || making_image_block) return nullptr;
+    std::unique_ptr<FilmBlock> image;
+    if (pilot_into_image_) {
+        making_image_block = true;
+        try {
+            image = make_block(x0, y0, w, h);
+        } catch (...) {
+            making_image_block = false;
+            throw;
+        }
+        making_image_block = false;
+    }
+    return std::make_unique<PilotBlock>(x0, y0, w, h, width_, world_time(), std::move(image));
 }
 
 void TimeResolvedFilm::warn_empty_window() const {
@@ -100,8 +138,9 @@ void TimeResolvedFilm::warn_empty_window() const {
 }
 
 bool TimeResolvedFilm::merge_pilot(const FilmBlock& block) {
-    if (!pilot_) return false;
-    static_cast<const PilotBlock&>(block).deliver(*tfilter_);
+    const auto* pilot = pilot_ ? dynamic_cast<const PilotBlock*>(&block) : nullptr;
+    if (!pilot) return false;  // (the image block of a pilot in the image merges as any block)
+    if (std::unique_ptr<FilmBlock> image = pilot->deliver(*tfilter_)) merge(*image);
     return true;
 }
 

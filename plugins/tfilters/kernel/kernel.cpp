@@ -12,16 +12,25 @@
 // on how the renderer groups samples into passes or threads.
 //
 // T_1 is `bandwidth` when given. Otherwise it adapts to where light arrives (ch. 5.7 uses 40
-// nearest neighbours): a pilot pass of `pilot_spp` samples per pixel (independent random
-// streams, not part of the image) records each pixel's arrivals (time, energy), and a
-// contribution at time t gets T_1 = the distance from t to its k-th nearest pilot arrival in
-// its pixel (`k_neighbors`), neighbours counted by energy: the pixel keeps 128 quantiles of
+// nearest neighbours): a pilot of `pilot_spp` samples per pixel records each pixel's arrivals
+// (time, energy), and a contribution at time t gets T_1 = the distance from t to its k-th
+// nearest pilot arrival in its home pixel (`k_neighbors`, counted among pilot_spp samples'
+// arrivals), neighbours counted by energy: the pixel keeps 128 quantiles of
 // its energy-weighted arrival times, and k of n arrivals becomes k * 128 / n quantiles. A
 // bright peak thus keeps a narrow kernel even when few samples carry it (a directly seen lamp),
 // while the dim indirect tail is smoothed widely (counting arrivals instead smeared such
 // peaks: bench/README.md). Each kernel is still normalised, so energy is kept (a
 // "sample-point" adaptive estimate). T_1 is clamped to [half a bin, 1/8 of the window].
 // Pixels with fewer than two pilot arrivals use the median bandwidth of the others.
+//
+// By default the pilot's samples are the image's first pilot_spp samples (`pilot_in_image`):
+// each tile keeps them until its pixels' bandwidths are set, then adds them to the image, so
+// the pilot costs no extra paths (a separate pilot of 64 spp took 0.71 of a 16-spp render:
+// bench/README.md). A render of fewer samples takes them all as its pilot, with k scaled to
+// them. Before the last tile's pilot is done the median fallback is unknown; the few pilot
+// samples of pixels with fewer than two arrivals are binned as a histogram would. A bandwidth
+// chosen from the samples it then spreads depends on each of them only through the pixel's
+// quantiles (1 of ~n arrivals each); bench/README.md compares the errors of both pilots.
 //
 // With `pilot_radius` r > 0 the pilot is shared across pixels: each pixel's arrivals are
 // pooled with those of its neighbours within r pixels before its quantiles are taken, so a
@@ -70,7 +79,13 @@ public:
         if (radius < 0 || radius > 16)
             props.fail("pilot_radius", "pilot_radius must lie in [0, 16]");
         pilot_radius_ = int(radius);
-        for (const char* pilot_param : {"k_neighbors", "pilot_spp", "pilot_radius"})
+        pilot_in_image_ = props.get_bool("pilot_in_image", pilot_radius_ == 0);
+        if (pilot_in_image_ && pilot_radius_ > 0)
+            props.fail("pilot_in_image",
+                       "a pilot in the image cannot be pooled (pilot_radius): a pixel's bandwidth "
+                       "is needed before its neighbours' pilots have run");
+        for (const char* pilot_param :
+             {"k_neighbors", "pilot_spp", "pilot_radius", "pilot_in_image"})
             if (fixed_bandwidth_ > 0 && props.has(pilot_param))
                 props.fail(pilot_param,
                            "k_neighbors, pilot_spp and pilot_radius choose the bandwidth from a "
@@ -88,7 +103,10 @@ public:
         } else {
             pilot_.assign(size_t(pixels), PixelPilot());
             arrivals_.assign(size_t(pixels) * kMaxArrivals, 0.f);
-            max_t1_ = 0.0;  // during the pilot: paths stop at the window's end
+            // During a separate pilot, paths stop at the window's end; a pilot in the image
+            // is spread as the image is.
+            max_t1_ =
+                pilot_in_image_ ? clamp_bandwidth(std::numeric_limits<double>::infinity()) : 0.0;
         }
     }
 
@@ -134,8 +152,10 @@ public:
     double max_radius() const override { return max_t1_; }
 
     uint32_t pilot_samples() const override { return fixed_bandwidth_ > 0 ? 0 : pilot_spp_; }
+    bool pilot_in_image() const override { return pilot_in_image_; }
 
-    void pilot_pixel(uint64_t pixel, std::vector<PilotArrival>& arrivals) override {
+    void pilot_pixel(uint64_t pixel, uint32_t samples,
+                     std::vector<PilotArrival>& arrivals) override {
         if (pixel >= pilot_.size() || arrivals.size() < 2) return;
         std::sort(arrivals.begin(), arrivals.end(),
                   [](const PilotArrival& a, const PilotArrival& b) { return a.time < b.time; });
@@ -162,9 +182,14 @@ public:
                 kept[q] = float(arrivals[m == n ? q : (q * (n - 1)) / (m - 1)].time);
         }
         pp.count = uint32_t(m);
-        // k of n neighbours, scaled to the m kept; at least 1 and at most m - 1.
-        pp.k = uint32_t(std::clamp<size_t>(
-            size_t(std::lround(double(k_neighbors_) * double(m) / double(n))), 1, m - 1));
+        // k of n neighbours, scaled to the m kept; at least 1 and at most m - 1. k counts among
+        // the arrivals of pilot_spp samples: a pixel that had fewer (a short render's pilot in
+        // the image, adaptive sampling) takes the same share of its arrivals.
+        const double k = samples > 0 && samples < pilot_spp_
+                             ? double(k_neighbors_) * double(samples) / double(pilot_spp_)
+                             : double(k_neighbors_);
+        pp.k =
+            uint32_t(std::clamp<size_t>(size_t(std::lround(k * double(m) / double(n))), 1, m - 1));
     }
 
     void end_pilot() override {
@@ -273,6 +298,7 @@ private:
     size_t k_neighbors_ = 40;
     uint32_t pilot_spp_ = 64;
     int pilot_radius_ = 0;
+    bool pilot_in_image_ = true;
     int width_ = 0, height_ = 0;
     TimeGrid grid_;
     std::vector<double> schedule_;   // T_j / T_1 for the first sample indices
@@ -298,4 +324,10 @@ FEMTO_PLUGIN(
      {"pilot_spp", "integer", "64", "pilot: samples per pixel of the pilot pass"},
      {"pilot_radius", "integer", "0",
       "pilot: each pixel pools the pilot arrivals of the pixels within this many pixels "
-      "(1: 3x3), so that a shorter pilot gives it as many (0: its own only)"}})
+      "(1: 3x3), so that a shorter pilot gives it as many (0: its own only)"},
+     {"pilot_in_image", "boolean", "true",
+      "pilot: its samples are the image's first pilot_spp samples of each pixel (a tile keeps "
+      "them in memory until its pixels' bandwidths are set), so the pilot costs no extra "
+      "samples; false (the default when pilot_radius > 0): a separate pass with its own random "
+      "streams. Integrators that splat or fix their samples per pass (light tracers, bdpt, "
+      "ppm, beams) and pilots of over 2^17 samples per tile run it separately"}})
