@@ -222,7 +222,9 @@ TEST(Render, KernelPilotInTheImageCostsNoExtraPaths) {
     EXPECT_EQ(in_image.spp_done, 8u);
     EXPECT_EQ(separate.spp_done, 8u);
     EXPECT_EQ(in_image.pilot_seconds, 0.0);
+    EXPECT_EQ(in_image.pilot_image_spp, 8u);
     EXPECT_GT(separate.pilot_seconds, 0.0);
+    EXPECT_EQ(separate.pilot_image_spp, 0u);
     // Both trace 8 samples' paths per pixel for the image; the separate pilot as many again.
     const double ratio = double(separate.rays) / double(in_image.rays);
     EXPECT_GT(ratio, 1.8);

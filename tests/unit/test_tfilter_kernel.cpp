@@ -303,14 +303,39 @@ TEST(KernelFilter, WithoutPilotDataItActsAsAHistogram) {
     ASSERT_EQ(out.size(), 1u);
     EXPECT_EQ(out[0].bin, 5);
     EXPECT_FLOAT_EQ(out[0].weight, 1.f);
-    // A pilot in the image (the default) is spread as the image is: its paths run on past the
-    // window's end by the widest bandwidth. A separate pilot's paths stop at the window's end.
+    // A separate pilot's paths stop at the window's end; a pilot of image samples (the
+    // default, when the renderer can) is spread as the image is: its paths run on past the
+    // window's end by the widest bandwidth.
     EXPECT_TRUE(f->pilot_in_image());
+    f->begin_pilot(false);
+    EXPECT_DOUBLE_EQ(f->max_radius(), 0.0);
+    f->begin_pilot(true);
     EXPECT_DOUBLE_EQ(f->max_radius(), 0.125);
     auto separate = make_kernel({{"pilot_in_image", "false", 'b'}});
-    separate->prepare(g, 1, 1);
     EXPECT_FALSE(separate->pilot_in_image());
-    EXPECT_DOUBLE_EQ(separate->max_radius(), 0.0);
+}
+
+TEST(KernelFilter, PilotBatchesOfAPixelAddUp) {
+    // A light pass's splats reach a pixel in several merges: each batch adds to the pixel's
+    // pilot. 1000 arrivals evenly spread over [0, 1) given in two interleaved batches of 500
+    // give the bandwidth of all 1000 at once (within the 128 kept quantiles' spacing), not that
+    // of the last batch (2x wider).
+    const TimeGrid g = grid(0.0, 0.0005, 2000);  // window [0, 1)
+    auto f = make_kernel({{"kernel", "box", 's'}, {"k_neighbors", "40", 'i'}});
+    f->prepare(g, 2, 1);
+    f->begin_pilot(false);
+    std::vector<PilotArrival> all, even, odd;
+    for (int i = 0; i < 1000; ++i) {
+        all.push_back({(i + 0.5) / 1000.0, 1.f});
+        (i % 2 ? odd : even).push_back({(i + 0.5) / 1000.0, 1.f});
+    }
+    f->pilot_pixel(0, 0, all);
+    f->pilot_pixel(1, 0, even);
+    f->pilot_pixel(1, 0, odd);
+    f->end_pilot();
+    const double once = box_bandwidth(*f, g, 0, 0.5);
+    EXPECT_NEAR(once, 20.0 / 1000, 1.0 / 128);
+    EXPECT_NEAR(box_bandwidth(*f, g, 1, 0.5), once, 1.0 / 128);
 }
 
 TEST(KernelFilter, RejectsBadParameters) {
@@ -435,3 +460,99 @@ TEST(KernelFilter, MseFallsAtTheRateOfAppendix5A) {
 }
 
 }  // namespace
+
+namespace {
+
+// A pilot in the image keeps every sample and, once it has handed its tile's arrivals to the
+// filter (with each pixel's sample count), puts them into the tile's image block unchanged
+// and in the order they came; without an image block it keeps only the arrivals.
+struct RecordedSample {
+    femto::Vec2 pos;
+    std::vector<femto::Contribution> items;
+    double sensor;
+    uint32_t index;
+    bool splat;
+};
+
+class RecordingBlock final : public femto::FilmBlock {
+public:
+    explicit RecordingBlock(std::vector<RecordedSample>* out) : out_(out) {}
+    void put(femto::Vec2 pos, const femto::ContributionList& s) override {
+        out_->push_back({pos, s.items(), s.sensor_distance(), s.sample_index(), s.is_splat()});
+    }
+
+private:
+    std::vector<RecordedSample>* out_;
+};
+
+class RecordingFilter final : public femto::TemporalFilter {
+public:
+    void splat(const femto::TimeGrid&, uint64_t, uint32_t, double,
+               std::vector<femto::BinWeight>&) const override {}
+    void pilot_pixel(uint64_t pixel, uint32_t samples,
+                     std::vector<femto::PilotArrival>& arrivals) override {
+        seen.push_back({pixel, samples, arrivals.size()});
+    }
+    struct Seen {
+        uint64_t pixel;
+        uint32_t samples;
+        size_t arrivals;
+    };
+    std::vector<Seen> seen;
+};
+
+}  // namespace
+
+TEST(PilotBlock, KeepsTheImageSamplesAndReplaysThemInOrder) {
+    using namespace femto;
+    std::vector<RecordedSample> replayed;
+    // The tile [4, 6) x [2, 3) of a film 10 pixels wide.
+    PilotBlock block(4, 2, 2, 1, 10, false, std::make_unique<RecordingBlock>(&replayed));
+    std::vector<RecordedSample> given;
+    for (uint32_t i = 0; i < 5; ++i) {
+        ContributionList s;
+        s.set_sample_index(i);
+        s.set_sensor_distance(1.5 + i);
+        s.add(Color(1.f + float(i)), 3.0 + i);
+        if (i != 2) s.add(Color(0.5f), 7.0 + i);     // sample 2 has one contribution
+        const Vec2 pos{4.25f + float(i % 2), 2.5f};  // pixels 24 and 25 in turn
+        block.put(pos, s);
+        given.push_back({pos, s.items(), s.sensor_distance(), i, false});
+    }
+    RecordingFilter filter;
+    std::unique_ptr<FilmBlock> image = block.deliver(filter);
+    ASSERT_TRUE(image);
+    ASSERT_EQ(replayed.size(), given.size());
+    for (size_t i = 0; i < given.size(); ++i) {
+        SCOPED_TRACE(i);
+        EXPECT_EQ(replayed[i].pos.x, given[i].pos.x);
+        EXPECT_EQ(replayed[i].pos.y, given[i].pos.y);
+        EXPECT_EQ(replayed[i].index, given[i].index);
+        EXPECT_EQ(replayed[i].sensor, given[i].sensor);
+        EXPECT_EQ(replayed[i].splat, false);
+        ASSERT_EQ(replayed[i].items.size(), given[i].items.size());
+        for (size_t c = 0; c < given[i].items.size(); ++c) {
+            EXPECT_EQ(replayed[i].items[c].time, given[i].items[c].time);
+            EXPECT_EQ(replayed[i].items[c].radiance.r, given[i].items[c].radiance.r);
+        }
+    }
+    // Pixel 24 had samples 0, 2, 4 (5 arrivals), pixel 25 samples 1, 3 (4 arrivals).
+    ASSERT_EQ(filter.seen.size(), 2u);
+    EXPECT_EQ(filter.seen[0].pixel, 24u);
+    EXPECT_EQ(filter.seen[0].samples, 3u);
+    EXPECT_EQ(filter.seen[0].arrivals, 5u);
+    EXPECT_EQ(filter.seen[1].pixel, 25u);
+    EXPECT_EQ(filter.seen[1].samples, 2u);
+    EXPECT_EQ(filter.seen[1].arrivals, 4u);
+
+    // A separate pilot: the arrivals alone, nothing for the image.
+    PilotBlock separate(4, 2, 2, 1, 10, false);
+    ContributionList s;
+    s.add(Color(1.f), 3.0);
+    separate.put({4.5f, 2.5f}, s);
+    RecordingFilter only;
+    EXPECT_FALSE(separate.deliver(only));
+    ASSERT_EQ(only.seen.size(), 1u);
+    EXPECT_EQ(only.seen[0].samples, 1u);
+    EXPECT_EQ(only.seen[0].arrivals, 1u);
+}

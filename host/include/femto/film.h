@@ -232,11 +232,12 @@ public:
     /// True when the film can keep the pilot's samples and add them to the image once the
     /// pilot has seen them (the pilot is then the image's first samples, not extra work).
     virtual bool pilot_in_image() const { return false; }
-    /// `into_image` false: the pilot has its own random streams and its samples are not part
-    /// of the image. True (only when pilot_in_image()): its samples are the image's samples
-    /// [0, n) of every pixel, drawn with the image's streams, and the film adds them to the
-    /// image as each tile's pilot is done; the renderer's image passes then start at n.
-    virtual void begin_pilot(bool /*into_image*/) {}
+    /// `image_samples` false: the pilot has its own random streams and its samples are not
+    /// part of the image. True (only when pilot_in_image()): its samples are the image's
+    /// samples [0, n) of every pixel, drawn with the image's streams (the renderer's image
+    /// passes then start at n), and with `keep` the film adds them to its image as each tile's
+    /// pilot is done (a distributed render keeps them in one process).
+    virtual void begin_pilot(bool /*image_samples*/, bool /*keep*/) {}
     virtual void end_pilot() {}
     /// Latest path length (scene units, camera time) this film records; paths beyond it may
     /// stop.

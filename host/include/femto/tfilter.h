@@ -21,8 +21,14 @@ namespace femto {
 /// One contribution seen by a pilot pass.
 struct PilotArrival {
     double time;   ///< recorded time (camera or world, as the film records)
-    float energy;  ///< mean of its radiance over the colour channels
+    float energy;  ///< pilot_energy() of its radiance
 };
+
+/// A contribution's energy as pilots count it: the mean of its radiance over the colour
+/// channels (0 if negative).
+inline float pilot_energy(const Color& radiance) {
+    return std::max(0.f, (radiance.r + radiance.g + radiance.b) / 3.f);
+}
 
 struct BinWeight {
     int bin;
@@ -64,9 +70,15 @@ public:
     /// filter). Renderers fall back to a separate pilot pass where they cannot (integrators
     /// that splat or fix their samples per pass).
     virtual bool pilot_in_image() const { return false; }
+    /// Called before the pilot pass: `image_samples` when its samples are the image's first
+    /// samples of each pixel (see Film::begin_pilot()). Every process of a distributed render
+    /// calls it alike, so that all of them compute the same pilot.
+    virtual void begin_pilot(bool /*image_samples*/) {}
     /// The contributions of the `samples` pilot samples (camera samples; 0 for a light pass's
     /// splats, which are not counted) that fell in `pixel`: recorded time and energy (mean
-    /// over the colour channels), unordered; the filter may reorder them.
+    /// over the colour channels), unordered; the filter may reorder them. A pass whose splats
+    /// merge in several batches (light tracers, BDPT's light subpaths) calls it once per batch
+    /// that reached the pixel: each call adds to the pixel's pilot.
     virtual void pilot_pixel(uint64_t /*pixel*/, uint32_t /*samples*/,
                              std::vector<PilotArrival>& /*arrivals*/) {}
     virtual void end_pilot() {}
@@ -124,6 +136,9 @@ public:
     std::unique_ptr<FilmBlock> deliver(TemporalFilter& filter) const;
 
 private:
+    void add_arrivals(size_t local, const Contribution* first, size_t count,
+                      double sensor_distance) const;
+
     struct KeptSample {  // a sample of a pilot in the image, its contributions in kept_
         Vec2 pos;
         uint32_t sample_index, first, count;
@@ -253,9 +268,10 @@ class TimeResolvedFilm : public Film {
 public:
     uint32_t pilot_samples() const override { return tfilter_->pilot_samples(); }
     bool pilot_in_image() const override { return tfilter_->pilot_in_image(); }
-    void begin_pilot(bool into_image) override {
+    void begin_pilot(bool image_samples, bool keep) override {
         pilot_ = true;
-        pilot_into_image_ = into_image;
+        pilot_into_image_ = image_samples && keep;
+        tfilter_->begin_pilot(image_samples);
     }
     void end_pilot() override;
     /// The grid's end plus the filter's reach in camera time; unbounded in world time (the

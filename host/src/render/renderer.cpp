@@ -40,7 +40,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr int kTileSize = 32;
-constexpr uint64_t kMaxKeptPilotSamples = uint64_t(1) << 17;
+constexpr uint64_t kMaxKeptPilotSamples = uint64_t(1) << 16;
 
 struct Tile {
     int x0, y0, w, h;
@@ -493,14 +493,16 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     const uint32_t rank = options.group ? uint32_t(options.group->rank()) : 0;
     // A temporal filter's pilot: the image's first samples when the film can keep them (not
     // for integrators that splat or fix their samples per pass), else a pass of its own.
-    // A tile keeps its pilot samples (~200 bytes each) until its pilot is done: at most
-    // kMaxKeptPilotSamples (32 MiB; a 32x32 tile of 128 spp).
+    // A tile keeps its pilot samples (40 bytes and 32 per contribution: ~230 bytes at 6
+    // contributions) until its pilot is done: at most kMaxKeptPilotSamples (a 32x32 tile of
+    // 64 spp, the kernel's default; ~15 MiB).
     const uint32_t pilot_spp = film.pilot_samples();
     const bool pilot_fits =
         uint64_t(tile) * uint64_t(tile) * std::min(pilot_spp, spp) <= kMaxKeptPilotSamples;
-    const bool pilot_in_image = pilot_spp > 0 && !splatting && integrator.samples_per_pass() == 0 &&
-                                film.pilot_in_image() && pilot_fits;
-    if (pilot_spp > 0 && film.pilot_in_image() && !pilot_fits)
+    const bool pilot_can_be_image =
+        pilot_spp > 0 && !splatting && integrator.samples_per_pass() == 0 && film.pilot_in_image();
+    const bool pilot_in_image = pilot_can_be_image && pilot_fits;
+    if (pilot_can_be_image && !pilot_fits)
         log_note(SourceLocation{},
                  fmt::format("the temporal filter's pilot of {} spp is too large to keep in the "
                              "image ({}x{} pixel tiles; at most {} samples per tile): it runs as "
@@ -616,7 +618,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     if (pilot_in_image) {
         // The image's samples [0, first_spp), which every process traces (each needs the
         // bandwidths) and only rank 0 keeps in its image.
-        film.begin_pilot(rank == 0);
+        film.begin_pilot(true, rank == 0);
         scene.refresh_time_window();
         scene.integrator().begin_pass(scene, PassInfo{0, options.seed, 0, first_spp, rank != 0});
         const double share = run_pass(options.seed, 0, first_spp, false);
@@ -626,7 +628,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     } else if (pilot_spp > 0) {
         // The pilot's random streams are independent of the image's (another seed).
         const uint64_t pilot_seed = options.seed ^ 0x9E3779B97F4A7C15ull;
-        film.begin_pilot(false);
+        film.begin_pilot(false, false);
         scene.refresh_time_window();
         scene.integrator().begin_pass(scene, PassInfo{0, pilot_seed, 0, pilot_spp, true});
         run_pass(pilot_seed, 0, pilot_spp, true);

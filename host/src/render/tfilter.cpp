@@ -32,6 +32,7 @@ void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
                                  uint32_t(sample.items().size()), sample.sensor_distance(),
                                  sample.is_splat()});
         kept_.insert(kept_.end(), sample.items().begin(), sample.items().end());
+        return;  // (its arrivals are read from what is kept, in deliver())
     }
     // The pixel that holds the sample (no reconstruction filter: the pilot only measures how
     // arrivals spread in time).
@@ -39,20 +40,33 @@ void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
     if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) return;
     const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
     if (!sample.is_splat()) ++samples_[local];
-    auto& arrivals = arrivals_[local];
-    for (const Contribution& c : sample.items())
-        if (c.radiance.is_finite() && std::isfinite(c.time))
-            arrivals.push_back({recorded_time(c.time, sample.sensor_distance(), world_time_),
-                                std::max(0.f, (c.radiance.r + c.radiance.g + c.radiance.b) / 3.f)});
+    add_arrivals(local, sample.items().data(), sample.items().size(), sample.sensor_distance());
+}
+
+void PilotBlock::add_arrivals(size_t local, const Contribution* first, size_t count,
+                              double sensor_distance) const {
+    for (const Contribution* c = first; c != first + count; ++c)
+        if (c->radiance.is_finite() && std::isfinite(c->time))
+            arrivals_[local].push_back(
+                {recorded_time(c->time, sensor_distance, world_time_), pilot_energy(c->radiance)});
 }
 
 std::unique_ptr<FilmBlock> PilotBlock::deliver(TemporalFilter& filter) const {
+    std::vector<uint32_t> samples = samples_;
+    for (const KeptSample& k : kept_samples_) {
+        const int x = int(std::floor(k.pos.x)), y = int(std::floor(k.pos.y));
+        if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) continue;
+        const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
+        if (!k.splat) ++samples[local];
+        add_arrivals(local, &kept_[k.first], k.count, k.sensor_distance);
+    }
     for (int y = 0; y < h_; ++y)
         for (int x = 0; x < w_; ++x) {
             const size_t local = size_t(y) * size_t(w_) + size_t(x);
             auto& arrivals = arrivals_[local];
+            if (arrivals.empty() && samples[local] == 0) continue;
             filter.pilot_pixel(uint64_t(y0_ + y) * uint64_t(film_width_) + uint64_t(x0_ + x),
-                               samples_[local], arrivals);
+                               samples[local], arrivals);
             std::vector<PilotArrival>().swap(arrivals);
         }
     if (!image_) return nullptr;
@@ -109,7 +123,7 @@ double TimeResolvedFilm::max_world_time() const {
 }
 
 // Set while make_pilot_block() asks the subclass's make_block() for the tile's own block.
-thread_local bool making_image_block = false;
+static thread_local bool making_image_block = false;
 
 std::unique_ptr<FilmBlock> TimeResolvedFilm::make_pilot_block(int x0, int y0, int w, int h) const {
     if (!pilot_ || making_image_block) return nullptr;

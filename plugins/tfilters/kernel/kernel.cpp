@@ -21,7 +21,9 @@
 // while the dim indirect tail is smoothed widely (counting arrivals instead smeared such
 // peaks: bench/README.md). Each kernel is still normalised, so energy is kept (a
 // "sample-point" adaptive estimate). T_1 is clamped to [half a bin, 1/8 of the window].
-// Pixels with fewer than two pilot arrivals use the median bandwidth of the others.
+// Pixels with fewer than two pilot arrivals use the median bandwidth of the others. A pixel's
+// pilot may arrive in batches (a light pass's splats merge in waves): each adds to the quantiles
+// kept, which stand for their share of the energy seen before.
 //
 // By default the pilot's samples are the image's first pilot_spp samples (`pilot_in_image`):
 // each tile keeps them until its pixels' bandwidths are set, then adds them to the image, so
@@ -103,10 +105,7 @@ public:
         } else {
             pilot_.assign(size_t(pixels), PixelPilot());
             arrivals_.assign(size_t(pixels) * kMaxArrivals, 0.f);
-            // During a separate pilot, paths stop at the window's end; a pilot in the image
-            // is spread as the image is.
-            max_t1_ =
-                pilot_in_image_ ? clamp_bandwidth(std::numeric_limits<double>::infinity()) : 0.0;
+            max_t1_ = 0.0;  // until the pilot: see begin_pilot()
         }
     }
 
@@ -138,7 +137,10 @@ public:
 
     void splat(const TimeGrid& grid, uint64_t pixel, uint32_t sample_index, double t,
                std::vector<BinWeight>& out) const override {
-        const double T = initial_bandwidth(pixel, t) * shrink(sample_index);
+        spread(grid, t, initial_bandwidth(pixel, t) * shrink(sample_index), out);
+    }
+
+    void spread(const TimeGrid& grid, double t, double T, std::vector<BinWeight>& out) const {
         if (!(T > 0.0)) {  // no bandwidth known (pilot not run for this pixel): a histogram
             const int bin = grid.bin_of(t);
             if (bin >= 0) out.push_back({bin, 1.f});
@@ -153,17 +155,34 @@ public:
 
     uint32_t pilot_samples() const override { return fixed_bandwidth_ > 0 ? 0 : pilot_spp_; }
     bool pilot_in_image() const override { return pilot_in_image_; }
+    void begin_pilot(bool image_samples) override {
+        // A separate pilot's paths stop at the window's end; a pilot of image samples is
+        // spread as the image is, so its paths run as far.
+        if (fixed_bandwidth_ <= 0)
+            max_t1_ = image_samples ? clamp_bandwidth(std::numeric_limits<double>::infinity()) : 0;
+    }
 
     void pilot_pixel(uint64_t pixel, uint32_t samples,
                      std::vector<PilotArrival>& arrivals) override {
-        if (pixel >= pilot_.size() || arrivals.size() < 2) return;
+        if (pixel >= pilot_.size()) return;
+        PixelPilot& pp = pilot_[size_t(pixel)];
+        // Another batch of the same pixel's pilot (a light pass's splats merge in waves): the
+        // quantiles kept so far join it, each standing for its share of their energy.
+        const size_t new_arrivals = arrivals.size();
+        if (pp.count > 0) {
+            const float* kept = &arrivals_[size_t(pixel) * kMaxArrivals];
+            for (uint32_t q = 0; q < pp.count; ++q)
+                arrivals.push_back({double(kept[q]), pp.energy / float(pp.count)});
+            samples += pp.samples;
+        }
+        if (arrivals.size() < 2) return;
         std::sort(arrivals.begin(), arrivals.end(),
                   [](const PilotArrival& a, const PilotArrival& b) { return a.time < b.time; });
         const size_t n = arrivals.size(), m = std::min(n, kMaxArrivals);
         double total = 0;
         for (const PilotArrival& a : arrivals) total += double(a.energy);
-        PixelPilot& pp = pilot_[size_t(pixel)];
-        pp.seen = uint32_t(std::min<size_t>(n, UINT32_MAX));
+        pp.seen = uint32_t(std::min<size_t>(new_arrivals + pp.seen, UINT32_MAX));
+        pp.samples = samples;
         pp.energy = float(total);
         float* kept = &arrivals_[size_t(pixel) * kMaxArrivals];
         if (total > 0) {
@@ -188,8 +207,8 @@ public:
         const double k = samples > 0 && samples < pilot_spp_
                              ? double(k_neighbors_) * double(samples) / double(pilot_spp_)
                              : double(k_neighbors_);
-        pp.k =
-            uint32_t(std::clamp<size_t>(size_t(std::lround(k * double(m) / double(n))), 1, m - 1));
+        pp.k = uint32_t(
+            std::clamp<size_t>(size_t(std::lround(k * double(m) / double(pp.seen))), 1, m - 1));
     }
 
     void end_pilot() override {
@@ -214,11 +233,12 @@ public:
 private:
     static constexpr size_t kMaxArrivals = 128;
     struct PixelPilot {
-        uint32_t count = 0;  // arrivals kept (sorted) in arrivals_
-        uint32_t k = 0;      // neighbours counted among them
-        uint32_t seen = 0;   // arrivals the pilot recorded (count keeps at most 128 of them)
-        float energy = 0;    // their total energy
-        float fallback = 0;  // T_1 when the pixel had fewer than two arrivals
+        uint32_t count = 0;    // arrivals kept (sorted) in arrivals_
+        uint32_t k = 0;        // neighbours counted among them
+        uint32_t seen = 0;     // arrivals the pilot recorded (count keeps at most 128 of them)
+        float energy = 0;      // their total energy
+        float fallback = 0;    // T_1 when the pixel had fewer than two arrivals
+        uint32_t samples = 0;  // camera samples the pilot counted (0: splats only)
     };
 
     // Replaces every pixel's kept quantiles by those of the arrivals of the pixels within
@@ -330,4 +350,4 @@ FEMTO_PLUGIN(
       "them in memory until its pixels' bandwidths are set), so the pilot costs no extra "
       "samples; false (the default when pilot_radius > 0): a separate pass with its own random "
       "streams. Integrators that splat or fix their samples per pass (light tracers, bdpt, "
-      "ppm, beams) and pilots of over 2^17 samples per tile run it separately"}})
+      "ppm, beams) and pilots of over 2^16 samples per tile run it separately"}})
