@@ -31,6 +31,12 @@ bench_log_header() {
     } | tee "$log"
 }
 
+# Reads `femto render`'s output on stdin and prints its render time and ray rate: "SECONDS
+# MRAYS_PER_S" (fails, as grep does, when the summary line is missing).
+render_seconds_and_rate() {
+    grep -o "in [0-9.]* s ([0-9.]* M rays/s)" | sed -E 's/in ([0-9.]*) s \(([0-9.]*) M rays.*/\1 \2/'
+}
+
 # Prints an LD_PRELOAD value for running femto under valgrind (empty when not needed): libhwy,
 # loaded with OpenImageIO, runs an instruction valgrind 3.19 cannot decode on some CPUs in a
 # static initializer; bench/tools/valgrind_hwy_shim.cpp stands in for that function. Built into

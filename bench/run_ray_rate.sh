@@ -38,9 +38,8 @@ for run in $(seq 1 "$runs"); do
                 -e '/<(distance|connection|angular) type=|name="mis"/d' \
                 "$root/scenes/$scene/scene.xml" > "$xml"
             line=$("$build/bin/femto" render "$xml" "${defines[@]}" --threads 2 \
-                -o "$work/out" 2>&1 | grep -o "in [0-9.]* s ([0-9.]* M rays/s)")
-            seconds=$(echo "$line" | sed -E 's/in ([0-9.]*) s.*/\1/')
-            rate=$(echo "$line" | sed -E 's/.*\(([0-9.]*) M rays.*/\1/')
+                -o "$work/out" 2>&1 | render_seconds_and_rate)
+            read -r seconds rate <<< "$line"
             echo "$scene,$integrator,$run,$seconds,$rate" | tee -a "$csv"
         done
     done

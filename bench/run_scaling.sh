@@ -39,10 +39,8 @@ for run in $(seq 1 "$runs"); do
         read -r -a defines <<< "$defs"
         for n in "${order[@]}"; do
             line=$("$build/bin/femto" render "$xml" -D integrator=path "${defines[@]}" \
-                --threads "$n" --seed "$run" -o "$work/out" 2>&1 |
-                grep -o "in [0-9.]* s ([0-9.]* M rays/s)")
-            seconds=$(echo "$line" | sed -E 's/in ([0-9.]*) s.*/\1/')
-            rate=$(echo "$line" | sed -E 's/.*\(([0-9.]*) M rays.*/\1/')
+                --threads "$n" --seed "$run" -o "$work/out" 2>&1 | render_seconds_and_rate)
+            read -r seconds rate <<< "$line"
             echo "$scene,$n,$run,$seconds,$rate" | tee -a "$csv"
         done
     done

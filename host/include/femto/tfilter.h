@@ -136,6 +136,9 @@ public:
     std::unique_ptr<FilmBlock> deliver(TemporalFilter& filter) const;
 
 private:
+    /// Index in the tile of the pixel that holds `pos` (no reconstruction filter: the pilot
+    /// only measures how arrivals spread in time); SIZE_MAX outside the tile.
+    size_t local_pixel(Vec2 pos) const;
     void add_arrivals(size_t local, const Contribution* first, size_t count,
                       double sensor_distance) const;
 

@@ -496,9 +496,9 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     // A tile keeps its pilot samples (40 bytes and 32 per contribution: ~230 bytes at 6
     // contributions) until its pilot is done: at most kMaxKeptPilotSamples (a 32x32 tile of
     // 64 spp, the kernel's default; ~15 MiB).
-    const uint32_t pilot_spp = film.pilot_samples();
+    const uint32_t pilot_spp = film.pilot_samples(), pilot_of_image = std::min(pilot_spp, spp);
     const bool pilot_fits =
-        uint64_t(tile) * uint64_t(tile) * std::min(pilot_spp, spp) <= kMaxKeptPilotSamples;
+        uint64_t(tile) * uint64_t(tile) * pilot_of_image <= kMaxKeptPilotSamples;
     const bool pilot_can_be_image =
         pilot_spp > 0 && !splatting && integrator.samples_per_pass() == 0 && film.pilot_in_image();
     const bool pilot_in_image = pilot_can_be_image && pilot_fits;
@@ -507,8 +507,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                  fmt::format("the temporal filter's pilot of {} spp is too large to keep in the "
                              "image ({}x{} pixel tiles; at most {} samples per tile): it runs as "
                              "a separate pass",
-                             std::min(pilot_spp, spp), tile, tile, kMaxKeptPilotSamples));
-    const uint32_t first_spp = pilot_in_image ? std::min(pilot_spp, spp) : 0;
+                             pilot_of_image, tile, tile, kMaxKeptPilotSamples));
+    const uint32_t first_spp = pilot_in_image ? pilot_of_image : 0;
     const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 18 : 22);
     const uint64_t passes_wanted = uint64_t(16) * ranks;
     const uint32_t pass_spp =

@@ -26,7 +26,15 @@ PilotBlock::PilotBlock(int x0, int y0, int w, int h, int film_width, bool world_
       samples_(size_t(w) * size_t(h), 0),
       image_(std::move(image)) {}
 
+size_t PilotBlock::local_pixel(Vec2 pos) const {
+    const int x = int(std::floor(pos.x)), y = int(std::floor(pos.y));
+    if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) return SIZE_MAX;
+    return size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
+}
+
 void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
+    const size_t local = local_pixel(pos);
+    if (local != SIZE_MAX && !sample.is_splat()) ++samples_[local];
     if (image_) {  // a pilot in the image: the sample waits for its pixel's bandwidth
         kept_samples_.push_back({pos, sample.sample_index(), uint32_t(kept_.size()),
                                  uint32_t(sample.items().size()), sample.sensor_distance(),
@@ -34,13 +42,8 @@ void PilotBlock::put(Vec2 pos, const ContributionList& sample) {
         kept_.insert(kept_.end(), sample.items().begin(), sample.items().end());
         return;  // (its arrivals are read from what is kept, in deliver())
     }
-    // The pixel that holds the sample (no reconstruction filter: the pilot only measures how
-    // arrivals spread in time).
-    const int x = int(std::floor(pos.x)), y = int(std::floor(pos.y));
-    if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) return;
-    const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
-    if (!sample.is_splat()) ++samples_[local];
-    add_arrivals(local, sample.items().data(), sample.items().size(), sample.sensor_distance());
+    if (local != SIZE_MAX)
+        add_arrivals(local, sample.items().data(), sample.items().size(), sample.sensor_distance());
 }
 
 void PilotBlock::add_arrivals(size_t local, const Contribution* first, size_t count,
@@ -52,21 +55,16 @@ void PilotBlock::add_arrivals(size_t local, const Contribution* first, size_t co
 }
 
 std::unique_ptr<FilmBlock> PilotBlock::deliver(TemporalFilter& filter) const {
-    std::vector<uint32_t> samples = samples_;
-    for (const KeptSample& k : kept_samples_) {
-        const int x = int(std::floor(k.pos.x)), y = int(std::floor(k.pos.y));
-        if (x < x0_ || x >= x0_ + w_ || y < y0_ || y >= y0_ + h_) continue;
-        const size_t local = size_t(y - y0_) * size_t(w_) + size_t(x - x0_);
-        if (!k.splat) ++samples[local];
-        add_arrivals(local, &kept_[k.first], k.count, k.sensor_distance);
-    }
+    for (const KeptSample& k : kept_samples_)
+        if (const size_t local = local_pixel(k.pos); local != SIZE_MAX)
+            add_arrivals(local, &kept_[k.first], k.count, k.sensor_distance);
     for (int y = 0; y < h_; ++y)
         for (int x = 0; x < w_; ++x) {
             const size_t local = size_t(y) * size_t(w_) + size_t(x);
             auto& arrivals = arrivals_[local];
-            if (arrivals.empty() && samples[local] == 0) continue;
+            if (arrivals.empty() && samples_[local] == 0) continue;
             filter.pilot_pixel(uint64_t(y0_ + y) * uint64_t(film_width_) + uint64_t(x0_ + x),
-                               samples[local], arrivals);
+                               samples_[local], arrivals);
             std::vector<PilotArrival>().swap(arrivals);
         }
     if (!image_) return nullptr;
