@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -826,6 +827,54 @@ TEST(StreakFilm, RejectsBadSamplesAsTheTransientFilm) {
         const std::vector<float> img = film.steady_image();
         for (int c = 0; c < 3; ++c) EXPECT_EQ(img[(3 * 40 + 2) * 3 + size_t(c)], 1.f) << type;
     }
+}
+
+// A transient block keeps one entry per (pixel, bin) it received, in a table that grows with
+// them and is recycled for the next block: whatever their number and order, and after a block
+// that was dropped unmerged (an exception), the cube and the count AOV are exactly the sums of
+// the merged contributions (values on a grid of 1/8, so that every sum is exact).
+TEST(TransientFilm, BlocksSumEveryContributionThroughGrowthAndRecycling) {
+    auto scene = load_scene_string(
+        streak_scene("transient", "<string name=\"aovs\" value=\"count\"/>", "box"));
+    Film& film = scene->sensor().film();
+    const int W = 40, bins = 40;  // streak_scene's film: 40 x 36 pixels, bins of 0.1 from 6.5
+    std::vector<double> want(size_t(W) * 36 * bins * 3, 0.0), want_count(want.size() / 3, 0.0);
+    std::mt19937 rng(7);
+    auto round = [&](int samples, bool merged) {
+        auto block = film.make_block(0, 0, 8, 8);
+        for (int s = 0; s < samples; ++s) {
+            const int x = int(rng() % 8), y = int(rng() % 8);
+            ContributionList sample;
+            for (int n = int(rng() % 3) + 1; n > 0; --n) {  // may repeat a bin within a sample
+                const int bin = int(rng() % uint32_t(bins + 2)) - 1;  // -1 and 40: outside
+                const float k = float(rng() % 4 + 1) / 8.f;
+                sample.add(Color(k, 2 * k, 3 * k), 6.5 + (bin + 0.5) * 0.1);
+                if (!merged || bin < 0 || bin >= bins) continue;
+                const size_t at = (size_t(y) * W + size_t(x)) * bins + size_t(bin);
+                for (int c = 0; c < 3; ++c) want[at * 3 + size_t(c)] += k * (c + 1);
+                want_count[at] += 1;
+            }
+            block->put(Vec2{float(x) + 0.5f, float(y) + 0.5f}, sample);
+        }
+        if (merged) film.merge(*block);
+    };
+    round(20000, true);  // 8 x 8 pixels x 40 bins, nearly all touched: the table grows
+    round(3000, false);  // dropped: must leave nothing behind in the recycled storage
+    round(500, true);
+    const std::vector<Accumulator> acc = film.accumulators();
+    ASSERT_EQ(acc[0].count, want.size());
+    ASSERT_EQ(acc[1].count, want_count.size());
+    const auto* cube = static_cast<const float*>(acc[0].data);
+    const auto* count = static_cast<const float*>(acc[1].data);
+    size_t wrong = 0, wrong_count = 0;
+    for (size_t i = 0; i < want.size(); ++i) wrong += cube[i] != float(want[i]) ? 1 : 0;
+    for (size_t i = 0; i < want_count.size(); ++i)
+        wrong_count += count[i] != float(want_count[i]) ? 1 : 0;
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_EQ(wrong_count, 0u);
+    // More entries than the storage's first table holds (4096 slots at a load of 1/2).
+    EXPECT_GT(std::count_if(want_count.begin(), want_count.end(), [](double n) { return n > 0; }),
+              2048);
 }
 
 TEST(StreakFilm, SkipsRowsOutsideTheFootprint) {

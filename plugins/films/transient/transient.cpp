@@ -5,16 +5,20 @@
 // io::OutputSet: the files replace earlier outputs together or not at all.
 //
 // Memory: the cube (W*H*T*3 floats) is allocated once; per-pixel filter weights and depth
-// sums are doubles. Blocks hold one tile (plus the filter border) of the cube each, in double.
+// sums are doubles. A block holds, in double, the (pixel, bin) entries its tile (plus the
+// filter border) received in a pass.
 // Sums are accumulated per sample, then per pass in a block, then into the cube, so a single
 // small contribution is never added directly to a large running total.
 #include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <stdexcept>
+#include <vector>
 
 #include "femto/film.h"
 #include "femto/image_io.h"
@@ -29,20 +33,79 @@ using namespace femto;
 
 class TransientFilm;
 
-// A block's sums. Kept all-zero between uses and recycled through the film's pool: a pass
-// touches few of a pixel's bins, so clearing and merging only the touched (pixel, bin)
-// entries, instead of whole tiles of the cube, is what keeps a cube film fast.
+// A block's sums: one entry per (block pixel, bin) the block received, found through a small
+// open-addressing table. A pass gives a tile's block a few contributions per pixel spread over
+// all of its bins (a 32x32 tile of 1024 bins would be 25 MB dense), so a dense block missed
+// the cache on almost every contribution; the entries of a pass fit in the L2 cache instead,
+// and the merge walks them in order. Recycled through the film's pool, empty between uses.
 struct BlockStorage {
-    // Time-major ([bins][h][w]): a contribution splatted over the filter footprint touches a
-    // few neighbouring cache lines of one bin rather than one line per pixel.
     // Double: a pass may add many contributions to one entry (a light tracer's splats onto a
     // one-pixel meter: every light path of the pass), and float sums of that many lose digits.
-    std::vector<double> cube;  // [bins][h][w][3]
-    std::vector<float> count;  // [bins][h][w] contributions per bin (aovs="count")
-    std::vector<double> sq;    // [bins][h][w][3] sum of w * (per-sample bin value)^2
+    struct Entry {
+        uint64_t key;  // bin << 32 | block pixel (the merge takes them apart without dividing)
+        double rgb[3];
+    };
+    std::vector<Entry> entries;   // in the order of their first touch
+    std::vector<double> sq;       // [entry][3] sum of w * (per-sample bin value)^2 (variance)
+    std::vector<float> count;     // [entry] contributions (aovs="count")
+    std::vector<uint32_t> table;  // open addressing, linear probing: entry + 1, or 0 (free)
     std::vector<PixelSums> weights;
-    std::vector<uint64_t> touched_bits;  // one bit per (pixel, bin)
-    std::vector<uint32_t> touched;       // the (bin * pixels + pixel) entries set, in order
+    const bool variance, counts;  // the storage keeps the second moment / the counts
+    int shift = 64;               // 64 - log2(table size)
+
+    BlockStorage(bool with_variance, bool with_counts)
+        : variance(with_variance), counts(with_counts) {
+        grow();
+    }
+
+    /// The entry of `key`, created (zero) on its first touch.
+    size_t entry(uint64_t key) {
+        for (size_t i = home(key);; i = (i + 1) & (table.size() - 1)) {
+            const uint32_t e = table[i];
+            if (e == 0) return insert(key, i);
+            if (entries[e - 1].key == key) return e - 1;
+        }
+    }
+    /// Empties the entries and the table (keeping their memory for the next block).
+    void clear() {
+        for (size_t e = 0; e < entries.size(); ++e)  // each entry's slot is on its probe path
+            for (size_t i = home(entries[e].key);; i = (i + 1) & (table.size() - 1))
+                if (table[i] == e + 1) {
+                    table[i] = 0;
+                    break;
+                }
+        entries.clear();
+        sq.clear();
+        count.clear();
+    }
+
+private:
+    size_t home(uint64_t key) const {  // Fibonacci hashing: neighbouring keys spread apart
+        return size_t((key * 0x9E3779B97F4A7C15ull) >> shift);
+    }
+    size_t insert(uint64_t key, size_t slot) {
+        if (2 * (entries.size() + 1) > table.size()) {  // keep the load at most 1/2
+            grow();
+            for (slot = home(key); table[slot] != 0; slot = (slot + 1) & (table.size() - 1)) {
+            }
+        }
+        const size_t e = entries.size();
+        if (e + 1 > std::numeric_limits<uint32_t>::max()) throw std::length_error("block entries");
+        table[slot] = uint32_t(e + 1);
+        entries.push_back({key, {0, 0, 0}});
+        if (variance) sq.insert(sq.end(), 3, 0.0);
+        if (counts) count.push_back(0.f);
+        return e;
+    }
+    void grow() {
+        table.assign(std::max<size_t>(4096, 2 * table.size()), 0);
+        shift = 64 - std::countr_zero(table.size());
+        for (size_t e = 0; e < entries.size(); ++e) {
+            size_t i = home(entries[e].key);
+            while (table[i] != 0) i = (i + 1) & (table.size() - 1);
+            table[i] = uint32_t(e + 1);
+        }
+    }
 };
 
 // The splat itself is TimeResolvedBlock's; this block is its storage (slot = block pixel).
@@ -59,43 +122,31 @@ public:
     size_t slot(int x, int y) const { return size_t(y - y0_) * size_t(w_) + size_t(x - x0_); }
     PixelSums& sums(size_t local) { return st_->weights[local]; }
     void add(size_t local, int bin, float w, const Color& v) {
-        const size_t flat = touch(local, bin);
-        double* dst = &st_->cube[flat * 3];
+        const size_t e = st_->entry(key(local, bin));
+        double* dst = st_->entries[e].rgb;
         dst[0] += w * v.r;
         dst[1] += w * v.g;
         dst[2] += w * v.b;
-        if (count_) st_->count[flat] += 1.f;
+        if (st_->counts) st_->count[e] += 1.f;
     }
     // Variance needs this sample's value per bin (several contributions may share a bin): w * v
     // into the cube and w * v^2 into the second moment.
-    bool totals() const { return variance_; }
+    bool totals() const { return st_->variance; }
     void add_total(size_t local, int bin, float w, const Color& v, int n) {
-        const size_t flat = touch(local, bin);
+        const size_t e = st_->entry(key(local, bin));
         for (int ch = 0; ch < 3; ++ch) {
-            st_->cube[flat * 3 + size_t(ch)] += w * v[ch];
-            st_->sq[flat * 3 + size_t(ch)] += w * v[ch] * v[ch];
+            st_->entries[e].rgb[ch] += w * v[ch];
+            st_->sq[e * 3 + size_t(ch)] += w * v[ch] * v[ch];
         }
-        if (count_) st_->count[flat] += float(n);
+        if (st_->counts) st_->count[e] += float(n);
     }
-
-    /// Index of (local pixel, bin) in the storage; marks it as holding data.
-    size_t touch(size_t local, int bin) {
-        const size_t flat = size_t(bin) * pixels_ + local;
-        uint64_t& word = st_->touched_bits[flat >> 6];
-        const uint64_t bit = uint64_t(1) << (flat & 63);
-        if (!(word & bit)) {
-            word |= bit;
-            st_->touched.push_back(uint32_t(flat));
-        }
-        return flat;
-    }
+    static uint64_t key(size_t local, int bin) { return uint64_t(bin) << 32 | uint64_t(local); }
 
     size_t pixels_;
     std::unique_ptr<BlockStorage> st_;
-    bool variance_, count_;      // the storage has the second moment / the counts
-    mutable bool clean_ = true;  // all sums merged (and zeroed) since the last put
+    mutable bool clean_ = true;  // all sums merged (and the storage emptied) since the last put
     // Film pixel of each block pixel, or SIZE_MAX outside the film: merge looks it up instead
-    // of dividing twice per touched entry (merge is a hot loop of cube films).
+    // of working it out per entry (merge is a hot loop of cube films).
     std::vector<size_t> dst_of_local_;
 };
 
@@ -167,14 +218,16 @@ public:
         add_expected_weight(samples_per_pixel, weights_);
     }
 
-    // A block stores every bin of its pixels (cube, second moment, counts, touched bits).
+    // At most, a block holds an entry for every bin of its pixels (sums, second moment,
+    // counts, key and up to four table slots).
     size_t block_bytes_per_pixel() const override {
-        const size_t per_bin =
-            3 * sizeof(double) * (variance_enabled_ ? 2 : 1) + (count_enabled_ ? sizeof(float) : 0);
-        return size_t(grid_.bins) * per_bin + size_t(grid_.bins + 7) / 8;
+        const size_t per_bin = 3 * sizeof(double) * (variance_enabled_ ? 2 : 1) +
+                               (count_enabled_ ? sizeof(float) : 0) + sizeof(uint64_t) +
+                               4 * sizeof(uint32_t);
+        return size_t(grid_.bins) * per_bin;
     }
 
-    /// A zeroed storage for a block of `pixels` pixels, recycled when possible.
+    /// An empty storage for a block of `pixels` pixels, recycled when possible.
     std::unique_ptr<BlockStorage> acquire_storage(size_t pixels) const {
         std::unique_ptr<BlockStorage> st;
         {
@@ -184,15 +237,8 @@ public:
                 pool_.pop_back();
             }
         }
-        if (!st) st = std::make_unique<BlockStorage>();
-        const size_t entries = pixels * size_t(grid_.bins);
-        if (st->weights.size() < pixels) {  // growing keeps the all-zero invariant
-            st->weights.resize(pixels);
-            st->cube.resize(entries * 3, 0.0);
-            if (variance_enabled_) st->sq.resize(entries * 3, 0.0);
-            if (count_enabled_) st->count.resize(entries, 0.f);
-            st->touched_bits.resize((entries + 63) / 64, 0);
-        }
+        if (!st) st = std::make_unique<BlockStorage>(variance_enabled_, count_enabled_);
+        if (st->weights.size() < pixels) st->weights.resize(pixels);  // all zero between uses
         return st;
     }
     void release_storage(std::unique_ptr<BlockStorage> st) const {
@@ -208,24 +254,27 @@ public:
         const size_t bins = size_t(grid_.bins);
         const size_t block_pixels = block.pixels_;
         const std::vector<size_t>& dst_of = block.dst_of_local_;
-        for (const uint32_t flat : st.touched) {
-            const size_t bin = flat / block_pixels, local = flat - bin * block_pixels;
-            const size_t dst = dst_of[local];
-            if (dst != SIZE_MAX) {
-                for (int c = 0; c < 3; ++c)
-                    cube_[(dst * bins + bin) * 3 + c] += float(st.cube[size_t(flat) * 3 + c]);
-                if (variance_enabled_)
-                    for (int c = 0; c < 3; ++c)
-                        sq_[(dst * bins + bin) * 3 + c] += float(st.sq[size_t(flat) * 3 + c]);
-                if (count_enabled_) count_[dst * bins + bin] += st.count[flat];
-            }
-            for (int c = 0; c < 3; ++c) st.cube[size_t(flat) * 3 + c] = 0.0;
+        // The film's entry of block entry e, or SIZE_MAX outside the film.
+        auto film_entry = [&](size_t e) {
+            const uint64_t key = st.entries[e].key;
+            const size_t bin = size_t(key >> 32), local = size_t(key & 0xffffffffu);
+            return dst_of[local] == SIZE_MAX ? SIZE_MAX : dst_of[local] * bins + bin;
+        };
+        // Each (pixel, bin) has one entry, so the order of the adds does not change the cube.
+        // Its entries lie anywhere in the cube: ask for them a few entries ahead.
+        constexpr size_t kAhead = 24;  // the merge took 30 % less time than without
+        for (size_t e = 0; e < st.entries.size(); ++e) {
+            if (e + kAhead < st.entries.size())
+                if (const size_t at = film_entry(e + kAhead); at != SIZE_MAX)
+                    __builtin_prefetch(&cube_[at * 3], 1);
+            const size_t at = film_entry(e);
+            if (at == SIZE_MAX) continue;
+            for (int c = 0; c < 3; ++c) cube_[at * 3 + c] += float(st.entries[e].rgb[c]);
             if (variance_enabled_)
-                for (int c = 0; c < 3; ++c) st.sq[size_t(flat) * 3 + c] = 0.0;
-            if (count_enabled_) st.count[flat] = 0.f;
-            st.touched_bits[flat >> 6] = 0;  // whole words: every bit in them is in `touched`
+                for (int c = 0; c < 3; ++c) sq_[at * 3 + c] += float(st.sq[e * 3 + c]);
+            if (count_enabled_) count_[at] += st.count[e];
         }
-        st.touched.clear();
+        st.clear();
         for (size_t local = 0; local < block_pixels; ++local) {
             PixelSums& s = st.weights[local];
             if (s.empty()) continue;
@@ -338,8 +387,6 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h)
     : TimeResolvedBlock(film, x0, y0, w, h),
       pixels_(size_t(w_) * size_t(h_)),
       st_(film.acquire_storage(pixels_)),
-      variance_(!st_->sq.empty()),
-      count_(!st_->count.empty()),
       dst_of_local_(pixels_) {
     for (int by = 0; by < h_; ++by)
         for (int bx = 0; bx < w_; ++bx) {
@@ -352,13 +399,9 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h)
 }
 
 CubeBlock::~CubeBlock() {
-    if (!clean_) {  // never merged (an exception): restore the all-zero invariant
-        std::fill(st_->cube.begin(), st_->cube.end(), 0.0);
-        std::fill(st_->sq.begin(), st_->sq.end(), 0.0);
-        std::fill(st_->count.begin(), st_->count.end(), 0.f);
-        std::fill(st_->touched_bits.begin(), st_->touched_bits.end(), 0);
+    if (!clean_) {  // never merged (an exception): leave the storage empty for the next block
+        st_->clear();
         std::fill(st_->weights.begin(), st_->weights.end(), PixelSums());
-        st_->touched.clear();
     }
     static_cast<const TransientFilm&>(film_).release_storage(std::move(st_));
 }
