@@ -201,10 +201,11 @@ BENCHMARK(Intersect);
 
 // FilmBlock::put of one camera sample of `contributions` contributions at random times
 // inside the window, into a 32x32 tile's block: hdrfilm or a 1024-bin transient film, with
-// the box or the Gaussian reconstruction filter.
+// the box or the Gaussian reconstruction filter. The block merges into the film after every
+// 2,048 samples, as a render's pass of 2 spp would (a transient block grows with what it holds).
 void Splat(benchmark::State& state, const std::string& film, const std::string& rfilter) {
     auto scene = cornell_box(film, rfilter);
-    const Film& f = scene->sensor().film();
+    Film& f = scene->sensor().film();
     auto block = f.make_block(0, 0, 32, 32);
     const auto pos = uniform_points(kInputs, 7), t = uniform_points(kInputs, 8);
     const int contributions = int(state.range(0));
@@ -217,7 +218,7 @@ void Splat(benchmark::State& state, const std::string& film, const std::string& 
             list.add(Color(0.5f, 0.25f, 0.125f), 3.6 + 25.0 * double(t[(k + c) & (kInputs - 1)].x));
         list.set_sensor_distance(4.0);
         block->put({pos[k].x * 32, pos[k].y * 32}, list);
-        ++i;
+        if (++i % 2048 == 0) f.merge(*block);
     }
     state.SetItemsProcessed(state.iterations());
 }
