@@ -16,7 +16,8 @@ log="$results/ray_rate_run.log"
 bench_log_header "$log"
 
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+temp_scenes=()
+trap 'rm -rf "$work" "${temp_scenes[@]}"' EXIT
 # scene, its -D settings (the path tracer renders about a second, BDPT 2-5)
 scenes=(
     "cornell-box|-D res=64 -D spp=256"
@@ -31,7 +32,9 @@ for run in $(seq 1 "$runs"); do
         scene=${entry%%|*}
         read -r -a defines <<< "${entry#*|}"
         for integrator in "${integrators[@]}"; do
-            xml="$work/$scene-$integrator.xml"
+            # Next to the scene: it includes files by paths relative to its folder.
+            xml=$(mktemp -p "$root/scenes/$scene" ".ray-rate-$integrator-XXXXXX.xml")
+            temp_scenes+=("$xml")
             # The scene's integrator with its type replaced and its time-sampling strategies
             # dropped (steady sampling everywhere, which every integrator takes).
             sed -E -e "s/<integrator type=\"[^\"]+\"/<integrator type=\"$integrator\"/" \
