@@ -17,6 +17,7 @@ outside A's range). The ratio t_path / t_A (> 1: A reaches it sooner) gets a 90 
 Usage: bidir.py FEMTO OUT_DIR [--quick]
 Writes OUT_DIR/bidir_runs.csv, bidir_ratios.csv, bidir.png.
 """
+import atexit
 import csv
 import warnings
 import math
@@ -126,7 +127,10 @@ def main():
                 continue
             xml = {}
             for integ in INTEGRATORS:
-                xml[integ] = os.path.join(work, f"{scene}-{tfilter}-{integ}.xml")
+                # Next to the scene: it includes files by paths relative to its folder.
+                xml[integ] = os.path.join(ROOT, "scenes", scene,
+                                          f".bidir-{os.getpid()}-{tfilter}-{integ}.xml")
+                atexit.register(lambda path=xml[integ]: os.path.exists(path) and os.remove(path))
                 open(xml[integ], "w").write(scene_xml(scene, integ, depth, hide, tfilter))
             halves = [render(femto, xml["transient_bdpt"], defines, ref_spp // 2, 1000 + h,
                              os.path.join(work, f"ref{h}"))[2] for h in (1, 2)]
