@@ -68,8 +68,10 @@ struct BlockStorage {
     }
     /// Empties the entries and the table (keeping their memory for the next block).
     void clear() {
-        for (size_t e = 0; e < entries.size(); ++e)  // each entry's slot is on its probe path
-            for (size_t i = home(entries[e].key);; i = (i + 1) & (table.size() - 1))
+        // Latest first: the slots between an entry's home and its own hold earlier entries
+        // (so it was when it was placed, and growing re-places them in order), still there.
+        for (size_t e = entries.size(); e-- > 0;)
+            for (size_t i = home(entries[e].key); table[i] != 0; i = (i + 1) & (table.size() - 1))
                 if (table[i] == e + 1) {
                     table[i] = 0;
                     break;
@@ -91,10 +93,16 @@ private:
         }
         const size_t e = entries.size();
         if (e + 1 > std::numeric_limits<uint32_t>::max()) throw std::length_error("block entries");
-        table[slot] = uint32_t(e + 1);
         entries.push_back({key, {0, 0, 0}});
-        if (variance) sq.insert(sq.end(), 3, 0.0);
-        if (counts) count.push_back(0.f);
+        try {  // an allocation that fails leaves the storage as it was
+            if (variance) sq.insert(sq.end(), 3, 0.0);
+            if (counts) count.push_back(0.f);
+        } catch (...) {
+            entries.pop_back();
+            if (variance) sq.resize(3 * e);
+            throw;
+        }
+        table[slot] = uint32_t(e + 1);
         return e;
     }
     void grow() {
@@ -218,8 +226,8 @@ public:
         add_expected_weight(samples_per_pixel, weights_);
     }
 
-    // At most, a block holds an entry for every bin of its pixels (sums, second moment,
-    // counts, key and up to four table slots).
+    // What a block holds per pixel once every bin of its pixels has an entry (sums, second
+    // moment, counts, key and up to four table slots; the vectors' spare capacity aside).
     size_t block_bytes_per_pixel() const override {
         const size_t per_bin = 3 * sizeof(double) * (variance_enabled_ ? 2 : 1) +
                                (count_enabled_ ? sizeof(float) : 0) + sizeof(uint64_t) +
