@@ -60,7 +60,7 @@ struct BlockStorage {
 
     /// The entry of `key`, created (zero) on its first touch.
     size_t entry(uint64_t key) {
-        for (size_t i = home(key);; i = (i + 1) & (table.size() - 1)) {
+        for (size_t i = home(key);; i = next(i)) {
             const uint32_t e = table[i];
             if (e == 0) return insert(key, i);
             if (entries[e - 1].key == key) return e - 1;
@@ -71,7 +71,7 @@ struct BlockStorage {
         // Latest first: the slots between an entry's home and its own hold earlier entries
         // (so it was when it was placed, and growing re-places them in order), still there.
         for (size_t e = entries.size(); e-- > 0;)
-            for (size_t i = home(entries[e].key); table[i] != 0; i = (i + 1) & (table.size() - 1))
+            for (size_t i = home(entries[e].key); table[i] != 0; i = next(i))
                 if (table[i] == e + 1) {
                     table[i] = 0;
                     break;
@@ -85,11 +85,16 @@ private:
     size_t home(uint64_t key) const {  // Fibonacci hashing: neighbouring keys spread apart
         return size_t((key * 0x9E3779B97F4A7C15ull) >> shift);
     }
+    size_t next(size_t slot) const { return (slot + 1) & (table.size() - 1); }
+    size_t free_slot(uint64_t key) const {  // where linear probing places a new key
+        size_t slot = home(key);
+        while (table[slot] != 0) slot = next(slot);
+        return slot;
+    }
     size_t insert(uint64_t key, size_t slot) {
         if (2 * (entries.size() + 1) > table.size()) {  // keep the load at most 1/2
             grow();
-            for (slot = home(key); table[slot] != 0; slot = (slot + 1) & (table.size() - 1)) {
-            }
+            slot = free_slot(key);
         }
         const size_t e = entries.size();
         if (e + 1 > std::numeric_limits<uint32_t>::max()) throw std::length_error("block entries");
@@ -108,11 +113,8 @@ private:
     void grow() {
         table.assign(std::max<size_t>(4096, 2 * table.size()), 0);
         shift = 64 - std::countr_zero(table.size());
-        for (size_t e = 0; e < entries.size(); ++e) {
-            size_t i = home(entries[e].key);
-            while (table[i] != 0) i = (i + 1) & (table.size() - 1);
-            table[i] = uint32_t(e + 1);
-        }
+        for (size_t e = 0; e < entries.size(); ++e)
+            table[free_slot(entries[e].key)] = uint32_t(e + 1);
     }
 };
 
