@@ -12,7 +12,9 @@ scenes/btf-sphere/scene.xml), renders
       (var_r = (h1 - h2)^2 / 4 for the mean r) and subtracted from every squared error;
   (b) the unfiltered BTF multisampled at N = 1, 2, 4, ..., 256 spp;
   (c) the prefiltered BTF at 1 spp for every filter (box, gaussian, lanczos) and scale s
-      (0.5, 1, 2: scale_spatial = scale_light = scale_view = s),
+      (0.5, 1, 2: scale_spatial = scale_light = scale_view = s), each with the mip-map's
+      level (spatial_lookup mipmap, the thesis' lookup) and with the exact box over the
+      pixel's footprint (spatial_lookup footprint; configurations named "box-footprint" etc.),
 
 all with `ldsampler` (Owen-scrambled (0,2)-sequence; complete nets at powers of two), a box
 pixel filter and the `direct` integrator; (b) and (c) RUNS times each with seeds 1..RUNS.
@@ -54,6 +56,8 @@ Usage: btf.py FEMTO OUT_DIR [--btf a|b] [--res 128] [--ref-spp 4096] [--runs 3] 
                             [--threads N] [--quick]
        btf.py FEMTO OUT_DIR --analyse     the speed-ups and the plot again from btf_runs.csv
        btf.py FEMTO OUT_DIR --cost [--btf a|b] [--res 128] [--runs 3]   the time per sample, btf_cost.csv
+       btf.py FEMTO OUT_DIR --bound [--btf a|b] [--res 128] [--ref-spp 4096] [--runs 3]
+                                          the speed-up no prefiltering can exceed, btf_bound.csv
 Writes OUT_DIR/btf_runs.csv, btf_speedup.csv, btf_build.csv, btf.png.
 """
 import csv
@@ -81,6 +85,15 @@ RADIUS = 1.0
 TEXELS_PER_UNIT = 128 * 64 / (2 * math.pi * RADIUS)  # uv_scale * width / (2 pi R)
 FOV = 30.0
 FILTERS = ["box", "gaussian", "lanczos"]
+# The prefiltered configurations' names: the pyramid's kernel, and with "-footprint" the exact
+# box over the pixel's footprint (spatial_lookup footprint) in place of the mip-map's level.
+CONFIGS = FILTERS + [f + "-footprint" for f in FILTERS]
+
+
+def config_defines(name):
+    """The scene parameters of a prefiltered configuration's name."""
+    kernel, _, lookup = name.partition("-")
+    return {"prefilter": "true", "filter": kernel, "lookup": lookup or "mipmap"}
 SCALES = ["0.5", "1", "2"]
 
 
@@ -126,6 +139,18 @@ def scene_xml(distance, btf, cache=False):
         assert no_cache in text
         text = text.replace(no_cache, '<boolean name="cache" value="true"/>')
     return text.replace('<default name="distance" value="d2"/>', "")
+
+
+def mask_xml(distance, btf):
+    """scene_xml with the sphere turned into a black emitter of radiance 1 and no light: a
+    pixel's value is the fraction of it that the sphere covers (at 1 spp: whether the camera
+    sample hits it, with the same camera samples as the BTF renders of the same seed)."""
+    text = scene_xml(distance, btf)
+    start, end = text.index('<bsdf type="btf">'), text.index("</bsdf>") + len("</bsdf>")
+    text = (text[:start] + '<bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>'
+            '<emitter type="area"><rgb name="radiance" value="1"/></emitter>' + text[end:])
+    start, end = text.index('<emitter type="directional">'), text.index("</scene>")
+    return text[:start] + text[end:]
 
 
 def render(femto, xml, defines, seed, out, threads):
@@ -235,6 +260,10 @@ def main():
              option("--threads"))
         summarise(out_dir)
         return
+    if "--bound" in sys.argv:
+        bound(femto, out_dir, int(option("--res", "128")), int(option("--ref-spp", "4096")),
+              int(option("--runs", "3")), option("--threads"))
+        return
     quick = "--quick" in sys.argv
     res = int(option("--res", "32" if quick else "128"))
     ref_spp = int(option("--ref-spp", "256" if quick else "4096"))
@@ -291,10 +320,9 @@ def main():
 
         for n in budgets:
             measure("multisampled", "", "", n, {"prefilter": "false"})
-        for filt in FILTERS:
+        for filt in CONFIGS:
             for scale in SCALES:
-                measure("prefiltered", filt, scale, 1,
-                        {"prefilter": "true", "filter": filt, "scale": scale})
+                measure("prefiltered", filt, scale, 1, dict(config_defines(filt), scale=scale))
     runs_csv.close()
     shutil.rmtree(work, ignore_errors=True)
     summarise(out_dir)
@@ -317,15 +345,87 @@ def cost(femto, out_dir, res, runs, threads):
             xml = os.path.join(work, f"btf-sphere-{dname}.xml")
             open(xml, "w").write(scene_xml(camera_distance(r, res), btf, cache))
             for seed in range(1, runs + 1):
-                for mode, filt in [("multisampled", "")] + [("prefiltered", x) for x in FILTERS]:
-                    defines = {"res": str(res), "spp": str(COST_SPP),
-                               "prefilter": "true" if filt else "false"}
+                for mode, filt in [("multisampled", "")] + [("prefiltered", x) for x in CONFIGS]:
+                    defines = {"res": str(res), "spp": str(COST_SPP), "prefilter": "false"}
                     if filt:
-                        defines["filter"] = filt
+                        defines.update(config_defines(filt))
                     t, _ = render(femto, xml, defines, seed, os.path.join(work, "x"), threads)
                     w.writerow([dname, r, res, mode, filt, COST_SPP, seed, t])
                     f.flush()
                     print(f"  {dname} {mode:12s} {filt:8s} {COST_SPP} spp: {t:.2f} s", flush=True)
+    shutil.rmtree(work, ignore_errors=True)
+
+
+def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
+    """An upper bound on any prefiltering's equal-RMSE speed-up at 1 spp (btf_bound.csv): a
+    1-spp render is an oracle's whose camera samples, where they hit the sphere, return the
+    pixel's exact value, so that every error left is the silhouette's, which a 1-spp sample
+    hits or misses whatever the material returns. Two oracles: the exact footprint mean (the
+    reference's pixel value over the fraction c of the pixel the sphere covers: what an
+    exact filter of the surface over the pixel's footprint returns) and the pixel's value
+    itself (lower error where c < 1, but no material can know c). Both are exact inside
+    the sphere, terminator included. c comes from renders of the sphere as an emitter of
+    radiance 1 (COVERAGE_SPP samples), the hits from the same scene at 1 spp with the seeds of
+    the BTF renders (the same camera samples). The equal-error N comes from the multisampled
+    medians of btf_runs.csv (run first, at the same RES), and the bound on the speed-up is that
+    N: the time of N unfiltered samples over one prefiltered sample of the same cost."""
+    rows = list(csv.DictReader(open(os.path.join(out_dir, "btf_runs.csv"))))
+    work = tempfile.mkdtemp()
+    btf, cache = btf_file(femto, work)
+    out_rows = []
+    for i, r in enumerate(RATIOS):
+        dname, dist = f"d{i}", camera_distance(r, res)
+        ms_runs = {}
+        for row in rows:
+            if row["distance"] == dname and row["mode"] == "multisampled":
+                assert int(row["res"]) == res, "btf_runs.csv was measured at another --res"
+                ms_runs.setdefault(int(row["spp"]), []).append(
+                    (float(row["rmse"]), float(row["seconds"])))
+        ms = {n: tuple(float(np.median([x[k] for x in v])) for k in range(2))
+              for n, v in ms_runs.items()}
+        xml = os.path.join(work, f"btf-sphere-{dname}.xml")
+        open(xml, "w").write(scene_xml(dist, btf, cache))
+        mask = os.path.join(work, f"mask-{dname}.xml")
+        open(mask, "w").write(mask_xml(dist, btf))
+        base = {"res": str(res)}
+        halves = [render(femto, xml, dict(base, prefilter="false", spp=str(ref_spp // 2)),
+                         1000 + h, os.path.join(work, f"ref{h}"), threads)[1] for h in (1, 2)]
+        ref = Reference(halves)
+        noise = math.sqrt(float(ref.var.mean()))
+        _, cover = render(femto, mask, dict(base, spp=str(coverage_spp)), 1,
+                          os.path.join(work, "cover"), threads)
+        c = cover[..., :1]
+        footprint_mean = np.where(c > 0, ref.image / np.maximum(c, 1e-30), 0.0)
+        errs = {"footprint": [], "pixel": []}
+        for seed in range(1, runs + 1):
+            _, hit = render(femto, mask, dict(base, spp="1"), seed, os.path.join(work, "hit"),
+                            threads)
+            h = hit[..., :1]
+            for name, value in (("footprint", footprint_mean), ("pixel", ref.image)):
+                errs[name].append(math.sqrt(float(((h * value - ref.image) ** 2).mean())))
+        row = [dname, r, res, ref_spp, f"{noise:.3g}", f"{float(c.mean()):.5g}",
+               f"{int(((c > 0) & (c < 1)).sum())}"]
+        for name in ("footprint", "pixel"):
+            e = float(np.median(errs[name]))
+            n, _, flag = (equal_error(ms, e) if e > 0 else
+                          (math.inf, math.inf, "no silhouette in view: the oracle is exact"))
+            row += [f"{e:.6g}", f"{n:.3g}", flag]
+            print(f"{dname} (r {r}): oracle ({name} value) RMSE {e:.4g} "
+                  f"(runs {', '.join('%.4g' % x for x in errs[name])}): equal to N = {n:.3g} "
+                  f"unfiltered samples {flag}", flush=True)
+        print(f"  {dname}: reference noise {noise:.3g}, sphere covers {c.mean():.4f} of the "
+              f"image, {row[6]} pixels in part", flush=True)
+        out_rows.append(row)
+    with open(os.path.join(out_dir, "btf_bound.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["distance", "r", "res", "ref_spp", "ref_noise_rmse", "coverage_mean",
+                    "partly_covered_pixels", "rmse_oracle_footprint", "bound_footprint",
+                    "note_footprint", "rmse_oracle_pixel", "bound_pixel", "note_pixel"])
+        w.writerows(out_rows)
+    for col, name in ((8, "footprint mean"), (11, "pixel value")):
+        v = [float(row[col]) for row in out_rows if row[0] != "d0"]
+        print(f"bound on the mean speed-up over d1-d4 ({name} oracle): {np.mean(v):.3g} "
+              f"(d1..d4: {', '.join('%.3g' % x for x in v)})", flush=True)
     shutil.rmtree(work, ignore_errors=True)
 
 
@@ -384,7 +484,7 @@ def summarise(out_dir):
         w.writerows(speed_rows)
     print("mean speed-up over d1-d4, whole image / inner pixels (arithmetic mean, geometric "
           "mean):", flush=True)
-    for filt in FILTERS:
+    for filt in CONFIGS:
         for scale in SCALES:
             for col, what in ((11, "whole"), (14, "inner"), (17, "whole, by cost"),
                               (18, "inner, by cost")):
@@ -417,8 +517,10 @@ def plot(data, path):
             for n in (ns[0], ns[-1]):
                 ax.annotate(f"N={n}", (ms[n][1], ms[n][k]), fontsize=6)
             for (filt, scale), v in sorted(pf.items()):
-                ax.loglog([v[1]], [v[k]], markers[filt], color=colours[scale], ms=5,
-                          mfc="none", label=f"prefiltered {filt}, s = {scale}")
+                kernel = filt.partition("-")[0]
+                ax.loglog([v[1]], [v[k]], markers[kernel], color=colours[scale], ms=5,
+                          mfc=colours[scale] if kernel != filt else "none",
+                          label=f"prefiltered {filt}, s = {scale}")
             ax.set_title(f"{dname}: r = {r} ({res}x{res})", fontsize=9)
             ax.set_xlabel("render time (s)", fontsize=8)
             ax.set_ylabel(what, fontsize=8)

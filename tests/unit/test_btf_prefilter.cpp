@@ -235,6 +235,51 @@ TEST(BtfPrefilter, LookupSelectsAndBlendsLevelsAndCones) {
     near(h.lookup(uv1, 2.0, 80 * deg, 60 * deg, l, v), h.value(1, 1, 0, 3, 3, 12, 57), 1e-6f);
 }
 
+// lookup_box() is the mean of a level's bilinear texture over the rectangle: against a 2D
+// midpoint rule of 400 x 400 bilinear lookups (h.lookup at ratio 0 is level 0's bilinear
+// texture), for rectangles that straddle texel centres, wrap around the texture's edges, are
+// thinner than a texel, and (on level 1) are too wide for level 0.
+TEST(BtfPrefilter, BoxLookupIsTheMeanOverTheRectangle) {
+    synth::Options o = btf_a(Format::Dfmf);
+    o.width = 16;
+    o.height = 8;
+    const Hierarchy h(factors_of(o, "box.dfmf"), o.directions, o.directions, PrefilterSettings{});
+    const auto l = at_sample(12), v = at_sample(57);
+    struct Case {
+        Vec2 uv, extent;  // extent in level-0 texels
+        int level;        // the level lookup_box should take
+    };
+    for (const Case& t :
+         {Case{{0.31f, 0.62f}, {3.3f, 2.7f}, 0}, Case{{0.01f, 0.97f}, {4.f, 1.5f}, 0},
+          Case{{0.5f, 0.5f}, {0.2f, 7.9f}, 0}, Case{{0.77f, 0.2f}, {11.2f, 5.f}, 1}}) {
+        const int n = 400;
+        const double scale = std::ldexp(1.0, t.level);  // level texels per level-0 texel: 1/scale
+        Color sum(0.f);
+        double sr = 0, sg = 0, sb = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const double du = (i + 0.5) / n - 0.5, dv = (j + 0.5) / n - 0.5;
+                const Vec2 uv(float(t.uv.x + du * t.extent.x / o.width),
+                              float(t.uv.y + dv * t.extent.y / o.height));
+                // Level `level`'s bilinear texture: lookup at a ratio that selects it alone.
+                const Color c = h.lookup(uv, scale, 0, 0, l, v);
+                sr += c.r;
+                sg += c.g;
+                sb += c.b;
+            }
+        sum = Color(float(sr / (n * n)), float(sg / (n * n)), float(sb / (n * n)));
+        const Color box = h.lookup_box(t.uv, t.extent, 0, 0, l, v);
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(box[c], sum[c], 2e-4 * std::abs(sum[c]) + 1e-6)
+                << "uv (" << t.uv.x << ", " << t.uv.y << "), extent (" << t.extent.x << ", "
+                << t.extent.y << "), channel " << c;
+    }
+    // A point (zero extent) is the bilinear lookup.
+    const Color point = h.lookup_box({0.4f, 0.3f}, {0.f, 0.f}, 0, 0, l, v);
+    const Color bilinear = h.lookup({0.4f, 0.3f}, 0, 0, 0, l, v);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(point[c], bilinear[c], 1e-6f);
+}
+
 TEST(BtfPrefilter, BadSettingsAreRefused) {
     const synth::Options o = btf_a(Format::Dfmf);
     const Factors f = factors_of(o, "bad.dfmf");

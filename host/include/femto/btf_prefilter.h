@@ -95,6 +95,14 @@ public:
     /// weights between the sampled directions.
     Color lookup(Vec2 uv, double texel_ratio, double light_cone, double view_cone,
                  const DirectionMesh::Weights& light, const DirectionMesh::Weights& view) const;
+    /// As lookup(), but the spatial factor is the exact mean of a level's bilinear texture
+    /// over the rectangle of `extent` finest-level texels (width along u, height along v)
+    /// centred at uv: a box filter over a pixel's footprint instead of a mip-map's
+    /// texel-aligned blocks. The level is the finest on which the rectangle spans at most
+    /// kBoxTexels texels along both sides (the finest level up to footprints of that size).
+    Color lookup_box(Vec2 uv, Vec2 extent, double light_cone, double view_cone,
+                     const DirectionMesh::Weights& light, const DirectionMesh::Weights& view) const;
+    static constexpr double kBoxTexels = 8;
     uint64_t memory_bytes() const;
     /// The singular values (decreasing) of level `level`'s unfiltered-cone matrix of channel c,
     /// (lights x views) x texels: how many components that level needs for a share of its
@@ -115,6 +123,9 @@ private:
     void bracket_cone(double angle, size_t& i0, size_t& i1, float& t) const;
     /// Adds weight x the bilinear spatial factor of level `level` at uv to s (3 x k).
     void add_spatial(int level, Vec2 uv, float weight, float* s) const;
+    /// The angular factors at the cones and directions, dotted with the spatial factor s.
+    Color combine(const float* s, double light_cone, double view_cone,
+                  const DirectionMesh::Weights& light, const DirectionMesh::Weights& view) const;
 
     uint32_t lights_ = 0, views_ = 0, components_ = 0;
     std::vector<double> cones_;  // radians

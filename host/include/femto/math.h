@@ -108,6 +108,10 @@ inline float tan2_theta(const Vec3& w) { return sin2_theta(w) / (w.z * w.z); }
 /// camera ray: their origins and directions (pbrt's ray differentials).
 struct RayDifferential {
     Vec3 dx_o, dx_d, dy_o, dy_d;
+    /// From the ray's film position to the centre of the pixel it was taken for, in pixels
+    /// (set by the renderer; 0 for a ray through the centre): a prefiltering material centres
+    /// its filter on the pixel, the area a box-filtered pixel averages, not on the sample.
+    Vec2 to_pixel_centre{0.f, 0.f};
 };
 
 struct Ray {

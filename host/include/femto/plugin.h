@@ -56,7 +56,9 @@ namespace femto {
 /// (26: a pilot in the image: Film::pilot_in_image(), Film::begin_pilot(bool),
 ///  TemporalFilter::pilot_in_image(), pilot_pixel() takes the pixel's sample count; PilotBlock's
 ///  layout.)
-inline constexpr uint32_t kPluginAbiVersion = 26;
+/// (27: RayDifferential::to_pixel_centre and PixelFootprint::to_pixel_centre change Ray's
+///  differential and Hit's layout.)
+inline constexpr uint32_t kPluginAbiVersion = 27;
 
 struct PluginDescriptor {
     uint32_t abi_version;

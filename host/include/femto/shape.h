@@ -33,9 +33,13 @@ class Shape;
 struct PixelFootprint {
     bool valid = false;
     Vec2 duv_dx, duv_dy;  ///< change of Hit::uv per pixel step in x and y
-    Vec3 dp_dx, dp_dy;    ///< change of the position (world)
-    Vec3 dn_dx, dn_dy;    ///< change of the shading normal (world)
-    Vec3 dd_dx, dd_dy;    ///< change of the ray direction (world, unit directions)
+    /// From the hit's film position to its pixel's centre, in pixel steps (as duv_dx/duv_dy
+    /// count them): the pixel's centre lies at uv + to_pixel_centre.x * duv_dx +
+    /// to_pixel_centre.y * duv_dy (RayDifferential::to_pixel_centre).
+    Vec2 to_pixel_centre{0.f, 0.f};
+    Vec3 dp_dx, dp_dy;  ///< change of the position (world)
+    Vec3 dn_dx, dn_dy;  ///< change of the shading normal (world)
+    Vec3 dd_dx, dd_dy;  ///< change of the ray direction (world, unit directions)
     /// Half-angle (radians) of the light directions the current light sample stands for over
     /// the pixel: the emitter's own cone at p plus half the turn of its direction across the
     /// footprint. Set by sample_emitter(scene, Hit&, sampler) (femto/transport.h) before the

@@ -256,7 +256,8 @@ void EmbreeScene::fill_hit(const Ray& ray, const RTCRayHit& rh, Hit& hit) const 
     if (ray.differential) {  // lines map to lines: the footprint is found in the group's space
         const RayDifferential& rd = *ray.differential;
         local_differential = {to_local.point(rd.dx_o), to_local.vector(rd.dx_d),
-                              to_local.point(rd.dy_o), to_local.vector(rd.dy_d)};
+                              to_local.point(rd.dy_o), to_local.vector(rd.dy_d),
+                              rd.to_pixel_centre};
         local.differential = &local_differential;
     }
     const Shape* shape = placed.group->shapes[rh.hit.geomID];

@@ -178,7 +178,6 @@ void Hierarchy::add_spatial(int level, Vec2 uv, float weight, float* s) const {
 Color Hierarchy::lookup(Vec2 uv, double texel_ratio, double light_cone, double view_cone,
                         const DirectionMesh::Weights& light,
                         const DirectionMesh::Weights& view) const {
-    const uint32_t k = components_;
     // The spatial factor, blended between the two levels around log2(texel_ratio).
     float s[3 * kMaxComponents] = {};
     const double level =
@@ -187,6 +186,81 @@ Color Hierarchy::lookup(Vec2 uv, double texel_ratio, double light_cone, double v
     const float tl = float(level - l0);
     add_spatial(l0, uv, 1.f - tl, s);
     if (tl > 0.f) add_spatial(l1, uv, tl, s);
+    return combine(s, light_cone, view_cone, light, view);
+}
+
+namespace {
+
+/// The weights of texels first, first + 1, ... of a 1D texture, linear between texel centres
+/// (texel i's centre at i), whose sum times the texels is the texture's mean over [a, b]:
+/// w_i = (T(b - i) - T(a - i)) / (b - a) with T the integral of the unit tent. A point (b = a)
+/// gets the linear interpolation's weights.
+int box_weights(double a, double b, double* w, int max_count) {
+    const int first = int(std::floor(a));  // texels below it have zero weight on [a, b]
+    std::fill(w, w + max_count, 0.0);
+    if (!(b - a > 1e-9)) {
+        w[0] = 1 - (a - first);
+        w[1] = a - first;
+        return first;
+    }
+    auto tent_integral = [](double t) {
+        if (t <= -1) return 0.0;
+        if (t <= 0) return 0.5 * (t + 1) * (t + 1);
+        if (t <= 1) return 1 - 0.5 * (1 - t) * (1 - t);
+        return 1.0;
+    };
+    for (int j = 0; j < max_count; ++j) {
+        const int i = first + j;
+        w[j] = i > b + 1 ? 0.0 : (tent_integral(b - i) - tent_integral(a - i)) / (b - a);
+    }
+    return first;
+}
+
+}  // namespace
+
+Color Hierarchy::lookup_box(Vec2 uv, Vec2 extent, double light_cone, double view_cone,
+                            const DirectionMesh::Weights& light,
+                            const DirectionMesh::Weights& view) const {
+    // The finest level on which the rectangle spans at most kBoxTexels texels: at most
+    // kBoxTexels + 2 texels per side have a weight.
+    const double longest = std::max(std::abs(double(extent.x)), std::abs(double(extent.y)));
+    int level = longest > kBoxTexels ? int(std::ceil(std::log2(longest / kBoxTexels))) : 0;
+    level = std::clamp(level, 0, levels() - 1);
+    const uint32_t w = widths_[size_t(level)], h = heights_[size_t(level)], k = components_;
+    const double sx = double(w) / widths_[0], sy = double(h) / heights_[0];
+    // The level's texel coordinates, texel centres at integers (as bilinear_texels()).
+    const double fx = std::fmod(double(uv.x) * w - 0.5, double(w));
+    const double fy = std::fmod((1.0 - double(uv.y)) * h - 0.5, double(h));
+    // At most kBoxTexels wide: only the coarsest level (one texel, where any box is that
+    // texel) and levels of odd sizes (rounded up) could be spanned by more.
+    const double hx = std::min(0.5 * std::abs(double(extent.x)) * sx, kBoxTexels / 2);
+    const double hy = std::min(0.5 * std::abs(double(extent.y)) * sy, kBoxTexels / 2);
+    constexpr int kMax = int(kBoxTexels) + 3;
+    double wx[kMax], wy[kMax];
+    const int x0 = box_weights(fx - hx, fx + hx, wx, kMax);
+    const int y0 = box_weights(fy - hy, fy + hy, wy, kMax);
+    auto wrap = [](int64_t i, uint32_t n) { return uint32_t(((i % n) + n) % n); };
+    float s[3 * kMaxComponents] = {};
+    for (int j = 0; j < kMax; ++j) {
+        if (wy[j] == 0) continue;
+        const size_t row_y = size_t(wrap(y0 + j, h)) * w;
+        for (int i = 0; i < kMax; ++i) {
+            const float wt = float(wx[i] * wy[j]);
+            if (wt == 0.f) continue;
+            const size_t row = row_y + wrap(x0 + i, w);
+            for (int c = 0; c < 3; ++c) {
+                const float* in = &spatial_[size_t(level) * 3 + size_t(c)][row * k];
+                for (uint32_t q = 0; q < k; ++q) s[size_t(c) * k + q] += wt * in[q];
+            }
+        }
+    }
+    return combine(s, light_cone, view_cone, light, view);
+}
+
+Color Hierarchy::combine(const float* s, double light_cone, double view_cone,
+                         const DirectionMesh::Weights& light,
+                         const DirectionMesh::Weights& view) const {
+    const uint32_t k = components_;
     // The angular factors of up to four cone pairs, each blended between the directions.
     size_t li[2], vi[2];
     float lt, vt;

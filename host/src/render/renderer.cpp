@@ -351,8 +351,11 @@ RenderedTile render_tile(const Scene& scene, const Tile& tile, uint64_t seed, ui
                 // The neighbouring pixels' rays, for the first hit's footprint (materials that
                 // prefilter); the ray points to it only for this sample.
                 RayDifferential differential;
-                if (differentials && sensor.sample_differential(pos, aperture, differential))
+                if (differentials && sensor.sample_differential(pos, aperture, differential)) {
+                    differential.to_pixel_centre = {float(x) + 0.5f - pos.x,
+                                                    float(y) + 0.5f - pos.y};
                     ray.differential = &differential;
+                }
                 list.clear();
                 list.reset_aovs(aov_count);
                 list.set_sample_index(s);

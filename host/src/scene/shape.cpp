@@ -320,6 +320,7 @@ PixelFootprint pixel_footprint(const Shape& shape, const Ray& ray, const Hit& hi
     const Vec3 dpdv = hit_dpdv(shape, hit);
     fp.duv_dx = coordinates_in_tangents(fp.dp_dx, hit.dpdu, dpdv);
     fp.duv_dy = coordinates_in_tangents(fp.dp_dy, hit.dpdu, dpdv);
+    fp.to_pixel_centre = rd.to_pixel_centre;
     const float side = shape.flip_normals() ? -1.f : 1.f;
     fp.dn_dx = normal_change(shape, hit, barycentrics, fp.dp_dx) * side;
     fp.dn_dy = normal_change(shape, hit, barycentrics, fp.dp_dy) * side;

@@ -71,6 +71,11 @@ public:
         const btf::PrefilterSettings settings = prefilter_settings(props);
         const btf::PcaSettings pca = pca_settings(props);
         const bool cache = props.get_bool("cache", true);
+        const std::string lookup = props.get_string("spatial_lookup", "mipmap");
+        if (lookup != "mipmap" && lookup != "footprint")
+            props.fail("spatial_lookup",
+                       "spatial_lookup must be mipmap or footprint, not \"" + lookup + "\"");
+        box_footprint_ = lookup == "footprint";
         if (prefilter) hierarchy_ = build_hierarchy(props, settings, pca, cache);
         sample_shares_ = sample_shares(props);
     }
@@ -224,8 +229,19 @@ private:
         const DirectionMesh::Weights wl = lights_.interpolate(light);
         const DirectionMesh::Weights wv = views_.interpolate(view);
         double ratio = 0, light_cone = 0, view_cone = 0;
-        if (hit.footprint.valid) footprint_query(hit.footprint, ratio, light_cone, view_cone);
-        Color b = hierarchy_->lookup(hit.uv * uv_scale_, ratio, light_cone, view_cone, wl, wv);
+        Vec2 uv = hit.uv;
+        Color b;
+        if (hit.footprint.valid) {
+            const PixelFootprint& f = hit.footprint;
+            footprint_query(f, ratio, light_cone, view_cone);
+            // Centred on the pixel (the area a box-filtered pixel averages), not on the sample.
+            uv = uv + f.duv_dx * f.to_pixel_centre.x + f.duv_dy * f.to_pixel_centre.y;
+        }
+        if (box_footprint_ && hit.footprint.valid)
+            b = hierarchy_->lookup_box(uv * uv_scale_, footprint_extent(hit.footprint), light_cone,
+                                       view_cone, wl, wv);
+        else
+            b = hierarchy_->lookup(uv * uv_scale_, ratio, light_cone, view_cone, wl, wv);
         // A filtered reflectance is >= 0; the angular filter's low-order fit can undershoot
         // at hard shadow edges (BTF B's grooves), and the PCA truncation a little anywhere.
         for (int c = 0; c < 3; ++c) b[c] = std::max(b[c], 0.f);
@@ -239,6 +255,18 @@ private:
             return uv_scale_ * std::hypot(double(duv.x) * h.width, double(duv.y) * h.height);
         };
         return std::max(texels(f.duv_dx), texels(f.duv_dy));
+    }
+    /// The rectangle (width along u, height along v, in finest-level texels, times
+    /// scale_spatial) with the footprint's second moments along u and along v: the pixel's
+    /// square maps to the parallelogram of the steps duv_dx and duv_dy, whose extent along u is
+    /// hypot(du_dx, du_dy) in that sense (exact when the steps lie along u and v; the
+    /// parallelogram's bounding box would blur a sheared footprint more than the pixel does).
+    Vec2 footprint_extent(const PixelFootprint& f) const {
+        const btf::Header& h = data_->header();
+        const float sx = uv_scale_ * float(h.width), sy = uv_scale_ * float(h.height);
+        return Vec2(std::hypot(f.duv_dx.x, f.duv_dy.x) * sx,
+                    std::hypot(f.duv_dx.y, f.duv_dy.y) * sy) *
+               scale_spatial_;
     }
     /// The level and cones a pixel's footprint selects (see the top of this file).
     void footprint_query(const PixelFootprint& f, double& ratio, double& light_cone,
@@ -284,6 +312,7 @@ private:
     float uv_scale_, scale_;
     float scale_spatial_, scale_light_, scale_view_;
     std::shared_ptr<const btf::Hierarchy> hierarchy_;       // with `prefilter`
+    bool box_footprint_ = false;                            // spatial_lookup="footprint"
     std::vector<std::pair<double, double>> sample_shares_;  // `adaptive_spp`: (log2 r, share)
 };
 
@@ -297,6 +326,9 @@ FEMTO_PLUGIN(Btf, femto::PluginKind::Bsdf, "btf",
               {"prefilter", "bool", "false",
                "look up the prefiltered hierarchy at the camera ray's pixel footprint"},
               {"filter", "string", "box", "prefilter kernel: box, gaussian or lanczos"},
+              {"spatial_lookup", "string", "mipmap",
+               "mipmap: the level of the footprint's longer side, trilinear (thesis ch. 3); "
+               "footprint: the exact mean over the footprint's rectangle (docs/btf.md)"},
               {"cone_angles", "string", "0, 15, 30, 45",
                "half-angles (degrees) of the light and view cones the hierarchy holds"},
               {"scale_spatial", "float", "1", "s_x: factor on the texel-to-pixel ratio"},
