@@ -303,7 +303,8 @@ TEST(BtfMaterial, BadParametersAreLocatedErrors) {
           std::pair{"<string name=\"cone_angles\" value=\"5, 15\"/>", "cone_angles"},
           std::pair{"<string name=\"cone_angles\" value=\"0, x\"/>", "cone_angles"},
           std::pair{"<integer name=\"components\" value=\"0\"/>", "components"},
-          std::pair{"<float name=\"scale_view\" value=\"0\"/>", "scale_view"}}) {
+          std::pair{"<float name=\"scale_view\" value=\"0\"/>", "scale_view"},
+          std::pair{"<string name=\"spatial_lookup\" value=\"ewa\"/>", "spatial_lookup"}}) {
         e = femto::test::load_error(
             scene("<string name=\"filename\" value=\"" + good + "\"/>" + params));
         EXPECT_NE(e.find(name), std::string::npos) << e;

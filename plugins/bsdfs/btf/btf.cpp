@@ -19,8 +19,11 @@
 // sample stands for (PixelFootprint::light_cone: the emitter's extent and its direction's turn
 // across the pixel, set by the toolkit's light sampling), times scale_light; the view cone = half
 // the pixel's change of the view direction relative to the surface (ray direction plus normal),
-// times scale_view. Rays without a footprint (after the first bounce) see the finest level,
-// unfiltered. With `adaptive_spp` (thesis Fig. 3.15), a pixel whose centre ray meets the
+// times scale_view. The texture is looked up at the pixel's centre (the area a box-filtered
+// pixel averages), not at the jittered sample (PixelFootprint::to_pixel_centre); with
+// spatial_lookup="footprint", as the exact box mean over the pixel's footprint instead of the
+// mip-map's level (docs/btf.md). Rays without a footprint (after the first bounce) see the
+// finest level, unfiltered. With `adaptive_spp` (thesis Fig. 3.15), a pixel whose centre ray meets the
 // material first takes share(r) of the render's samples per pixel (femto/bsdf.h,
 // pixel_sample_share()). A BTF is not reciprocal: paths from the lights evaluate it through
 // eval_adjoint(), with the camera's side as the view.
