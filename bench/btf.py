@@ -15,8 +15,11 @@ scenes/btf-sphere/scene.xml), renders
       (0.5, 1, 2: scale_spatial = scale_light = scale_view = s), each with the mip-map's
       level (spatial_lookup mipmap, the thesis' lookup) and with the exact box over the
       pixel's footprint (spatial_lookup footprint; configurations named "box-footprint" etc.),
+      and the footprint box with one ray through each pixel's centre ("box-footprint-centre":
+      `stratified` without jitter, where the others take ldsampler's jittered sample),
 
-all with `ldsampler` (Owen-scrambled (0,2)-sequence; complete nets at powers of two), a box
+all with `ldsampler` (Owen-scrambled (0,2)-sequence; complete nets at powers of two; the
+"-centre" configurations aside), a box
 pixel filter and the `direct` integrator; (b) and (c) RUNS times each with seeds 1..RUNS.
 
 Errors against the reference, per render:
@@ -85,15 +88,34 @@ RADIUS = 1.0
 TEXELS_PER_UNIT = 128 * 64 / (2 * math.pi * RADIUS)  # uv_scale * width / (2 pi R)
 FOV = 30.0
 FILTERS = ["box", "gaussian", "lanczos"]
-# The prefiltered configurations' names: the pyramid's kernel, and with "-footprint" the exact
-# box over the pixel's footprint (spatial_lookup footprint) in place of the mip-map's level.
-CONFIGS = FILTERS + [f + "-footprint" for f in FILTERS]
+# The prefiltered configurations' names: the pyramid's kernel; with "-footprint" the exact box
+# over the pixel's footprint (spatial_lookup footprint) in place of the mip-map's level; with
+# "-centre" one ray through each pixel's centre (`stratified` without jitter) in place of
+# ldsampler's jittered sample.
+CONFIGS = (FILTERS + [f + "-footprint" for f in FILTERS] +
+           [f + "-footprint-centre" for f in FILTERS])
+CENTRE_SAMPLER = ('<sampler type="stratified"><integer name="sample_count" value="$spp"/>'
+                  '<boolean name="jitter" value="false"/></sampler>')
 
 
 def config_defines(name):
     """The scene parameters of a prefiltered configuration's name."""
-    kernel, _, lookup = name.partition("-")
-    return {"prefilter": "true", "filter": kernel, "lookup": lookup or "mipmap"}
+    kernel = name.partition("-")[0]
+    return {"prefilter": "true", "filter": kernel,
+            "lookup": "footprint" if "-footprint" in name else "mipmap"}
+
+
+def scene_files(work, dname, dist, btf, cache):
+    """The scene at `dist` as written to WORK: (with ldsampler, through pixel centres)."""
+    xml = os.path.join(work, f"btf-sphere-{dname}.xml")
+    text = scene_xml(dist, btf, cache)
+    open(xml, "w").write(text)
+    centre = os.path.join(work, f"btf-sphere-{dname}-centre.xml")
+    text, n = re.subn(r'<sampler type="ldsampler">.*?</sampler>', CENTRE_SAMPLER, text,
+                      flags=re.S)
+    assert n == 1
+    open(centre, "w").write(text)
+    return xml, centre
 SCALES = ["0.5", "1", "2"]
 
 
@@ -289,8 +311,7 @@ def main():
     out_runs.writerow(RUN_COLUMNS)
     for i, r in enumerate(RATIOS):
         dname, dist = f"d{i}", camera_distance(r, res)
-        xml = os.path.join(work, f"btf-sphere-{dname}.xml")
-        open(xml, "w").write(scene_xml(dist, btf, cache))
+        xml, xml_centre = scene_files(work, dname, dist, btf, cache)
         base = {"res": str(res)}
         halves = []
         for h in (1, 2):
@@ -306,8 +327,9 @@ def main():
 
         def measure(mode, filt, scale, spp, defines):
             rs = []
+            scene = xml_centre if filt.endswith("-centre") else xml
             for seed in range(1, runs + 1):
-                t, img = render(femto, xml, dict(base, spp=str(spp), **defines), seed,
+                t, img = render(femto, scene, dict(base, spp=str(spp), **defines), seed,
                                 os.path.join(work, "x"), threads)
                 e = ref.errors(img)
                 out_runs.writerow([dname, r, f"{dist:.6f}", res, mode, filt, scale, spp, seed,
@@ -315,7 +337,7 @@ def main():
                 runs_csv.flush()
                 rs.append((t, *e))
             med = [float(np.median([x[k] for x in rs])) for k in range(4)]
-            print(f"  {dname} {mode:12s} {filt:8s} s={scale:3s} spp {spp:4d}: {med[0]:7.3f} s "
+            print(f"  {dname} {mode:12s} {filt:16s} s={scale:3s} spp {spp:4d}: {med[0]:7.3f} s "
                   f"RMSE {med[1]:.4g} (inner {med[2]:.4g}) SSIM {med[3]:.4f}", flush=True)
 
         for n in budgets:
@@ -342,14 +364,14 @@ def cost(femto, out_dir, res, runs, threads):
         w.writerow(["distance", "r", "res", "mode", "filter", "spp", "seed", "seconds"])
         for i, r in enumerate(RATIOS):
             dname = f"d{i}"
-            xml = os.path.join(work, f"btf-sphere-{dname}.xml")
-            open(xml, "w").write(scene_xml(camera_distance(r, res), btf, cache))
+            xml, xml_centre = scene_files(work, dname, camera_distance(r, res), btf, cache)
             for seed in range(1, runs + 1):
                 for mode, filt in [("multisampled", "")] + [("prefiltered", x) for x in CONFIGS]:
                     defines = {"res": str(res), "spp": str(COST_SPP), "prefilter": "false"}
                     if filt:
                         defines.update(config_defines(filt))
-                    t, _ = render(femto, xml, defines, seed, os.path.join(work, "x"), threads)
+                    scene = xml_centre if filt.endswith("-centre") else xml
+                    t, _ = render(femto, scene, defines, seed, os.path.join(work, "x"), threads)
                     w.writerow([dname, r, res, mode, filt, COST_SPP, seed, t])
                     f.flush()
                     print(f"  {dname} {mode:12s} {filt:8s} {COST_SPP} spp: {t:.2f} s", flush=True)
@@ -518,7 +540,8 @@ def plot(data, path):
                 ax.annotate(f"N={n}", (ms[n][1], ms[n][k]), fontsize=6)
             for (filt, scale), v in sorted(pf.items()):
                 kernel = filt.partition("-")[0]
-                ax.loglog([v[1]], [v[k]], markers[kernel], color=colours[scale], ms=5,
+                ax.loglog([v[1]], [v[k]], markers[kernel], color=colours[scale],
+                          ms=7 if filt.endswith("-centre") else 5,
                           mfc=colours[scale] if kernel != filt else "none",
                           label=f"prefiltered {filt}, s = {scale}")
             ax.set_title(f"{dname}: r = {r} ({res}x{res})", fontsize=9)
