@@ -388,9 +388,11 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
     itself (lower error where c < 1, but no material can know c). Both are exact inside
     the sphere, terminator included. c comes from renders of the sphere as an emitter of
     radiance 1 (COVERAGE_SPP samples), the hits from the same scene at 1 spp with the seeds of
-    the BTF renders (the same camera samples). The equal-error N comes from the multisampled
-    medians of btf_runs.csv (run first, at the same RES), and the bound on the speed-up is that
-    N: the time of N unfiltered samples over one prefiltered sample of the same cost."""
+    the BTF renders (the same camera samples), once with ldsampler's jittered sample and once
+    with a ray through each pixel's centre (the "-centre" configurations' sampler: a bound for
+    each). The equal-error N comes from the multisampled medians of btf_runs.csv (run first, at
+    the same RES), and the bound on the speed-up is that N: the time of N unfiltered samples
+    over one prefiltered sample of the same cost."""
     rows = list(csv.DictReader(open(os.path.join(out_dir, "btf_runs.csv"))))
     work = tempfile.mkdtemp()
     btf, cache = btf_file(femto, work)
@@ -409,6 +411,11 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
         open(xml, "w").write(scene_xml(dist, btf, cache))
         mask = os.path.join(work, f"mask-{dname}.xml")
         open(mask, "w").write(mask_xml(dist, btf))
+        mask_centre = os.path.join(work, f"mask-{dname}-centre.xml")
+        text, n = re.subn(r'<sampler type="ldsampler">.*?</sampler>', CENTRE_SAMPLER,
+                          mask_xml(dist, btf), flags=re.S)
+        assert n == 1
+        open(mask_centre, "w").write(text)
         base = {"res": str(res)}
         halves = [render(femto, xml, dict(base, prefilter="false", spp=str(ref_spp // 2)),
                          1000 + h, os.path.join(work, f"ref{h}"), threads)[1] for h in (1, 2)]
@@ -418,36 +425,39 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
                           os.path.join(work, "cover"), threads)
         c = cover[..., :1]
         footprint_mean = np.where(c > 0, ref.image / np.maximum(c, 1e-30), 0.0)
-        errs = {"footprint": [], "pixel": []}
-        for seed in range(1, runs + 1):
-            _, hit = render(femto, mask, dict(base, spp="1"), seed, os.path.join(work, "hit"),
-                            threads)
-            h = hit[..., :1]
-            for name, value in (("footprint", footprint_mean), ("pixel", ref.image)):
-                errs[name].append(math.sqrt(float(((h * value - ref.image) ** 2).mean())))
-        row = [dname, r, res, ref_spp, f"{noise:.3g}", f"{float(c.mean()):.5g}",
-               f"{int(((c > 0) & (c < 1)).sum())}"]
-        for name in ("footprint", "pixel"):
-            e = float(np.median(errs[name]))
-            n, _, flag = (equal_error(ms, e) if e > 0 else
-                          (math.inf, math.inf, "no silhouette in view: the oracle is exact"))
-            row += [f"{e:.6g}", f"{n:.3g}", flag]
-            print(f"{dname} (r {r}): oracle ({name} value) RMSE {e:.4g} "
-                  f"(runs {', '.join('%.4g' % x for x in errs[name])}): equal to N = {n:.3g} "
-                  f"unfiltered samples {flag}", flush=True)
+        for sampler, scene in (("jittered", mask), ("centre", mask_centre)):
+            errs = {"footprint": [], "pixel": []}
+            for seed in range(1, runs + 1):
+                _, hit = render(femto, scene, dict(base, spp="1"), seed,
+                                os.path.join(work, "hit"), threads)
+                h = hit[..., :1]
+                for name, value in (("footprint", footprint_mean), ("pixel", ref.image)):
+                    errs[name].append(math.sqrt(float(((h * value - ref.image) ** 2).mean())))
+            row = [dname, r, res, sampler, ref_spp, f"{noise:.3g}", f"{float(c.mean()):.5g}",
+                   f"{int(((c > 0) & (c < 1)).sum())}"]
+            for name in ("footprint", "pixel"):
+                e = float(np.median(errs[name]))
+                n, _, flag = (equal_error(ms, e) if e > 0 else
+                              (math.inf, math.inf, "no silhouette in view: the oracle is exact"))
+                row += [f"{e:.6g}", f"{n:.3g}", flag]
+                print(f"{dname} (r {r}), {sampler} sample: oracle ({name} value) RMSE {e:.4g} "
+                      f"(runs {', '.join('%.4g' % x for x in errs[name])}): equal to N = "
+                      f"{n:.3g} unfiltered samples {flag}", flush=True)
+            out_rows.append(row)
         print(f"  {dname}: reference noise {noise:.3g}, sphere covers {c.mean():.4f} of the "
-              f"image, {row[6]} pixels in part", flush=True)
-        out_rows.append(row)
+              f"image, {row[7]} pixels in part", flush=True)
     with open(os.path.join(out_dir, "btf_bound.csv"), "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["distance", "r", "res", "ref_spp", "ref_noise_rmse", "coverage_mean",
-                    "partly_covered_pixels", "rmse_oracle_footprint", "bound_footprint",
-                    "note_footprint", "rmse_oracle_pixel", "bound_pixel", "note_pixel"])
+        w.writerow(["distance", "r", "res", "sampler", "ref_spp", "ref_noise_rmse",
+                    "coverage_mean", "partly_covered_pixels", "rmse_oracle_footprint",
+                    "bound_footprint", "note_footprint", "rmse_oracle_pixel", "bound_pixel",
+                    "note_pixel"])
         w.writerows(out_rows)
-    for col, name in ((8, "footprint mean"), (11, "pixel value")):
-        v = [float(row[col]) for row in out_rows if row[0] != "d0"]
-        print(f"bound on the mean speed-up over d1-d4 ({name} oracle): {np.mean(v):.3g} "
-              f"(d1..d4: {', '.join('%.3g' % x for x in v)})", flush=True)
+    for sampler in ("jittered", "centre"):
+        for col, name in ((9, "footprint mean"), (12, "pixel value")):
+            v = [float(row[col]) for row in out_rows if row[0] != "d0" and row[3] == sampler]
+            print(f"bound on the mean speed-up over d1-d4, {sampler} sample ({name} oracle): "
+                  f"{np.mean(v):.3g} (d1..d4: {', '.join('%.3g' % x for x in v)})", flush=True)
     shutil.rmtree(work, ignore_errors=True)
 
 
