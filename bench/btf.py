@@ -392,7 +392,9 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
     with a ray through each pixel's centre (the "-centre" configurations' sampler: a bound for
     each). The equal-error N comes from the multisampled medians of btf_runs.csv (run first, at
     the same RES), and the bound on the speed-up is that N: the time of N unfiltered samples
-    over one prefiltered sample of the same cost."""
+    over one prefiltered sample of the same cost. Beside them, for scale: the unfiltered BTF's
+    own 1-spp error with each sampler (what the ray through the centre gains without any
+    prefiltering)."""
     rows = list(csv.DictReader(open(os.path.join(out_dir, "btf_runs.csv"))))
     work = tempfile.mkdtemp()
     btf, cache = btf_file(femto, work)
@@ -407,8 +409,7 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
                     (float(row["rmse"]), float(row["seconds"])))
         ms = {n: tuple(float(np.median([x[k] for x in v])) for k in range(2))
               for n, v in ms_runs.items()}
-        xml = os.path.join(work, f"btf-sphere-{dname}.xml")
-        open(xml, "w").write(scene_xml(dist, btf, cache))
+        xml, xml_centre = scene_files(work, dname, dist, btf, cache)
         mask = os.path.join(work, f"mask-{dname}.xml")
         open(mask, "w").write(mask_xml(dist, btf))
         mask_centre = os.path.join(work, f"mask-{dname}-centre.xml")
@@ -425,22 +426,27 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
                           os.path.join(work, "cover"), threads)
         c = cover[..., :1]
         footprint_mean = np.where(c > 0, ref.image / np.maximum(c, 1e-30), 0.0)
-        for sampler, scene in (("jittered", mask), ("centre", mask_centre)):
-            errs = {"footprint": [], "pixel": []}
+        for sampler, scene, btf_scene in (("jittered", mask, xml),
+                                          ("centre", mask_centre, xml_centre)):
+            # Beside the oracles: the unfiltered BTF at 1 spp with the same sampler.
+            errs = {"footprint": [], "pixel": [], "unfiltered": []}
             for seed in range(1, runs + 1):
                 _, hit = render(femto, scene, dict(base, spp="1"), seed,
                                 os.path.join(work, "hit"), threads)
                 h = hit[..., :1]
                 for name, value in (("footprint", footprint_mean), ("pixel", ref.image)):
                     errs[name].append(math.sqrt(float(((h * value - ref.image) ** 2).mean())))
+                _, img = render(femto, btf_scene, dict(base, prefilter="false", spp="1"), seed,
+                                os.path.join(work, "x"), threads)
+                errs["unfiltered"].append(ref.errors(img)[0])
             row = [dname, r, res, sampler, ref_spp, f"{noise:.3g}", f"{float(c.mean()):.5g}",
                    f"{int(((c > 0) & (c < 1)).sum())}"]
-            for name in ("footprint", "pixel"):
+            for name in ("footprint", "pixel", "unfiltered"):
                 e = float(np.median(errs[name]))
                 n, _, flag = (equal_error(ms, e) if e > 0 else
                               (math.inf, math.inf, "no silhouette in view: the oracle is exact"))
                 row += [f"{e:.6g}", f"{n:.3g}", flag]
-                print(f"{dname} (r {r}), {sampler} sample: oracle ({name} value) RMSE {e:.4g} "
+                print(f"{dname} (r {r}), {sampler} sample: {name} RMSE {e:.4g} "
                       f"(runs {', '.join('%.4g' % x for x in errs[name])}): equal to N = "
                       f"{n:.3g} unfiltered samples {flag}", flush=True)
             out_rows.append(row)
@@ -451,7 +457,8 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
         w.writerow(["distance", "r", "res", "sampler", "ref_spp", "ref_noise_rmse",
                     "coverage_mean", "partly_covered_pixels", "rmse_oracle_footprint",
                     "bound_footprint", "note_footprint", "rmse_oracle_pixel", "bound_pixel",
-                    "note_pixel"])
+                    "note_pixel", "rmse_unfiltered_1spp", "equal_error_spp_unfiltered_1spp",
+                    "note_unfiltered_1spp"])
         w.writerows(out_rows)
     for sampler in ("jittered", "centre"):
         for col, name in ((9, "footprint mean"), (12, "pixel value")):
