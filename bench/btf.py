@@ -379,22 +379,23 @@ def cost(femto, out_dir, res, runs, threads):
 
 
 def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
-    """An upper bound on any prefiltering's equal-RMSE speed-up at 1 spp (btf_bound.csv): a
-    1-spp render is an oracle's whose camera samples, where they hit the sphere, return the
-    pixel's exact value, so that every error left is the silhouette's, which a 1-spp sample
-    hits or misses whatever the material returns. Two oracles: the exact footprint mean (the
-    reference's pixel value over the fraction c of the pixel the sphere covers: what an
-    exact filter of the surface over the pixel's footprint returns) and the pixel's value
-    itself (lower error where c < 1, but no material can know c). Both are exact inside
-    the sphere, terminator included. c comes from renders of the sphere as an emitter of
-    radiance 1 (COVERAGE_SPP samples), the hits from the same scene at 1 spp with the seeds of
-    the BTF renders (the same camera samples), once with ldsampler's jittered sample and once
-    with a ray through each pixel's centre (the "-centre" configurations' sampler: a bound for
-    each). The equal-error N comes from the multisampled medians of btf_runs.csv (run first, at
-    the same RES), and the bound on the speed-up is that N: the time of N unfiltered samples
-    over one prefiltered sample of the same cost. Beside them, for scale: the unfiltered BTF's
-    own 1-spp error with each sampler (what the ray through the centre gains without any
-    prefiltering)."""
+    """An upper bound on any prefiltering's equal-RMSE speed-up at 1 spp (btf_bound.csv).
+    Whatever a material returns, a 1-spp render is black where its camera sample misses the
+    sphere; the least error it can then have is an oracle's that returns the pixel's exact value
+    wherever the sample hits ("pixel" oracle: the reference's value), which leaves only the
+    silhouette's error: that is the bound. A second oracle ("footprint") returns the
+    reference's value over the fraction c of the pixel the sphere covers (the surface's mean
+    over the covered part, what an exact filter of the surface alone could return): for
+    comparison, not a bound (it overshoots where c < 1, and real renders can beat it). Both are
+    exact inside the sphere, terminator included. c comes from renders of the sphere as an
+    emitter of radiance 1 (COVERAGE_SPP samples), the hits from the same scene at 1 spp with
+    the seeds of the BTF renders (the same camera samples), once with ldsampler's jittered
+    sample and once with a ray through each pixel's centre (the "-centre" configurations'
+    sampler: a bound for each). The equal-error N comes from the multisampled medians of
+    btf_runs.csv (run first, at the same RES), and the bound on the speed-up is that N: the
+    time of N unfiltered samples over one prefiltered sample of the same cost. Beside them,
+    for scale: the unfiltered BTF's own 1-spp error with each sampler (what the ray through
+    the centre gains without any prefiltering)."""
     rows = list(csv.DictReader(open(os.path.join(out_dir, "btf_runs.csv"))))
     work = tempfile.mkdtemp()
     btf, cache = btf_file(femto, work)
@@ -544,7 +545,7 @@ def plot(data, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(2, len(data), figsize=(3.2 * len(data), 6.4), squeeze=False)
+    fig, axes = plt.subplots(2, len(data), figsize=(3.2 * len(data) + 2.5, 6.4), squeeze=False)
     markers = {"box": "s", "gaussian": "o", "lanczos": "^"}
     colours = {"0.5": "tab:blue", "1": "tab:orange", "2": "tab:green"}
     for col, (dname, (r, ms, pf, res)) in enumerate(data.items()):
@@ -565,8 +566,9 @@ def plot(data, path):
             ax.set_xlabel("render time (s)", fontsize=8)
             ax.set_ylabel(what, fontsize=8)
             ax.tick_params(labelsize=7)
-    axes[0][0].legend(fontsize=5.5)
-    fig.tight_layout()
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="center right", fontsize=5.5)  # beside the panels
+    fig.tight_layout(rect=(0, 0, 0.86, 1))
     fig.savefig(path, dpi=100)
 
 

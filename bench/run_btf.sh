@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Prefiltered BTF rendering against multisampling on scenes/btf-sphere (issue 16 §4, thesis
 # ch. 3, Experiment 1): RMSE and SSIM against a 4096-spp reference at five texel-to-pixel
-# ratios, equal-error speed-ups, the hierarchy's build time and size.
-#   bench/run_btf.sh [--quick]       about 20 minutes on 2 cores once built (--quick: 3 min)
+# ratios, equal-error speed-ups, the hierarchy's build time and size, and the bound on any
+# prefiltering's speed-up (--bound).
+#   bench/run_btf.sh [--quick]       about 20 minutes on 2 cores once built (BTF B: 40; --quick: 4)
 #   bench/run_btf.sh --res R --ref-spp N --runs K --max-spp M   other settings
 #   bench/run_btf.sh --btf b         BTF B (V-grooves, made at bench time) instead of BTF A
 # Results: bench/results/btf/ (BTF A) or bench/results/btf-b/ (BTF B): btf_runs.csv,
-# btf_speedup.csv, btf_build.csv, btf_cost.csv, btf.png, btf_run.log.
+# btf_speedup.csv, btf_build.csv, btf_cost.csv, btf_bound.csv, btf.png, btf_run.log.
 set -euo pipefail
 
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -31,4 +32,9 @@ done
 if [[ " $* " == *" --quick "* ]]; then res=32; fi
 echo "time per sample (--cost):" | tee -a "$log"
 /usr/bin/python3 "$root/bench/btf.py" "$build/bin/femto" "$out" --cost --btf "$btf" --res "$res" 2>&1 | tee -a "$log"
+# The speed-up no prefiltering can exceed at 1 spp (btf_bound.csv; bench/README.md).
+echo "bound (--bound):" | tee -a "$log"
+bound_args=(--btf "$btf" --res "$res")
+if [[ " $* " == *" --quick "* ]]; then bound_args+=(--ref-spp 256 --runs 1); fi
+/usr/bin/python3 "$root/bench/btf.py" "$build/bin/femto" "$out" --bound "${bound_args[@]}" 2>&1 | tee -a "$log"
 echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$log"
