@@ -23,8 +23,8 @@
 // pixel averages), not at the jittered sample (PixelFootprint::to_pixel_centre); with
 // spatial_lookup="footprint", as the exact box mean over the pixel's footprint instead of the
 // mip-map's level (docs/btf.md). Rays without a footprint (after the first bounce) see the
-// finest level, unfiltered. With `adaptive_spp` (thesis Fig. 3.15), a pixel whose centre ray meets the
-// material first takes share(r) of the render's samples per pixel (femto/bsdf.h,
+// finest level, unfiltered. With `adaptive_spp` (thesis Fig. 3.15), a pixel whose centre ray
+// meets the material first takes share(r) of the render's samples per pixel (femto/bsdf.h,
 // pixel_sample_share()). A BTF is not reciprocal: paths from the lights evaluate it through
 // eval_adjoint(), with the camera's side as the view.
 #include "femto/btf.h"
