@@ -138,8 +138,7 @@ TEST(BtfRender, PrefilteredPlaneMatchesTheClosedFormAtEveryDistance) {
                         worst = std::max(worst, std::abs(image[3 * (j * n + i) + c] - want) / want);
                     }
             // Float factors, a float dot product and the renderer's float accumulation: ~1e-6.
-            EXPECT_LT(worst, 2e-5)
-                << "r = " << r << (jittered ? ", jittered" : "");
+            EXPECT_LT(worst, 2e-5) << "r = " << r << (jittered ? ", jittered" : "");
             std::printf("[btf] r = %3d (%3d x %3d pixels%s): worst relative error %.2g\n", r, n, n,
                         jittered ? ", jittered" : "", worst);
         }
