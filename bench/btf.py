@@ -105,16 +105,21 @@ def config_defines(name):
             "lookup": "footprint" if "-footprint" in name else "mipmap"}
 
 
+def through_centres(text):
+    """Scene text with its ldsampler replaced by one ray through each pixel's centre."""
+    text, n = re.subn(r'<sampler type="ldsampler">.*?</sampler>', CENTRE_SAMPLER, text,
+                      flags=re.S)
+    assert n == 1
+    return text
+
+
 def scene_files(work, dname, dist, btf, cache):
     """The scene at `dist` as written to WORK: (with ldsampler, through pixel centres)."""
     xml = os.path.join(work, f"btf-sphere-{dname}.xml")
     text = scene_xml(dist, btf, cache)
     open(xml, "w").write(text)
     centre = os.path.join(work, f"btf-sphere-{dname}-centre.xml")
-    text, n = re.subn(r'<sampler type="ldsampler">.*?</sampler>', CENTRE_SAMPLER, text,
-                      flags=re.S)
-    assert n == 1
-    open(centre, "w").write(text)
+    open(centre, "w").write(through_centres(text))
     return xml, centre
 SCALES = ["0.5", "1", "2"]
 
@@ -414,10 +419,7 @@ def bound(femto, out_dir, res, ref_spp, runs, threads, coverage_spp=1024):
         mask = os.path.join(work, f"mask-{dname}.xml")
         open(mask, "w").write(mask_xml(dist, btf))
         mask_centre = os.path.join(work, f"mask-{dname}-centre.xml")
-        text, n = re.subn(r'<sampler type="ldsampler">.*?</sampler>', CENTRE_SAMPLER,
-                          mask_xml(dist, btf), flags=re.S)
-        assert n == 1
-        open(mask_centre, "w").write(text)
+        open(mask_centre, "w").write(through_centres(mask_xml(dist, btf)))
         base = {"res": str(res)}
         halves = [render(femto, xml, dict(base, prefilter="false", spp=str(ref_spp // 2)),
                          1000 + h, os.path.join(work, f"ref{h}"), threads)[1] for h in (1, 2)]

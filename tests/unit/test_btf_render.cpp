@@ -103,8 +103,7 @@ TEST(BtfRender, PrefilteredPlaneMatchesTheClosedFormAtEveryDistance) {
         for (const int r : {1, 4, 16, 64, 256}) {
             const int n = 256 / r;
             const std::string sampler =
-                jittered ? "<sampler type=\"independent\"><integer name=\"sample_count\" "
-                           "value=\"1\"/></sampler>"
+                jittered ? independent_sampler(1)
                          : "<sampler type=\"stratified\"><integer name=\"sample_count\" "
                            "value=\"1\"/><boolean name=\"jitter\" value=\"false\"/></sampler>";
             const std::string xml =

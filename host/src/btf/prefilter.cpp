@@ -26,6 +26,9 @@ std::array<float, 4> downsampling_weights(FilterKernel kernel) {
 
 namespace {
 
+/// Texel index i of a texture of n texels that tiles (wraps around).
+uint32_t wrap(int64_t i, uint32_t n) { return uint32_t(((i % n) + n) % n); }
+
 /// Level L + 1's spatial factor from level L's: each parent texel is the weighted sum of the
 /// 4 x 4 children around it (separable `weights`), wrapping around (the texture tiles), for one
 /// channel of k components.
@@ -33,7 +36,6 @@ std::vector<float> downsample(const std::vector<float>& s, uint32_t w, uint32_t 
                               const std::array<float, 4>& weights, uint32_t& w2, uint32_t& h2) {
     w2 = std::max(1u, (w + 1) / 2);
     h2 = std::max(1u, (h + 1) / 2);
-    auto wrap = [](int64_t i, uint32_t n) { return uint32_t(((i % n) + n) % n); };
     std::vector<float> rows(size_t(w2) * h * k, 0.f);  // filtered along x
     for (uint32_t y = 0; y < h; ++y)
         for (uint32_t x = 0; x < w2; ++x)
@@ -239,7 +241,6 @@ Color Hierarchy::lookup_box(Vec2 uv, Vec2 extent, double light_cone, double view
     double wx[kMax], wy[kMax];
     const int x0 = box_weights(fx - hx, fx + hx, wx, kMax);
     const int y0 = box_weights(fy - hy, fy + hy, wy, kMax);
-    auto wrap = [](int64_t i, uint32_t n) { return uint32_t(((i % n) + n) % n); };
     float s[3 * kMaxComponents] = {};
     for (int j = 0; j < kMax; ++j) {
         if (wy[j] == 0) continue;
