@@ -829,69 +829,83 @@ TEST(StreakFilm, RejectsBadSamplesAsTheTransientFilm) {
     }
 }
 
-// A transient block keeps one entry per (pixel, bin) it received, in a table that grows with
-// them and is recycled for the next block: whatever their number and order, and after a block
-// that was dropped unmerged (an exception), each cube entry is its contributions summed in one
+// A transient block keeps one entry per (pixel, bin) it received, found through the run of
+// the pixel being splatted or, once a pixel receives again after its run, through a table that
+// grows with them; its storage is recycled for the next block. Whatever their number and
+// order (pixel by pixel, in any order, or first one then the other), and after a block that
+// was dropped unmerged (an exception), each cube entry is its contributions summed in one
 // double in the order they came, rounded to float once per merge (values of every float digit:
 // an entry split in two, or a stale one, rounds differently), and the count AOV and the pixels'
 // filter weights are those of the merged samples alone.
 TEST(TransientFilm, BlocksSumEveryContributionThroughGrowthAndRecycling) {
-    auto scene = load_scene_string(
-        streak_scene("transient", "<string name=\"aovs\" value=\"count\"/>", "box"));
-    Film& film = scene->sensor().film();
-    const size_t W = 40, H = 36, bins = 40;  // streak_scene's film: bins of 0.1 from 6.5
-    std::vector<float> want(W * H * bins * 3, 0.f), want_count(W * H * bins, 0.f);
-    std::vector<double> want_weight(W * H, 0.0);
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<float> value(0.01f, 1.f);
-    auto round = [&](int samples, bool merged) {
-        std::vector<double> block_sums(want.size(), 0.0);  // the block's sums, one per entry
-        std::vector<float> block_count(want_count.size(), 0.f);
-        std::vector<double> block_weight(want_weight.size(), 0.0);
-        auto block = film.make_block(0, 0, 8, 8);
-        for (int s = 0; s < samples; ++s) {
-            const size_t x = rng() % 8, y = rng() % 8, pixel = y * W + x;
-            ContributionList sample;
-            for (int n = int(rng() % 3) + 1; n > 0; --n) {  // may repeat a bin within a sample
-                const int bin = int(rng() % uint32_t(bins + 2)) - 1;  // -1 and 40: outside
-                const float k = value(rng);
-                const Color radiance(k, 2 * k, 3 * k);
-                sample.add(radiance, 6.5 + (bin + 0.5) * 0.1);
-                if (bin < 0 || bin >= int(bins)) continue;
-                const size_t at = pixel * bins + size_t(bin);
-                for (int c = 0; c < 3; ++c) block_sums[at * 3 + size_t(c)] += radiance[c];
-                block_count[at] += 1.f;
+    for (const bool with_count : {true, false}) {
+        SCOPED_TRACE(with_count ? "aovs=count" : "no AOV");
+        auto scene = load_scene_string(streak_scene(
+            "transient", with_count ? "<string name=\"aovs\" value=\"count\"/>" : "", "box"));
+        Film& film = scene->sensor().film();
+        const size_t W = 40, H = 36, bins = 40;  // streak_scene's film: bins of 0.1 from 6.5
+        std::vector<float> want(W * H * bins * 3, 0.f), want_count(W * H * bins, 0.f);
+        std::vector<double> want_weight(W * H, 0.0);
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<float> value(0.01f, 1.f);
+        // `runs` of the block's samples come pixel by pixel (as a tile's camera samples do),
+        // the rest at random pixels.
+        auto round = [&](int samples, int runs, bool merged) {
+            std::vector<double> block_sums(want.size(), 0.0);  // the block's sums, one per entry
+            std::vector<float> block_count(want_count.size(), 0.f);
+            std::vector<double> block_weight(want_weight.size(), 0.0);
+            auto block = film.make_block(0, 0, 8, 8);
+            for (int s = 0; s < samples; ++s) {
+                const size_t in_run = size_t(s) * 64 / size_t(std::max(runs, 1));
+                const size_t x = s < runs ? in_run % 8 : rng() % 8,
+                             y = s < runs ? in_run / 8 : rng() % 8, pixel = y * W + x;
+                ContributionList sample;
+                for (int n = int(rng() % 3) + 1; n > 0; --n) {  // may repeat a bin in a sample
+                    const int bin = int(rng() % uint32_t(bins + 2)) - 1;  // -1 and 40: outside
+                    const float k = value(rng);
+                    const Color radiance(k, 2 * k, 3 * k);
+                    sample.add(radiance, 6.5 + (bin + 0.5) * 0.1);
+                    if (bin < 0 || bin >= int(bins)) continue;
+                    const size_t at = pixel * bins + size_t(bin);
+                    for (int c = 0; c < 3; ++c) block_sums[at * 3 + size_t(c)] += radiance[c];
+                    block_count[at] += 1.f;
+                }
+                block_weight[pixel] += 1.0;  // the box filter: weight 1 in the sample's pixel
+                block->put(Vec2{float(x) + 0.5f, float(y) + 0.5f}, sample);
             }
-            block_weight[pixel] += 1.0;  // the box filter: weight 1 in the sample's pixel
-            block->put(Vec2{float(x) + 0.5f, float(y) + 0.5f}, sample);
-        }
-        if (!merged) return;
-        film.merge(*block);
-        for (size_t i = 0; i < want.size(); ++i) want[i] += float(block_sums[i]);
-        for (size_t i = 0; i < want_count.size(); ++i) want_count[i] += block_count[i];
-        for (size_t i = 0; i < want_weight.size(); ++i) want_weight[i] += block_weight[i];
-    };
-    round(20000, true);  // 8 x 8 pixels x 40 bins, nearly all touched: the table grows
-    round(3000, false);  // dropped: must leave nothing behind in the recycled storage
-    round(500, true);
-    const std::vector<Accumulator> acc = film.accumulators();  // cube, count, sq, weights
-    ASSERT_EQ(acc[0].count, want.size());
-    ASSERT_EQ(acc[1].count, want_count.size());
-    ASSERT_EQ(acc[3].count, want_weight.size() * sizeof(PixelSums) / sizeof(double));
-    const auto* cube = static_cast<const float*>(acc[0].data);
-    const auto* count = static_cast<const float*>(acc[1].data);
-    const auto* sums = static_cast<const PixelSums*>(acc[3].data);
-    size_t wrong = 0, wrong_count = 0, wrong_weight = 0;
-    for (size_t i = 0; i < want.size(); ++i) wrong += cube[i] != want[i] ? 1 : 0;
-    for (size_t i = 0; i < want_count.size(); ++i) wrong_count += count[i] != want_count[i];
-    for (size_t p = 0; p < want_weight.size(); ++p)
-        wrong_weight += sums[p].weight != want_weight[p];
-    EXPECT_EQ(wrong, 0u);
-    EXPECT_EQ(wrong_count, 0u);
-    EXPECT_EQ(wrong_weight, 0u);
-    // More entries than the storage's first table holds (4096 slots at a load of 1/2).
-    EXPECT_GT(std::count_if(want_count.begin(), want_count.end(), [](float n) { return n > 0; }),
-              2048);
+            if (!merged) return;
+            film.merge(*block);
+            for (size_t i = 0; i < want.size(); ++i) want[i] += float(block_sums[i]);
+            for (size_t i = 0; i < want_count.size(); ++i) want_count[i] += block_count[i];
+            for (size_t i = 0; i < want_weight.size(); ++i) want_weight[i] += block_weight[i];
+        };
+        round(20000, 0, true);     // 8 x 8 pixels x 40 bins, nearly all touched: the table grows
+        round(3000, 0, false);     // dropped: must leave nothing behind in the recycled storage
+        round(6400, 6400, true);   // pixel by pixel: 100 samples each, no table
+        round(3000, 1500, false);  // runs, then the table (dropped)
+        round(6400, 3200, true);   // half the pixels' runs, then the table for all of them
+        round(500, 0, true);
+        const std::vector<Accumulator> acc = film.accumulators();  // cube, count, sq, weights
+        ASSERT_EQ(acc[0].count, want.size());
+        ASSERT_EQ(acc[1].count, with_count ? want_count.size() : 0u);
+        ASSERT_EQ(acc[3].count, want_weight.size() * sizeof(PixelSums) / sizeof(double));
+        const auto* cube = static_cast<const float*>(acc[0].data);
+        const auto* count = static_cast<const float*>(acc[1].data);
+        const auto* sums = static_cast<const PixelSums*>(acc[3].data);
+        size_t wrong = 0, wrong_count = 0, wrong_weight = 0;
+        for (size_t i = 0; i < want.size(); ++i) wrong += cube[i] != want[i] ? 1 : 0;
+        if (with_count)
+            for (size_t i = 0; i < want_count.size(); ++i) wrong_count += count[i] != want_count[i];
+        for (size_t p = 0; p < want_weight.size(); ++p)
+            wrong_weight += sums[p].weight != want_weight[p];
+        EXPECT_EQ(wrong, 0u);
+        EXPECT_EQ(wrong_count, 0u);
+        EXPECT_EQ(wrong_weight, 0u);
+        // More entries than the storage's first table holds (4096 slots at a load of 1/2).
+        EXPECT_GT(
+            std::count_if(want_count.begin(), want_count.end(), [](float n) { return n > 0; }),
+            2048);
+    }
 }
 
 TEST(StreakFilm, SkipsRowsOutsideTheFootprint) {
