@@ -41,6 +41,7 @@ using Clock = std::chrono::steady_clock;
 
 constexpr int kTileSize = 32;
 constexpr uint64_t kMaxKeptPilotSamples = uint64_t(1) << 16;
+constexpr uint64_t kMinPassSpp = 8;  // samples per pixel of a pass, where there are enough
 
 struct Tile {
     int x0, y0, w, h;
@@ -491,6 +492,10 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp; camera
     // integrators that splat keep a pass's splats in memory, so theirs are smaller. A
     // distributed render runs pass p in process p % ranks, with about 16 passes per process.
+    // A pass gives each pixel at least kMinPassSpp samples where every process still gets a
+    // pass: a time-resolved film's merge updates a cache line of its cube per (pixel, bin) it
+    // received, and a pixel's samples in one pass share them (the Cornell box: 2.09 lines per
+    // sample at 2 spp per pass, 1.63 at 8; bench/README.md).
     const uint64_t pixels = uint64_t(W) * uint64_t(H);
     const uint32_t ranks = options.group ? uint32_t(options.group->size()) : 1;
     const uint32_t rank = options.group ? uint32_t(options.group->rank()) : 0;
@@ -513,14 +518,16 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                              pilot_of_image, tile, tile, kMaxKeptPilotSamples));
     const uint32_t first_spp = pilot_in_image ? pilot_of_image : 0;
     const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 18 : 22);
-    const uint64_t passes_wanted = uint64_t(16) * ranks;
+    const uint64_t passes_wanted = uint64_t(16) * ranks, image_spp = spp - first_spp;
+    const uint64_t least_spp = std::min<uint64_t>(kMinPassSpp, image_spp / ranks);
     const uint32_t pass_spp =
         integrator.samples_per_pass() > 0
             ? integrator.samples_per_pass()
             : uint32_t(std::max<uint64_t>(
-                  1, std::min<uint64_t>((spp - first_spp + passes_wanted - 1) / passes_wanted,
-                                        max_pass_samples / pixels)));
-    const uint32_t passes = uint32_t((uint64_t(spp - first_spp) + pass_spp - 1) / pass_spp);
+                  1, std::min<uint64_t>(
+                         std::max((image_spp + passes_wanted - 1) / passes_wanted, least_spp),
+                         max_pass_samples / pixels)));
+    const uint32_t passes = uint32_t((image_spp + pass_spp - 1) / pass_spp);
     auto pass_range = [&](uint32_t pass) {
         const uint32_t s0 = uint32_t(first_spp + uint64_t(pass) * pass_spp);
         return std::pair<uint32_t, uint32_t>(
