@@ -176,11 +176,22 @@ struct RenderInfo {
 template <typename F>
 void for_each_filter_pixel(const ReconstructionFilter& filter, Vec2 pos, int x0, int y0, int x1,
                            int y1, F&& f) {
+    // floor and ceil of a film coordinate (finite, well inside int's range) by a conversion
+    // and a correction: std::floor and std::ceil compile to longer sequences for x86-64's
+    // baseline, and a splat runs them per camera sample.
+    auto floor_int = [](float x) {
+        const int i = int(x);
+        return x < float(i) ? i - 1 : i;
+    };
+    auto ceil_int = [](float x) {
+        const int i = int(x);
+        return x > float(i) ? i + 1 : i;
+    };
     const float r = filter.radius();
-    const int xa = std::max(x0, int(std::ceil(pos.x - 0.5f - r)));
-    const int xb = std::min(x1 - 1, int(std::floor(pos.x - 0.5f + r)));
-    const int ya = std::max(y0, int(std::ceil(pos.y - 0.5f - r)));
-    const int yb = std::min(y1 - 1, int(std::floor(pos.y - 0.5f + r)));
+    const int xa = std::max(x0, ceil_int(pos.x - 0.5f - r));
+    const int xb = std::min(x1 - 1, floor_int(pos.x - 0.5f + r));
+    const int ya = std::max(y0, ceil_int(pos.y - 0.5f - r));
+    const int yb = std::min(y1 - 1, floor_int(pos.y - 0.5f + r));
     // The filter is separable: each column's weight is evaluated once per sample, not once
     // per pixel (a Gaussian's exp per tap was most of a splat's cost).
     constexpr int kMaxColumns = 64;

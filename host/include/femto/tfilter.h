@@ -101,7 +101,7 @@ Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t 
             const double inside =
                 integrate_over_bins(grid, c.kernel.shape, t, c.kernel.half_width,
                                     [&](int bin, double w) { add(bin, c.radiance * float(w)); });
-            spill += c.radiance * float((grid.bin_of(t) >= 0 ? 1.0 : 0.0) - inside);
+            spill += c.radiance * float((grid.contains(t) ? 1.0 : 0.0) - inside);
             continue;
         }
         if (histogram) {
@@ -116,7 +116,7 @@ Color splat_sample(const TemporalFilter& filter, const TimeGrid& grid, uint64_t 
             add(bw.bin, c.radiance * bw.weight);
             inside += bw.weight;
         }
-        if (spreads) spill += c.radiance * ((grid.bin_of(t) >= 0 ? 1.f : 0.f) - inside);
+        if (spreads) spill += c.radiance * ((grid.contains(t) ? 1.f : 0.f) - inside);
     }
     return spill;
 }
@@ -355,7 +355,7 @@ void TimeResolvedBlock::splat(Vec2 pos, const ContributionList& sample, Storage&
     const uint64_t pixel = uint64_t(home_y) * uint64_t(film_.width()) + uint64_t(home_x);
     for (const Contribution& c : sample.items()) {  // for the empty-window warning
         const double t = recorded_time(c.time, sensor, world_time);
-        arrivals_.add(t, grid.bin_of(t) >= 0);
+        arrivals_.add(t, grid.contains(t));
     }
     for_each_filter_pixel(
         film_.rfilter(), pos, x0_, y0_, x0_ + w_, y0_ + h_, [&](int x, int y, float w) {

@@ -38,9 +38,12 @@ struct TimeGrid {
     bool known = true;
 
     double end() const { return start + bin_width * bins; }
+    /// True when time t lies in the window [start, end()) (bin_of(t) >= 0), found without
+    /// dividing.
+    bool contains(double t) const { return t >= start && t < end(); }
     /// Bin holding time t, or -1 outside the window.
     int bin_of(double t) const {
-        if (!(t >= start) || !(t < end())) return -1;
+        if (!contains(t)) return -1;
         const int b = int((t - start) / bin_width);
         return b < bins ? b : bins - 1;
     }
