@@ -70,10 +70,8 @@ struct BlockStorage {
     BlockStorage(bool with_variance, bool with_counts, size_t bins)
         : variance(with_variance), counts(with_counts) {
         grow();
-        if (bins <= kRunBins)
-            run_entry.assign(bins, 0);
-        else
-            hashed = true;
+        if (bins <= kRunBins) run_entry.assign(bins, 0);
+        hashed = run_entry.empty();
     }
 
     /// The entry of `key`, created (zero) on its first touch.
@@ -125,12 +123,9 @@ private:
         end_run();
         run_pixel = UINT64_MAX;
         if (had_run[size_t(pixel)]) {
-            size_t slots = table.size();  // all free: the table was not in use
+            size_t slots = table.size();
             while (2 * (entries.size() + 1) > slots) slots *= 2;
-            if (slots != table.size()) table.assign(slots, 0u);
-            shift = 64 - std::countr_zero(table.size());
-            for (size_t e = 0; e < entries.size(); ++e)
-                table[free_slot(entries[e].key)] = uint32_t(e + 1);
+            rehash(slots);
             hashed = true;
             return false;
         }
@@ -176,8 +171,10 @@ private:
         }
         return e;
     }
-    void grow() {
-        table.assign(std::max<size_t>(4096, 2 * table.size()), 0);
+    void grow() { rehash(std::max<size_t>(4096, 2 * table.size())); }
+    // A table of `slots` (a power of two) holding every entry, placed in order.
+    void rehash(size_t slots) {
+        table.assign(slots, 0);
         shift = 64 - std::countr_zero(table.size());
         for (size_t e = 0; e < entries.size(); ++e)
             table[free_slot(entries[e].key)] = uint32_t(e + 1);
