@@ -126,9 +126,13 @@ struct Subpaths {
     };
     std::vector<Outgoing> camera_out;
     double emission_time = 0;  // the light subpath's
+    // Bdpt::far_sums(): per subpath vertex, the MIS sum of the strategies joining the subpath
+    // at or before it, filled as connections ask for them.
+    mutable std::vector<double> light_far, camera_far;
     void clear() {
         camera.clear(), light.clear(), camera_beta.clear(), camera_clock.clear();
         light_power.clear(), light_clock.clear(), camera_out.clear();
+        light_far.clear(), camera_far.clear();
     }
 };
 
@@ -966,18 +970,26 @@ private:
         // when aimed at it) would not describe it.
         const bool hit_excluded = !steady_angular_ && path[1].kind == Vertex::Kind::Medium;
         if (s == 0 && hit_excluded) return 0.f;
+        const int last = to_sensor_ ? n - 1 : n - 2;  // the last strategy: t = 1 or t = 2
+        // The connection changes the densities of its end points and their neighbours only, so
+        // the strategies k in [s - 2, s + 2] are summed here and those beyond from the
+        // subpaths' own sums (far_sums()). Time-angular directions and placed vertices make
+        // densities depend on the whole path: all strategies are summed here then.
+        const bool local = steady_angular_ && !connecting_;
+        const int lo = local ? std::max(0, s - 2) : 0, hi = local ? std::min(last, s + 2) : last;
         // On the stack for the usual depths (a thread_local vector costs a TLS lookup per call).
         constexpr int kStack = 64;
         Densities stack[kStack];
         std::vector<Densities> heap(n > kStack ? size_t(n) : 0);
         Densities* x = n > kStack ? heap.data() : stack;
-        for (int i = 0; i < s; ++i) {
+        const int first = std::max(0, lo - 1), end = std::min(n, hi + 2);  // the x used
+        for (int i = first; i < std::min(s, end); ++i) {
             const Vertex& v = path.light_vertex(i);
             x[size_t(i)] = {v.pdf_fwd, v.pdf_rev, v.delta, 0};
         }
-        for (int j = 0; j < t; ++j) {
-            const Vertex& v = path.camera_vertex(j);
-            x[size_t(n - 1 - j)] = {v.pdf_rev, v.pdf_fwd, v.delta, 0};
+        for (int i = std::max(s, first); i < end; ++i) {
+            const Vertex& v = path.camera_vertex(n - 1 - i);
+            x[size_t(i)] = {v.pdf_rev, v.pdf_fwd, v.delta, 0};
         }
         // The connection's end points are not scattered by a delta lobe, and the densities
         // across the connection are those of the other side sampling them.
@@ -1001,21 +1013,18 @@ private:
             x[size_t(s) + 1].from_light = pdf_light(pt, path.camera_vertex(t - 2)) * pt.segment_rev;
         }
         if (!steady_angular_) angular_densities(path, x);
-        auto remap = [](double f) { return f != 0 ? f : 1.0; };
-        auto h = [&](double r) { return power_ ? r * r : r; };
-        const int last = to_sensor_ ? n - 1 : n - 2;  // the last strategy: t = 1 or t = 2
         x[size_t(s)].rel = 1.0;
-        for (int k = s + 1; k <= last; ++k)  // strategies with fewer camera vertices
-            x[size_t(k)].rel = x[size_t(k) - 1].rel * remap(x[size_t(k) - 1].from_light) /
-                               remap(x[size_t(k) - 1].from_camera);
-        for (int k = s - 1; k >= 0; --k)  // strategies with fewer light vertices
-            x[size_t(k)].rel = x[size_t(k) + 1].rel * remap(x[size_t(k)].from_camera) /
-                               remap(x[size_t(k)].from_light);
+        for (int k = s + 1; k <= hi; ++k)  // strategies with fewer camera vertices
+            x[size_t(k)].rel = x[size_t(k) - 1].rel *
+                               ratio(x[size_t(k) - 1].from_light, x[size_t(k) - 1].from_camera);
+        for (int k = s - 1; k >= lo; --k)  // strategies with fewer light vertices
+            x[size_t(k)].rel =
+                x[size_t(k) + 1].rel * ratio(x[size_t(k)].from_camera, x[size_t(k)].from_light);
         // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
         const bool delta_light = s > 0 && (path.light_vertex(0).emission.delta_position ||
                                            path.light_vertex(0).emission.delta_direction);
         double sum = 0.0;
-        for (int k = 0; k <= last; ++k) {
+        for (int k = lo; k <= hi; ++k) {
             const bool start_delta = k > 0 ? x[size_t(k) - 1].delta : delta_light;
             const bool joins = k == s || (k > s ? !x[size_t(k) - 1].delta && !x[size_t(k)].delta
                                                 : !x[size_t(k)].delta && !start_delta);
@@ -1026,7 +1035,44 @@ private:
             if (const double c = placement_factor(scene, path, k); c > 0)
                 sum += h(x[size_t(k)].rel * c);
         }
+        if (lo > 0) sum += h(x[size_t(lo)].rel) * far_sums(paths, true, lo - 1);
+        if (hi < last) sum += h(x[size_t(hi)].rel) * far_sums(paths, false, n - 1 - hi);
         return float((placed ? h(placement_factor(scene, path, s)) : 1.0) / sum);
+    }
+    // The heuristic's function of a density ratio (multiplicative: h(ab) = h(a) h(b)).
+    double h(double r) const { return power_ ? r * r : r; }
+    // A ratio of densities; a zero density (a delta lobe's) stands for 1, as in pbrt-v3.
+    static double ratio(double num, double den) {
+        return (num != 0 ? num : 1.0) / (den != 0 ? den : 1.0);
+    }
+    // Strategies far from a connection, for mis_weight(). At light vertex m: the sum, over the
+    // strategies k <= m (joining light vertices k - 1 and k) that can join, of h(the product
+    // over i = k..m of vertex i's density from the camera side over its own); at camera vertex
+    // m the same over the strategies keeping camera vertices 0..t' - 1, 1 (or 2) <= t' <= m.
+    // These densities are the subpath's own (a connection (s, t) changes those of path
+    // vertices s - 2 .. s + 1 only) and h is multiplicative, so mis_weight() needs only
+    // h(its strategy s - 2's or s + 2's relative density) times this: O(1) per connection
+    // instead of O(path length) (the recursive MIS of van Antwerpen 2011 and Georgiev 2012).
+    // Filled on demand: a vertex's reverse density is known once the vertex after it has
+    // scattered, which holds for every vertex a connection asks for here.
+    double far_sums(const Subpaths& paths, bool light, int m) const {
+        std::vector<double>& sums = light ? paths.light_far : paths.camera_far;
+        const std::vector<Vertex>& path = light ? paths.light : paths.camera;
+        const int first_joinable = light ? 0 : (to_sensor_ ? 1 : 2);  // camera: t' >= 1 or 2
+        for (int i = int(sums.size()); i <= m; ++i) {
+            const Vertex& v = path[size_t(i)];
+            const double before = i > 0 ? sums[size_t(i) - 1] : 0.0;
+            if (i < first_joinable) {
+                sums.push_back(0.0);
+                continue;
+            }
+            const bool previous_delta =
+                i > 0 ? path[size_t(i) - 1].delta
+                      : v.emission.delta_position || v.emission.delta_direction;
+            const double joins = !v.delta && !previous_delta ? 1.0 : 0.0;
+            sums.push_back(h(ratio(v.pdf_rev, v.pdf_fwd)) * (joins + before));
+        }
+        return sums[size_t(m)];
     }
 
     // Time-angular sampling: the densities of leaving each medium vertex of the path toward its
