@@ -11,17 +11,15 @@ namespace femto {
 
 namespace {
 
-constexpr double kPi64 = 3.14159265358979323846;
-
-// The angles, seen from the target's foot on the line, of the segment's start and end (pi / 2
-// for an infinite segment); empty when the segment is too short to resolve.
-struct AngleRange {
-    double theta_a, theta_b;
-    bool empty() const { return !(theta_b > theta_a); }
-};
-AngleRange angle_range(const ConnectionQuery& q, const ConnectionGeometry& g) {
-    return {std::atan2(-g.b, g.D),
-            std::isfinite(q.length) ? std::atan2(q.length - g.b, g.D) : kPi64 / 2};
+// The angle the segment spans seen from the target's foot on the line (theta_b - theta_a, the
+// angles of its end and start; not positive when the segment is too short to resolve). One atan2:
+// atan(x) - atan(y) = atan2(x - y, 1 + x y) with x = (length - b) / D and y = -b / D, scaled by
+// D^2 (for an infinite segment pi / 2 - atan(y) = atan2(1, y)). Two angles cost twice as much
+// (the density's only transcendental, which connection strategies evaluate in every MIS
+// weight) and cancel on short segments.
+double angle_span(const ConnectionQuery& q, const ConnectionGeometry& g) {
+    return std::isfinite(q.length) ? std::atan2(q.length * g.D, g.D * g.D - g.b * (q.length - g.b))
+                                   : std::atan2(g.D, -g.b);
 }
 
 }  // namespace
@@ -39,19 +37,19 @@ ConnectionGeometry::ConnectionGeometry(const ConnectionQuery& q) {
 double equiangular_sample(const ConnectionQuery& q, double u) {
     if (!(q.length > 0)) return -1.0;
     const ConnectionGeometry g(q);
-    const AngleRange range = angle_range(q, g);
-    if (range.empty()) return -1.0;
-    const double r = g.b + g.D * std::tan(range.theta_a + u * (range.theta_b - range.theta_a));
+    const double span = angle_span(q, g);
+    if (!(span > 0)) return -1.0;
+    const double r = g.b + g.D * std::tan(std::atan2(-g.b, g.D) + u * span);
     return std::clamp(r, 0.0, std::nextafter(q.length, 0.0));
 }
 
 double equiangular_pdf(const ConnectionQuery& q, double r) {
     if (!(r >= 0 && r < q.length)) return 0.0;
     const ConnectionGeometry g(q);
-    const AngleRange range = angle_range(q, g);
-    if (range.empty()) return 0.0;
+    const double span = angle_span(q, g);
+    if (!(span > 0)) return 0.0;
     const double h = r - g.b;
-    return g.D / ((range.theta_b - range.theta_a) * (g.D * g.D + h * h));
+    return g.D / (span * (g.D * g.D + h * h));
 }
 
 }  // namespace femto
