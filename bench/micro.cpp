@@ -1,6 +1,7 @@
 // femto_micro: Google Benchmark micro benchmarks of the routines every camera path runs per
 // vertex or per sample (issue 17): the sampler's draws, a light sample, a hit record's fill,
-// a film splat, and one whole path-traced camera sample. Each works on the Cornell box of
+// a film splat, a connection strategy's density, and one whole path-traced (or BDPT) camera
+// sample. Each works on the Cornell box of
 // bench/experiments/scenes/cornell-films.xml (the shipped room), so its figures are the costs
 // that bench/README.md's profile of that scene adds up. A regression in one routine shows here
 // before it is lost in a whole render's noise.
@@ -27,6 +28,7 @@
 #include "femto/scene.h"
 #include "femto/sensor.h"
 #include "femto/shape.h"
+#include "femto/time_sampling.h"
 
 namespace {
 
@@ -228,16 +230,41 @@ BENCHMARK_CAPTURE(Splat, transient_box, std::string("transient"), std::string("b
 BENCHMARK_CAPTURE(Splat, transient_gaussian, std::string("transient"), std::string("gaussian"))
     ->Arg(4);
 
+// ---- connection strategies -----------------------------------------------------------------
+
+// The equiangular density of a distance on a segment toward a point: a connection strategy's
+// term in every MIS weight of a BDPT path through a medium (per vertex and strategy), on
+// segments and targets of the box's size.
+void EquiangularPdf(benchmark::State& state) {
+    const auto a = uniform_points(kInputs, 5), b = uniform_points(kInputs, 6);
+    std::vector<ConnectionQuery> queries(kInputs);
+    for (size_t i = 0; i < kInputs; ++i)
+        queries[i] = {Vec3(0.f, -0.5f, 0.f), normalize(Vec3(a[i].x - 0.5f, 0.3f, a[i].y - 0.5f)),
+                      0.5 + 2.0 * b[i].x, Vec3(2 * b[i].y - 1, 0.9f, 0.2f)};
+    size_t i = 0;
+    for (auto _ : state) {
+        const ConnectionQuery& q = queries[i & (kInputs - 1)];
+        benchmark::DoNotOptimize(equiangular_pdf(q, 0.5 * q.length));
+        ++i;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(EquiangularPdf);
+
 // ---- one camera sample ---------------------------------------------------------------------
 
 // Integrator::sample for one camera ray of the box, max_depth 8, no roulette: everything above
-// together, plus Embree (the ray rate's denominator).
+// together, plus Embree (the ray rate's denominator). BDPT's sample also keeps its splats (the
+// strategies t = 1), dropped before the next.
 void PathSample(benchmark::State& state, const std::string& integrator) {
     auto scene = cornell_box("hdrfilm", "box", integrator);
+    scene->integrator().preprocess(*scene);  // as render() does (BDPT's light starts)
     const Sensor& sensor = scene->sensor();
     auto sampler = sensor.sampler().clone();
     const Integrator& path = scene->integrator();
     ContributionList list;
+    SplatList splats;
+    if (path.splats()) list.set_splat_list(&splats);
     uint32_t s = 0;
     const uint64_t rays_before = scene->rays_traced();
     for (auto _ : state) {
@@ -247,6 +274,7 @@ void PathSample(benchmark::State& state, const std::string& integrator) {
         const Ray ray = sensor.sample_ray(
             {float(pixel % 64) + jitter.x, float(pixel / 64) + jitter.y}, sampler->next_2d());
         list.clear();
+        splats.clear();
         path.sample(*scene, *sampler, ray, list);
         benchmark::DoNotOptimize(list.items().data());
         ++s;
@@ -257,6 +285,7 @@ void PathSample(benchmark::State& state, const std::string& integrator) {
 }
 BENCHMARK_CAPTURE(PathSample, path, std::string("path"));
 BENCHMARK_CAPTURE(PathSample, transient_path, std::string("transient_path"));
+BENCHMARK_CAPTURE(PathSample, transient_bdpt, std::string("transient_bdpt"));
 
 }  // namespace
 
