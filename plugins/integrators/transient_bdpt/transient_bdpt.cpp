@@ -1024,6 +1024,7 @@ private:
         const bool delta_light = s > 0 && (path.light_vertex(0).emission.delta_position ||
                                            path.light_vertex(0).emission.delta_direction);
         double sum = 0.0;
+        double placed_factor = 0.0;  // strategy s's (k = s always joins)
         for (int k = lo; k <= hi; ++k) {
             const bool start_delta = k > 0 ? x[size_t(k) - 1].delta : delta_light;
             const bool joins = k == s || (k > s ? !x[size_t(k) - 1].delta && !x[size_t(k)].delta
@@ -1032,12 +1033,14 @@ private:
             const bool environment_to_camera = k == 1 && n == 2 && path[0].environment;
             if (!joins || (k == 0 && hit_excluded) || environment_to_camera) continue;
             sum += h(x[size_t(k)].rel);
-            if (const double c = placement_factor(scene, path, k); c > 0)
+            if (const double c = placement_factor(scene, path, k); c > 0) {
                 sum += h(x[size_t(k)].rel * c);
+                if (k == s) placed_factor = c;
+            }
         }
         if (lo > 0) sum += h(x[size_t(lo)].rel) * far_sums(paths, true, lo - 1);
         if (hi < last) sum += h(x[size_t(hi)].rel) * far_sums(paths, false, n - 1 - hi);
-        return float((placed ? h(placement_factor(scene, path, s)) : 1.0) / sum);
+        return float((placed ? h(placed_factor) : 1.0) / sum);
     }
     // The heuristic's function of a density ratio (multiplicative: h(ab) = h(a) h(b)).
     double h(double r) const { return power_ ? r * r : r; }
