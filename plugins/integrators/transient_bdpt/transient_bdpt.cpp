@@ -1021,8 +1021,7 @@ private:
             x[size_t(k)].rel =
                 x[size_t(k) + 1].rel * ratio(x[size_t(k)].from_camera, x[size_t(k)].from_light);
         // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
-        const bool delta_light = s > 0 && (path.light_vertex(0).emission.delta_position ||
-                                           path.light_vertex(0).emission.delta_direction);
+        const bool delta_light = s > 0 && delta_emission(path.light_vertex(0));
         double sum = 0.0;
         double placed_factor = 0.0;  // strategy s's (k = s always joins)
         for (int k = lo; k <= hi; ++k) {
@@ -1041,6 +1040,11 @@ private:
         if (lo > 0) sum += h(x[size_t(lo)].rel) * far_sums(paths, true, lo - 1);
         if (hi < last) sum += h(x[size_t(hi)].rel) * far_sums(paths, false, n - 1 - hi);
         return float((placed ? h(placed_factor) : 1.0) / sum);
+    }
+    // A light subpath's start emitting a delta in position or direction: no camera path hits
+    // it, so the strategy joining the camera subpath to it (k = 0) cannot make the path.
+    static bool delta_emission(const Vertex& start) {
+        return start.emission.delta_position || start.emission.delta_direction;
     }
     // The heuristic's function of a density ratio (multiplicative: h(ab) = h(a) h(b)).
     double h(double r) const { return power_ ? r * r : r; }
@@ -1069,9 +1073,7 @@ private:
                 sums.push_back(0.0);
                 continue;
             }
-            const bool previous_delta =
-                i > 0 ? path[size_t(i) - 1].delta
-                      : v.emission.delta_position || v.emission.delta_direction;
+            const bool previous_delta = i > 0 ? path[size_t(i) - 1].delta : delta_emission(v);
             const double joins = !v.delta && !previous_delta ? 1.0 : 0.0;
             sums.push_back(h(ratio(v.pdf_rev, v.pdf_fwd)) * (joins + before));
         }
