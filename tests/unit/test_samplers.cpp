@@ -708,4 +708,73 @@ TEST(SamplerStratified, Mitsuba06SceneWithSampleCountAndDimension) {
     EXPECT_THROW(femto::load_scene_string(misspelt), femto::SceneError);
 }
 
+// -- dimensions -------------------------------------------------------------------------------
+
+// An integrator whose number of draws varies from sample to sample (BDPT) starts a decision at
+// a fixed dimension with advance_to(): the pixel's samples then stratify that decision whatever
+// was drawn before it. Without it (the control) the same draw lands on a different dimension in
+// each sample and is not stratified.
+TEST(SamplerDimensions, AdvanceToStratifiesADecisionAfterVaryingDraws) {
+    constexpr uint32_t kSide = 8, kCount = kSide * kSide;  // 2^6 samples
+    for (const char* type : {"ldsampler", "stratified"}) {
+        SCOPED_TRACE(type);
+        auto s = make_sampler(type, kCount);
+        std::vector<Vec2> aligned, drifting;
+        for (uint32_t i = 0; i < kCount; ++i) {
+            for (bool align : {true, false}) {
+                s->start(7, 3, i);
+                EXPECT_EQ(s->dimension(), 0u);
+                const uint32_t before = (i * 7) % 5;  // 0 to 4 draws
+                for (uint32_t k = 0; k < before; ++k) s->next_1d();
+                EXPECT_EQ(s->dimension(), before);
+                if (align) {
+                    s->advance_to(6);
+                    EXPECT_EQ(s->dimension(), 6u);
+                    aligned.push_back(s->next_2d());
+                } else {
+                    drifting.push_back(s->next_2d());
+                }
+                EXPECT_EQ(s->dimension(), (align ? 6u : before) + 1);
+                // Never back: a dimension is drawn at most once in a sample.
+                s->advance_to(1);
+                EXPECT_EQ(s->dimension(), (align ? 6u : before) + 1);
+            }
+        }
+        if (std::string(type) == "ldsampler") {
+            EXPECT_TRUE(is_02_net(aligned, 6));
+            EXPECT_FALSE(is_02_net(drifting, 6));
+        } else {
+            EXPECT_TRUE(one_per_cell(aligned, kSide));
+            EXPECT_FALSE(one_per_cell(drifting, kSide));
+        }
+    }
+}
+
+// ldsampler's numbers are a function of (seed, pixel, sample, dimension): advancing to a
+// dimension gives what drawing up to it would have.
+TEST(SamplerDimensions, LdsamplerAdvanceEqualsDrawingThrough) {
+    auto s = make_sampler("ldsampler", 16);
+    for (uint32_t i = 0; i < 16; ++i) {
+        s->start(5, 9, i);
+        for (int k = 0; k < 4; ++k) s->next_2d();
+        const Vec2 drawn = s->next_2d();
+        s->start(5, 9, i);
+        s->advance_to(4);
+        const Vec2 advanced = s->next_2d();
+        EXPECT_EQ(advanced.x, drawn.x);
+        EXPECT_EQ(advanced.y, drawn.y);
+    }
+}
+
+// Independent numbers need no alignment: the default advance_to() leaves them as they are.
+TEST(SamplerDimensions, IndependentIgnoresAdvance) {
+    auto s = make_sampler("independent", 16);
+    s->start(5, 9, 2);
+    const float a = s->next_1d(), b = s->next_1d();
+    s->start(5, 9, 2);
+    s->advance_to(100);
+    EXPECT_EQ(s->next_1d(), a);
+    EXPECT_EQ(s->next_1d(), b);
+}
+
 }  // namespace

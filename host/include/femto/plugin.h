@@ -58,7 +58,8 @@ namespace femto {
 ///  layout.)
 /// (27: RayDifferential::to_pixel_centre and PixelFootprint::to_pixel_centre change Ray's
 ///  differential and Hit's layout.)
-inline constexpr uint32_t kPluginAbiVersion = 27;
+/// (28: Sampler::dimension() and Sampler::advance_to() change Sampler's vtable.)
+inline constexpr uint32_t kPluginAbiVersion = 28;
 
 struct PluginDescriptor {
     uint32_t abi_version;

@@ -23,6 +23,17 @@ public:
     virtual float next_1d() = 0;
     virtual Vec2 next_2d() = 0;
 
+    /// The dimension the next next_1d() or next_2d() opens: 0 after start(), one more per
+    /// draw. A sampler whose dimensions are all alike (`independent`) may keep it at 0.
+    virtual uint64_t dimension() const { return 0; }
+    /// Skips ahead to dimension `d` (nothing when the sampler is at or past it: a dimension is
+    /// never drawn twice in a sample). An integrator whose number of draws varies from sample
+    /// to sample (BDPT: subpaths of different lengths) starts each decision at a fixed
+    /// dimension this way, so that a stratified or low-discrepancy sampler stratifies that
+    /// decision over the pixel's samples. The default does nothing: independent numbers need
+    /// no alignment.
+    virtual void advance_to(uint64_t d) { (void)d; }
+
     uint32_t sample_count() const { return sample_count_; }
     void set_sample_count(uint32_t n) { sample_count_ = n; }
 

@@ -136,6 +136,39 @@ struct Subpaths {
     }
 };
 
+// Where a sample's decisions start in the sampler's dimensions (Sampler::advance_to). Drawn in
+// sequence, a decision's dimension would depend on how many numbers the subpaths before it
+// took: the second subpath's start and every connection's numbers would land on another
+// dimension in each sample, and a low-discrepancy sampler could not stratify them
+// (bench/README.md measures what that cost). So each subpath vertex and each connection starts
+// at a dimension of its own: one that draws more than kStride numbers pushes the later ones
+// along, never back onto a dimension already drawn.
+struct DimensionLayout {
+    static constexpr uint64_t kStride = 8;  // a vertex draws at most ~5 (distance, event, lobe)
+    uint64_t camera = 0, light = 0, connections = 0, placed = 0;
+    uint64_t light_vertices = 0;
+
+    // `base`: the first dimension after the camera ray's; the subpath traced first comes first.
+    DimensionLayout(uint64_t base, int camera_vertices, int light_vertices_, bool camera_first)
+        : light_vertices(uint64_t(light_vertices_)) {
+        const uint64_t camera_size = uint64_t(camera_vertices) * kStride;
+        const uint64_t light_size = light_vertices * kStride;
+        camera = camera_first ? base : base + light_size;
+        light = camera_first ? base + camera_size : base;
+        connections = base + camera_size + light_size;
+        placed = connections + uint64_t(camera_vertices) * light_size;
+    }
+    // Vertex `index` of a subpath whose block starts at `subpath`.
+    static uint64_t vertex(uint64_t subpath, size_t index) { return subpath + index * kStride; }
+    // Strategy (s, t), and the placed variant joining light vertex s - 1 on camera_out[j].
+    uint64_t connection(int s, int t) const {
+        return connections + (uint64_t(t - 1) * light_vertices + uint64_t(s - 1)) * kStride;
+    }
+    uint64_t placement(size_t j, int s) const {
+        return placed + (uint64_t(j) * light_vertices + uint64_t(s - 1)) * kStride;
+    }
+};
+
 // The calling thread's subpaths, reused from sample to sample. Reached through a call that is
 // never inlined: given the thread_local itself, GCC specialised the helpers it is passed to
 // for it, and in a plugin (a shared library) every access there called __tls_get_addr (98
@@ -248,21 +281,24 @@ public:
                 ContributionList& out) const override {
         Subpaths& paths = thread_subpaths();
         paths.clear();
+        const DimensionLayout dims(sampler.dimension(), max_vertices(true), max_vertices(false),
+                                   steady_angular_);
         if (steady_angular_) {
-            camera_subpath(scene, sampler, ray, out, paths);
-            light_subpath(scene, sampler, paths, ray.o);
+            camera_subpath(scene, sampler, ray, out, paths, dims.camera);
+            light_subpath(scene, sampler, paths, ray.o, dims.light);
         } else {  // the camera subpath aims at the light subpath's first vertex
-            light_subpath(scene, sampler, paths, ray.o);
-            camera_subpath(scene, sampler, ray, out, paths);
+            light_subpath(scene, sampler, paths, ray.o, dims.light);
+            camera_subpath(scene, sampler, ray, out, paths, dims.camera);
         }
         const int nc = int(paths.camera.size()), nl = int(paths.light.size());
         for (int t = to_sensor_ ? 1 : 2; t <= nc; ++t)
             for (int s = 1; s <= nl; ++s) {
                 if (max_depth() >= 0 && s + t - 1 > max_depth()) break;
                 if (!wanted(s, t)) continue;
+                sampler.advance_to(dims.connection(s, t));
                 connect(scene, sampler, paths, s, t, out);
             }
-        if (connecting_) place_and_connect(scene, sampler, paths, out);
+        if (connecting_) place_and_connect(scene, sampler, paths, dims, out);
     }
 
     // A distributed render adds every process's strategy images (atomics of doubles: the
@@ -317,8 +353,9 @@ private:
 
     // The camera subpath: the camera, then the scattering vertices the camera ray's path meets.
     // A vertex on an emitter adds the strategy s = 0 at once.
+    // `dims`: its block of sampler dimensions (DimensionLayout).
     void camera_subpath(const Scene& scene, Sampler& sampler, const Ray& camera_ray,
-                        ContributionList& out, Subpaths& paths) const {
+                        ContributionList& out, Subpaths& paths, uint64_t dims) const {
         Walk walk{camera_ray, MediumTracker::at_sensor(scene), 0.0, segment_densities()};
         if (!paths.light.empty()) walk.has_target = true, walk.target = paths.light[0].p;
         Vertex cam;
@@ -338,6 +375,7 @@ private:
         first_ray.differential = nullptr;
         paths.camera_out.push_back({first_ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         while (int(paths.camera.size()) < max_vertices(true)) {
+            sampler.advance_to(DimensionLayout::vertex(dims, paths.camera.size() - 1));
             Vertex v;
             Color weight(1.f);
             const double before = clock.time();
@@ -376,10 +414,11 @@ private:
 
     // The light subpath: a point on an emitter, then the scattering vertices its light meets.
     // Time-angular directions aim at `camera` (the camera sample's ray origin).
-    void light_subpath(const Scene& scene, Sampler& sampler, Subpaths& paths,
-                       const Vec3& camera) const {
+    void light_subpath(const Scene& scene, Sampler& sampler, Subpaths& paths, const Vec3& camera,
+                       uint64_t dims) const {
         const int limit = max_vertices(false);
         if (limit < 1) return;
+        sampler.advance_to(dims);
         const LightPathStarts::Start start = LightPathStarts::sample(scene, sampler);
         if (!start) return;
         const Emitter* emitter = start.emitter;
@@ -408,6 +447,7 @@ private:
         walk.target = camera;
         Color power = start.power();
         while (int(paths.light.size()) < limit) {
+            sampler.advance_to(DimensionLayout::vertex(dims, paths.light.size()));
             Vertex v;
             Color weight(1.f);
             const double before = clock.time();
@@ -753,14 +793,16 @@ private:
     // aiming at each light vertex and joined to it. The placed vertex takes the place of the
     // distance-sampled last camera vertex of strategy (s, t); MIS weighs both variants.
     void place_and_connect(const Scene& scene, Sampler& sampler, const Subpaths& paths,
-                           ContributionList& out) const {
+                           const DimensionLayout& dims, ContributionList& out) const {
         const int nl = int(paths.light.size());
         for (size_t j = 0; j < paths.camera_out.size(); ++j) {
             if (!paths.camera_out[j].medium.medium) continue;
             const int t = int(j) + 2;  // the camera vertices up to camera[j], and the placed one
             for (int s = 1; s <= nl; ++s) {
                 if (max_depth() >= 0 && s + t - 1 > max_depth()) break;
-                if (wanted(s, t, true)) connect_placed(scene, sampler, paths, j, s, out);
+                if (!wanted(s, t, true)) continue;
+                sampler.advance_to(dims.placement(j, s));
+                connect_placed(scene, sampler, paths, j, s, out);
             }
         }
     }

@@ -26,6 +26,7 @@
 // rendering past sample_count continues the same sequence). With sample_count a power of two
 // each pixel's samples form a complete (0,k,2)-net in every dimension pair; other counts give
 // a subset of one (at most one point per elementary interval).
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -143,6 +144,9 @@ public:
         const uint32_t y = reverse_bits(laine_karras_permutation(sobol_dim1_reversed(r), s.y_seed));
         return {to_unit_float(x), to_unit_float(y)};
     }
+
+    uint64_t dimension() const override { return slot_; }
+    void advance_to(uint64_t d) override { slot_ = std::max(slot_, d); }
 
 private:
     struct Slot {

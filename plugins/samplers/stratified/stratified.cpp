@@ -134,6 +134,9 @@ public:
         return {in_stratum(stratum % side_, jx, side_), in_stratum(stratum / side_, jy, side_)};
     }
 
+    uint64_t dimension() const override { return dimension_; }
+    void advance_to(uint64_t d) override { dimension_ = std::max(dimension_, d); }
+
 private:
     /// Mitsuba 3 rounds a sample count that is not a perfect square up to the next one, with
     /// a warning; so does femto, naming the count it uses.
