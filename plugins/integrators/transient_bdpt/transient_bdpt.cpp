@@ -146,13 +146,13 @@ struct Subpaths {
 struct DimensionLayout {
     static constexpr uint64_t kStride = 8;  // a vertex draws at most ~5 (distance, event, lobe)
     uint64_t camera = 0, light = 0, connections = 0, placed = 0;
-    uint64_t light_vertices = 0;
+    uint64_t light_vertex_count = 0;  // the most a light subpath has
 
     // `base`: the first dimension after the camera ray's; the subpath traced first comes first.
-    DimensionLayout(uint64_t base, int camera_vertices, int light_vertices_, bool camera_first)
-        : light_vertices(uint64_t(light_vertices_)) {
+    DimensionLayout(uint64_t base, int camera_vertices, int light_vertices, bool camera_first)
+        : light_vertex_count(uint64_t(light_vertices)) {
         const uint64_t camera_size = uint64_t(camera_vertices) * kStride;
-        const uint64_t light_size = light_vertices * kStride;
+        const uint64_t light_size = light_vertex_count * kStride;
         camera = camera_first ? base : base + light_size;
         light = camera_first ? base + camera_size : base;
         connections = base + camera_size + light_size;
@@ -162,10 +162,10 @@ struct DimensionLayout {
     static uint64_t vertex(uint64_t subpath, size_t index) { return subpath + index * kStride; }
     // Strategy (s, t), and the placed variant joining light vertex s - 1 on camera_out[j].
     uint64_t connection(int s, int t) const {
-        return connections + (uint64_t(t - 1) * light_vertices + uint64_t(s - 1)) * kStride;
+        return connections + (uint64_t(t - 1) * light_vertex_count + uint64_t(s - 1)) * kStride;
     }
     uint64_t placement(size_t j, int s) const {
-        return placed + (uint64_t(j) * light_vertices + uint64_t(s - 1)) * kStride;
+        return placed + (uint64_t(j) * light_vertex_count + uint64_t(s - 1)) * kStride;
     }
 };
 
