@@ -211,7 +211,7 @@ bad_define)
 unused_define)
   # A -D the scene does not use is a typo until proven otherwise: an error naming the scene's
   # parameters and the closest one; --lenient makes it a warning and renders.
-  expect_exit 2 '^femto: error: -D sppp=4: .*scene\.xml has no parameter "sppp" \(did you mean "spp"\?\); its parameters \(<default> names and \$names\): bins, integrator, max_depth, res, spp, tfilter$' -- "$femto" render "$scene" -D sppp=4 -o out/u -q
+  expect_exit 2 '^femto: error: -D sppp=4: .*scene\.xml has no parameter "sppp" \(did you mean "spp"\?\); its parameters \(<default> names and \$names\): bins, integrator, max_depth, res, sampler, spp, tfilter$' -- "$femto" render "$scene" -D sppp=4 -o out/u -q
   [ ! -e out/u.exr ] || fail "output written"
   expect_exit 0 '^warning: -D sppp=4: .* -- ignored \(--lenient\)$' -- "$femto" render "$scene" -D sppp=4 -D spp=1 -D res=8 -D bins=4 --lenient -o out/l -q
   [ -s out/l.exr ] || fail "--lenient did not render";;
