@@ -32,7 +32,13 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-BUILD=build-fuzz
+# FEMTO_FUZZ_BUILD: another build folder configured with FEMTO_FUZZ=ON (scripts/test.sh passes
+# its sanitizer build, which builds the tests and the harnesses in one clang configuration).
+BUILD=${FEMTO_FUZZ_BUILD:-build-fuzz}
+if [ -f "$BUILD/CMakeCache.txt" ] && ! grep -q '^FEMTO_FUZZ:BOOL=ON$' "$BUILD/CMakeCache.txt"; then
+  echo "scripts/fuzz.sh: $BUILD is not configured with -DFEMTO_FUZZ=ON (clang)" >&2
+  exit 2
+fi
 LAUNCHER=()
 if command -v ccache >/dev/null; then LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 if [ ! -f "$BUILD/build.ninja" ]; then

@@ -28,10 +28,11 @@ constexpr int kRes = 8;
 // material: a path tracer's camera sample is `le` with probability 0.7 and 0 otherwise.
 std::string mask_scene(const std::string& integrator, int spp, double le,
                        const std::string& film = "") {
-    const std::string f =
-        film.empty() ? "<film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/><integer "
-                       "name=\"height\" value=\"8\"/><rfilter type=\"box\"/></film>"
-                     : film;
+    const std::string res = std::to_string(kRes);
+    const std::string f = film.empty() ? "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" +
+                                             res + "\"/><integer name=\"height\" value=\"" + res +
+                                             "\"/><rfilter type=\"box\"/></film>"
+                                       : film;
     return "<scene version=\"3.0.0\">\n" + integrator +
            "\n<sensor type=\"orthographic\"><transform name=\"to_world\"><lookat "
            "origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/></transform><sampler "
