@@ -19,10 +19,12 @@ namespace femto::cli {
 namespace {
 
 struct BenchArgs {
-    std::string experiment, out_dir;
+    std::vector<std::string> experiments;  // one, or several with --check
+    std::string out_dir;
     int threads = 0;
     std::vector<std::string> plugin_dirs;
     bool quiet = false;
+    bool check = false;
     int runs_per_machine = 1;
 } g_args;
 
@@ -38,7 +40,10 @@ CLI::App* add_bench_command(CLI::App& app) {
         "bench",
         "Run a convergence study: variants x budgets x seeds against a reference, "
         "error against time (docs/bench.md)");
-    bench->add_option("experiment", g_args.experiment, "Experiment file (XML)")->required();
+    bench
+        ->add_option("experiment", g_args.experiments,
+                     "Experiment file (XML; several with --check)")
+        ->required();
     bench->add_option("-o,--output", g_args.out_dir,
                       "Results folder (default: EXPERIMENT's name + \"-results\" beside it); a "
                       "re-run resumes from its results.csv");
@@ -50,6 +55,10 @@ CLI::App* add_bench_command(CLI::App& app) {
     bench->add_option("--plugin-dir", g_args.plugin_dirs,
                       "Plugin folder searched first by every variant (repeatable)");
     bench->add_flag("-q,--quiet", g_args.quiet, "No line per run");
+    bench->add_flag("--check", g_args.check,
+                    "Only load every scene with every variant and let each integrator check it "
+                    "(as every study does first), render nothing, and exit: 0 when all can run, "
+                    "2 naming the first that cannot");
     bench
         ->add_option("--runs-per-machine", g_args.runs_per_machine,
                      "Under mpirun: processes of each machine that take runs at the same time "
@@ -65,15 +74,27 @@ int run_bench_command(const std::atomic<bool>& stop, Distributed* group) {
         g_args.quiet = true;
         femto::silence_log(true);
     }
-    const bench::Experiment e = bench::load_experiment(g_args.experiment);
     bench::RunnerOptions options;
-    options.out_dir = g_args.out_dir.empty()
-                          ? (fs::path(g_args.experiment).parent_path() /
-                             (fs::path(g_args.experiment).stem().string() + "-results"))
-                                .string()
-                          : g_args.out_dir;
     options.threads = g_args.threads;
     options.plugin_dirs = g_args.plugin_dirs;
+    if (g_args.check) {
+        for (const std::string& file : g_args.experiments) {
+            const size_t pairs = bench::check_experiment(bench::load_experiment(file), options);
+            if (root)
+                fmt::print(stderr, "{}: all {} (scene, variant) pairs load and can render\n", file,
+                           pairs);
+        }
+        return 0;
+    }
+    if (g_args.experiments.size() != 1)
+        throw SceneError("femto bench runs one experiment at a time (several only with --check)");
+    const std::string& file = g_args.experiments.front();
+    const bench::Experiment e = bench::load_experiment(file);
+    options.out_dir =
+        g_args.out_dir.empty()
+            ? (fs::path(file).parent_path() / (fs::path(file).stem().string() + "-results"))
+                  .string()
+            : g_args.out_dir;
     options.progress = !g_args.quiet;
     options.stop = &stop;
     std::error_code ec;

@@ -117,6 +117,39 @@ bench_sigint)
   [ "$rows" -ge 3 ] && [ "$rows" -lt 19 ] || fail "results.csv has $rows lines after the stop"
   "$femto" bench "$experiment" -o out/b -q || fail "resume"
   [ "$(wc -l < out/b/results.csv)" = 19 ] || fail "the resumed study has $(wc -l < out/b/results.csv) lines";;
+bench_experiments_load)
+  # Every shipped experiment's (scene, variant) pairs load and pass their integrator's checks.
+  # The displaced sphere's mesh is generated, not shipped: experiments that use it are skipped
+  # (and say so) unless it has been made.
+  mesh="$src/bench/experiments/scenes/displaced_sphere.ply"
+  experiments=()
+  for e in "$src"/bench/experiments/*.xml; do
+    if grep -q 'displaced-sphere' "$e" && [ ! -e "$mesh" ]; then
+      echo "not checked: $(basename "$e") (needs python3 bench/experiments/scenes/make_displaced_sphere.py)"
+    else
+      experiments+=("$e")
+    fi
+  done
+  [ "${#experiments[@]}" -ge 20 ] || fail "only ${#experiments[@]} experiments to check"
+  expect_exit 0 'pairs load and can render' -- "$femto" bench --check "${experiments[@]}"
+  [ "$(grep -c 'pairs load and can render' stderr.txt)" -eq "${#experiments[@]}" ] ||
+    fail "not every experiment was checked"
+  expect_exit 2 'one experiment at a time' -- "$femto" bench "${experiments[0]}" "${experiments[1]}"
+  # A variant that cannot render is named before anything renders or is written.
+  cat > b.xml <<EOF
+<experiment name="x">
+<scene file="$src/scenes/cornell-box/scene.xml"><define name="res" value="16"/></scene>
+<variant name="ok"/>
+<variant name="broken">
+<define name="integrator" value="transient_beams"/>
+</variant>
+<budgets spp="1"/>
+<reference variant="ok" spp="4"/>
+</experiment>
+EOF
+  expect_exit 2 'b\.xml:4:1: variant "broken" cannot render scene "cornell-box": .*no shape bounds a <medium>' -- "$femto" bench b.xml -o out/b
+  [ ! -e out/b ] || fail "the study wrote before its check"
+  expect_exit 2 'variant "broken" cannot render' -- "$femto" bench --check b.xml;;
 bench_bad_input)
   printf '<experiment>\n<scenery/>\n</experiment>\n' > e.xml
   expect_exit 2 'e\.xml:2:1: unknown element <scenery> in <experiment>' -- "$femto" bench e.xml

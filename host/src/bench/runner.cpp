@@ -759,7 +759,26 @@ void write_received_runs(const RunnerOptions& options, const Experiment& e, cons
     });
 }
 
+size_t check_experiment(const Experiment& e, const RunnerOptions& options) {
+    size_t pairs = 0;
+    for (const SceneSpec& scene : e.scenes)
+        for (const Variant& v : e.variants) {
+            try {
+                const std::unique_ptr<Scene> loaded =
+                    load_scene(scene.file, load_options(scene, v, options));
+                loaded->integrator().preprocess(*loaded);
+            } catch (const SceneError& err) {
+                throw SceneError(v.location, fmt::format("variant \"{}\" cannot render scene "
+                                                         "\"{}\": {}",
+                                                         v.name, scene.name, err.what()));
+            }
+            ++pairs;
+        }
+    return pairs;
+}
+
 bool run_experiment(const Experiment& e, const RunnerOptions& options) {
+    check_experiment(e, options);
     StudyGroup* group = options.group;
     const bool root = !group || group->rank() == 0;
     if (group && e.raw_rays_seconds > 0)

@@ -73,6 +73,12 @@ struct RunRow {
     std::vector<double> pixels;   ///< rel_mse of each <pixel>'s time profile, in order
 };
 
+/// Loads every scene of `e` with every variant and lets its integrator check the scene
+/// (preprocess), rendering nothing: a variant that cannot run is found before the study spends
+/// time on references and runs. Returns the number of (scene, variant) pairs; throws SceneError
+/// naming the first pair that cannot run and why. run_experiment() calls it first.
+size_t check_experiment(const Experiment& e, const RunnerOptions& options);
+
 /// Runs what results.csv in `out_dir` does not hold yet (a re-run resumes), then writes the
 /// report from every row. Returns false when stopped early (the finished rows are kept).
 bool run_experiment(const Experiment& e, const RunnerOptions& options);
