@@ -159,10 +159,13 @@ void trace_photon_path(const Scene& scene, const LightPathStarts& starts,
 constexpr uint64_t kPhotonChunk = 1024;
 
 /// Traces `paths` photon paths of pass `pass` in parallel: `chunks` is resized to one Chunk per
-/// kPhotonChunk paths, and trace(sampler, chunk) is called for each path with the sampler
-/// started for it (its own seed, the path's index, the pass), so that each path's random
-/// numbers depend only on its index and the caller, appending the chunks in order, stores the
-/// same things whatever the thread count.
+/// kPhotonChunk paths, each emptied first, and trace(sampler, chunk) is called for each path
+/// with the sampler started for it (its own seed, the path's index, the pass), so that each
+/// path's random numbers depend only on its index and the caller, appending the chunks in
+/// order, stores the same things whatever the thread count. A Chunk with a clear() member is
+/// emptied by it and so keeps its storage from pass to pass (freeing and allocating it again
+/// every pass costs page faults: bench/README.md, "Photon storage kept across passes"); any
+/// other Chunk is replaced by a default-constructed one.
 template <typename Chunk, typename Trace>
 void trace_photon_paths(const Scene& scene, const PassInfo& pass, uint64_t paths,
                         std::vector<Chunk>& chunks, Trace&& trace) {
@@ -174,7 +177,10 @@ void trace_photon_paths(const Scene& scene, const PassInfo& pass, uint64_t paths
     tbb::parallel_for(uint64_t(0), count, [&](uint64_t c) {
         std::unique_ptr<Sampler> sampler = prototype.clone();
         Chunk& into = chunks[size_t(c)];
-        into = Chunk{};
+        if constexpr (requires { into.clear(); })
+            into.clear();
+        else
+            into = Chunk{};
         const uint64_t end = std::min(paths, (c + 1) * kPhotonChunk);
         for (uint64_t i = c * kPhotonChunk; i < end; ++i) {
             sampler->start(seed, i, pass.pass);

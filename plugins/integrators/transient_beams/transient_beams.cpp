@@ -71,6 +71,7 @@ struct Beam {
 
 struct BeamChunk {
     std::vector<Beam> beams;
+    void clear() { beams.clear(); }  // keeps the storage for the next pass
 };
 
 // Keeps every medium segment of a photon path.
@@ -357,7 +358,7 @@ bool TransientBeams::continue_from_surface(Sampler& sampler, EyePath& eye, const
 void TransientBeams::trace_beams(const Scene& scene, const PassInfo& pass) {
     // The last pass's beams are not needed while this pass's are traced.
     map_.release();
-    beams_ = {};
+    beams_.clear();  // keeps the storage: see transient_ppm's trace_photons()
     const double scale = 1.0 / double(photons_per_pass_);
     trace_photon_paths(scene, pass, photons_per_pass_, chunks_,
                        [&](Sampler& sampler, BeamChunk& into) {
@@ -366,11 +367,9 @@ void TransientBeams::trace_beams(const Scene& scene, const PassInfo& pass) {
                        });
     size_t count = 0;
     for (const BeamChunk& chunk : chunks_) count += chunk.beams.size();
-    beams_.reserve(count);
-    for (BeamChunk& chunk : chunks_) {
+    if (count > beams_.capacity()) beams_.reserve(count + count / 8);
+    for (const BeamChunk& chunk : chunks_)
         beams_.insert(beams_.end(), chunk.beams.begin(), chunk.beams.end());
-        chunk = BeamChunk{};
-    }
 }
 
 // ---- defaults and checks ---------------------------------------------------------------------

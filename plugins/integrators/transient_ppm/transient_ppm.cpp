@@ -68,13 +68,18 @@ struct Photons {
         positions.push_back(p);
         photons.push_back(photon);
     }
-    // Empty, with room for exactly n photons (no growth by doubling while appending).
-    void reserve_exactly(size_t n) {
-        release();
-        positions.reserve(n);
-        photons.reserve(n);
+    // Empty, keeping the storage: a pass's photons reuse the last pass's memory.
+    void clear() {
+        positions.clear();
+        photons.clear();
     }
-    void release() { *this = Photons{}; }
+    // Room for n photons, so that appending them does not grow by doubling. Growth leaves an
+    // eighth spare, since the next pass's count differs by a little.
+    void reserve(size_t n) {
+        if (n <= photons.capacity()) return;
+        positions.reserve(n + n / 8);
+        photons.reserve(n + n / 8);
+    }
     void append(const Photons& more) {
         positions.insert(positions.end(), more.positions.begin(), more.positions.end());
         photons.insert(photons.end(), more.photons.begin(), more.photons.end());
@@ -84,6 +89,10 @@ struct Photons {
 // A pass's photons of one chunk of photon paths.
 struct PhotonChunk {
     Photons surface, volume;
+    void clear() {
+        surface.clear();
+        volume.clear();
+    }
 };
 
 // One kind of estimate (on surfaces: 2D kernel; in media: 3D): its schedule, R_1, this pass's
@@ -202,7 +211,7 @@ private:
     LightPathStarts starts_;
     double bandwidth_1_ = 0;           // T_1, set by preprocess()
     PhotonMap surface_, volume_;       // this pass's photons, read by sample()
-    std::vector<PhotonChunk> chunks_;  // per chunk of photon paths, appended in order, freed
+    std::vector<PhotonChunk> chunks_;  // per chunk of photon paths, appended in order
 };
 
 // ---- camera paths ----------------------------------------------------------------------------
@@ -339,9 +348,11 @@ struct PhotonStore : PhotonVisitor {
 };
 
 void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
-    // The last pass's photons are not needed while this pass's are traced.
-    surface_.photons.release();
-    volume_.photons.release();
+    // The last pass's photons are not needed while this pass's are traced; their storage,
+    // and the chunks', is reused (bench/README.md: allocating it afresh every pass cost a
+    // fifth of a render in page faults).
+    surface_.photons.clear();
+    volume_.photons.clear();
     const double scale = 1.0 / double(photons_per_pass_);
     trace_photon_paths(scene, pass, photons_per_pass_, chunks_,
                        [&](Sampler& sampler, PhotonChunk& into) {
@@ -351,13 +362,11 @@ void TransientPpm::trace_photons(const Scene& scene, const PassInfo& pass) {
     size_t surface = 0, volume = 0;
     for (const PhotonChunk& chunk : chunks_)
         surface += chunk.surface.photons.size(), volume += chunk.volume.photons.size();
-    surface_.photons.reserve_exactly(surface);
-    volume_.photons.reserve_exactly(volume);
-    // Each chunk is freed once appended: a pass holds its photons about once, not twice.
-    for (PhotonChunk& chunk : chunks_) {
+    surface_.photons.reserve(surface);
+    volume_.photons.reserve(volume);
+    for (const PhotonChunk& chunk : chunks_) {
         surface_.photons.append(chunk.surface);
         volume_.photons.append(chunk.volume);
-        chunk = PhotonChunk{};
     }
 }
 
