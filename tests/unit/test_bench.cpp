@@ -425,12 +425,33 @@ TEST(BenchRunner, ChildProcessesMeasurePeakMemoryWithoutAReference) {
     EXPECT_NE(report.find("median peak MB"), std::string::npos);
     EXPECT_FALSE(fs::exists(dir / "out" / "plot.svg"));
     EXPECT_FALSE(fs::exists(dir / "out" / "frames.csv"));
-    // A failing child (a scene value the loader refuses) is an error naming the run.
+    // A scene value the loader refuses is found before anything runs, naming the variant.
     write(dir / "e.xml",
           "<experiment><scene file=\"scene.xml\" name=\"s\"/><variant name=\"bad\"><define "
           "name=\"bins\" value=\"-3\"/></variant><budgets spp=\"1\"/><isolation "
           "value=\"process\"/></experiment>");
     o.out_dir = (dir / "bad").string();
+    try {
+        run_experiment(load_experiment((dir / "e.xml").string()), o);
+        ADD_FAILURE() << "no error";
+    } catch (const femto::SceneError& err) {
+        EXPECT_NE(std::string(err.what()).find("variant \"bad\" cannot render scene \"s\""),
+                  std::string::npos)
+            << err.what();
+        EXPECT_NE(std::string(err.what()).find("bins must be in"), std::string::npos) << err.what();
+    }
+    EXPECT_FALSE(fs::exists(dir / "bad"));
+    // A child that fails while rendering (a filter wider than femto's tiles allow, refused by
+    // the render, not the loader) is an error naming the run.
+    std::string wide = read(dir / "scene.xml");
+    wide.replace(wide.find("</film>"), 7,
+                 "<rfilter type=\"gaussian\"><float name=\"stddev\" value=\"20\"/></rfilter>"
+                 "</film>");
+    write(dir / "wide.xml", wide);
+    write(dir / "e.xml",
+          "<experiment><scene file=\"wide.xml\" name=\"s\"/><variant name=\"wide\"/><budgets "
+          "spp=\"1\"/><isolation value=\"process\"/></experiment>");
+    o.out_dir = (dir / "wide").string();
     try {
         run_experiment(load_experiment((dir / "e.xml").string()), o);
         ADD_FAILURE() << "no error";
