@@ -102,7 +102,9 @@ struct PhotonMap {
     double requested_radius = 0;  // R_1 as given (0: the default)
     double radius_1 = 0;          // R_1 in use, set by preprocess()
     double radius2 = 0, bandwidth = 0;
-    double ball = 1;  // kernel_ball_integral(spatial, schedule.dims)
+    double ball = 1;   // kernel_ball_integral(spatial, schedule.dims)
+    float radius = 0;  // R_j
+    double norm = 0;   // 1 / (ball R_j^dims): the spatial kernel's normalisation
     Photons photons;
     PointGrid grid;
 
@@ -110,14 +112,14 @@ struct PhotonMap {
     void begin(uint64_t pass, double bandwidth_1) {
         radius2 = schedule.radius_squared(radius_1 * radius_1, pass);
         bandwidth = schedule.time(bandwidth_1, pass);
-        grid.build(photons.positions, float(std::sqrt(radius2)));
+        radius = float(std::sqrt(radius2));
+        norm = 1.0 / (ball * std::pow(double(radius), schedule.dims));
+        grid.build(photons.positions, radius);
     }
     // Calls each(photon, K_R) for every photon within R_j of x, K_R being the normalised
     // spatial kernel of `shape` at its distance.
     template <typename Each>
     void for_each_near(const Vec3& x, KernelShape shape, Each&& each) const {
-        const float radius = float(std::sqrt(radius2));
-        const double norm = 1.0 / (ball * std::pow(double(radius), schedule.dims));
         grid.query(x, [&](uint32_t i) {
             const Vec3 d = photons.positions[i] - x;
             const float dist2 = dot(d, d);
