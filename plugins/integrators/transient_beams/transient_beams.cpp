@@ -358,7 +358,7 @@ bool TransientBeams::continue_from_surface(Sampler& sampler, EyePath& eye, const
 void TransientBeams::trace_beams(const Scene& scene, const PassInfo& pass) {
     // The last pass's beams are not needed while this pass's are traced.
     map_.release();
-    beams_.clear();  // keeps the storage: see transient_ppm's trace_photons()
+    beams_.clear();  // keeps the storage: allocating it afresh every pass costs page faults
     const double scale = 1.0 / double(photons_per_pass_);
     trace_photon_paths(scene, pass, photons_per_pass_, chunks_,
                        [&](Sampler& sampler, BeamChunk& into) {
