@@ -9,7 +9,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   libopenmpi-dev openmpi-bin
-  python3 python3-numpy python3-matplotlib python3-skimage
+  python3 python3-numpy python3-scipy python3-matplotlib python3-skimage
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
