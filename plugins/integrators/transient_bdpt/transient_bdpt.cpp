@@ -376,7 +376,10 @@ private:
         paths.camera_out.push_back({first_ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         while (int(paths.camera.size()) < max_vertices(true)) {
             sampler.advance_to(DimensionLayout::vertex(dims, paths.camera.size() - 1));
-            Vertex v;
+            // The vertex is built in place (copying its ~500 bytes showed in the profile) and
+            // taken back where the walk ends before it.
+            Vertex& v = paths.camera.emplace_back();
+            const Vertex& prev = paths.camera[paths.camera.size() - 2];
             Color weight(1.f);
             const double before = clock.time();
             const bool found =
@@ -386,6 +389,7 @@ private:
                 });
             paths.camera_out.back().first_end = walk.first_end;
             if (!found) {
+                paths.camera.pop_back();
                 if (walk.escaped) environment_hit(scene, sampler, walk, paths, beta, clock, out);
                 return;
             }
@@ -393,11 +397,13 @@ private:
             beta *= weight;
             // A vertex on top of the previous one (a distance that rounds to 0) has no direction
             // to or from it: the walk ends (an event of probability zero in exact arithmetic).
-            if (beta.is_black() || !(squared_length(v.p - paths.camera.back().p) > 0.f)) return;
+            if (beta.is_black() || !(squared_length(v.p - prev.p) > 0.f)) {
+                paths.camera.pop_back();
+                return;
+            }
             if (v.kind == Vertex::Kind::Surface || v.kind == Vertex::Kind::Medium)
                 clock.reach_vertex();
-            set_forward_density(walk, paths.camera.back(), v);
-            paths.camera.push_back(v);
+            set_forward_density(walk, prev, v);
             if (v.emitter) emitter_hit(scene, sampler, paths, beta, clock, out);
             if (v.bsdf) apply_vertex_event(*v.bsdf, v.hit, sampler, clock, beta);
             paths.camera_beta.push_back(beta);
@@ -448,20 +454,25 @@ private:
         Color power = start.power();
         while (int(paths.light.size()) < limit) {
             sampler.advance_to(DimensionLayout::vertex(dims, paths.light.size()));
-            Vertex v;
+            Vertex& v = paths.light.emplace_back();  // in place, as on the camera subpath
+            const Vertex& prev = paths.light[paths.light.size() - 2];
             Color weight(1.f);
             const double before = clock.time();
             if (!next_vertex(scene, sampler, walk, v, weight, [&](const Vec3& p, double eta) {
                     clock.travel_to(p, eta);
                     return !clock.expired();
-                }))
+                })) {
+                paths.light.pop_back();
                 return;
+            }
             v.segment_optical = clock.time() - before;
             power *= weight;
-            if (power.is_black() || !(squared_length(v.p - paths.light.back().p) > 0.f)) return;
-            set_forward_density(walk, paths.light.back(), v);
+            if (power.is_black() || !(squared_length(v.p - prev.p) > 0.f)) {
+                paths.light.pop_back();
+                return;
+            }
+            set_forward_density(walk, prev, v);
             if (v.bsdf) v.event = apply_vertex_event(*v.bsdf, v.hit, sampler, clock);
-            paths.light.push_back(v);
             paths.light_power.push_back(power);
             paths.light_clock.push_back(clock);
             if (int(paths.light.size()) == limit) return;
@@ -520,8 +531,9 @@ private:
     bool next_vertex(const Scene& scene, Sampler& sampler, Walk& walk, Vertex& v, Color& weight,
                      Travel&& travel) const {
         walk.segment.clear();
+        Hit& hit = v.hit;  // found in place: a surface vertex keeps it
         for (int crossings = 0; crossings < 256; ++crossings) {
-            Hit hit;
+            if (crossings > 0) hit = Hit();
             const bool found = scene.intersect(walk.ray, hit);
             if (crossings == 0) walk.first_end = found ? double(hit.t) : kInfinity;
             if (const Medium* medium = walk.medium.medium) {
@@ -536,6 +548,7 @@ private:
                 walk.segment.add(strategy.survival(piece), strategy.pdf(piece));
                 weight *= ds.weight;
                 if (ds.scattered) {
+                    hit = Hit();  // a medium vertex has none
                     v.kind = Vertex::Kind::Medium;
                     v.p = walk.ray.at(float(ds.distance));
                     v.wi = -walk.ray.d;
@@ -560,7 +573,6 @@ private:
             v.p = hit.p;
             v.wi = -walk.ray.d;
             v.n = hit.ng;
-            v.hit = hit;
             v.bsdf = &bsdf;
             v.emitter = hit.shape->emitter();
             v.medium = walk.medium;
@@ -904,12 +916,17 @@ private:
     // Density with which vertex v, arrived at from direction w_prev (unit, toward where the
     // path came from; unused for end points), samples `next`, as a density of next.
     double pdf(const Scene& scene, const Vertex& v, const Vec3& w_prev, const Vertex& next) const {
-        const Vec3 d = towards(v, next);
+        return pdf(scene, v, w_prev, next, towards(v, next));
+    }
+    // The same with d = towards(v, next) already known (mis_weight(): the connection's
+    // direction, found once for the four densities across it).
+    double pdf(const Scene& scene, const Vertex& v, const Vec3& w_prev, const Vertex& next,
+               const Vec3& d) const {
         switch (v.kind) {
             case Vertex::Kind::Camera:
                 return to_area(scene.sensor().pdf_direction(d), v, next);
             case Vertex::Kind::Light:
-                return pdf_light(v, next);
+                return pdf_light(v, next, d);
             case Vertex::Kind::Medium:
                 return to_area(v.phase->eval(w_prev, d), v, next);
             case Vertex::Kind::Surface:
@@ -925,14 +942,17 @@ private:
     // a surface; in a medium dV = dA_perp dr), so the light vertex keeps only the emitter's
     // probability (pdf_light_origin()) and the path's density is unchanged.
     static double pdf_light(const Vertex& v, const Vertex& next) {
+        return pdf_light(v, next, towards(v, next));
+    }
+    static double pdf_light(const Vertex& v, const Vertex& next, const Vec3& d) {  // d: to next
         EmissionSample at = v.emission;
         at.p = v.p;
         at.n = v.n;
         float pos = 0.f, dir = 0.f;
-        v.emitter->pdf_emission(at, towards(v, next), pos, dir);
+        v.emitter->pdf_emission(at, d, pos, dir);
         if (!v.emission.delta_direction && !v.environment) return to_area(dir, v, next);
         if (!next.on_surface()) return pos;
-        return pos * std::abs(dot(next.n, towards(v, next)));
+        return pos * std::abs(dot(next.n, d));
     }
     // Density with which a light subpath starts at v (on an emitter).
     static double pdf_light_origin(const Scene& scene, const Vertex& v) {
@@ -1042,14 +1062,15 @@ private:
         if (s > 0) {
             Densities& xs = x[size_t(s) - 1];
             xs.delta = false;
-            xt.from_light = pdf(scene, *qs, qs->wi, pt) * join.at_camera_end;
+            const Vec3 across = towards(pt, *qs);  // and -across = towards(*qs, pt), exactly
+            xt.from_light = pdf(scene, *qs, qs->wi, pt, -across) * join.at_camera_end;
             if (t > 1)
                 x[size_t(s) + 1].from_light =
-                    pdf(scene, pt, towards(pt, *qs), path.camera_vertex(t - 2)) * pt.segment_rev;
-            xs.from_camera = pdf(scene, pt, pt.wi, *qs) * join.at_light_end;
+                    pdf(scene, pt, across, path.camera_vertex(t - 2)) * pt.segment_rev;
+            xs.from_camera = pdf(scene, pt, pt.wi, *qs, across) * join.at_light_end;
             if (s > 1)
                 x[size_t(s) - 2].from_camera =
-                    pdf(scene, *qs, towards(*qs, pt), path.light_vertex(s - 2)) * qs->segment_rev;
+                    pdf(scene, *qs, -across, path.light_vertex(s - 2)) * qs->segment_rev;
         } else {
             xt.from_light = pdf_light_origin(scene, pt);
             x[size_t(s) + 1].from_light = pdf_light(pt, path.camera_vertex(t - 2)) * pt.segment_rev;
@@ -1074,6 +1095,7 @@ private:
             const bool environment_to_camera = k == 1 && n == 2 && path[0].environment;
             if (!joins || (k == 0 && hit_excluded) || environment_to_camera) continue;
             sum += h(x[size_t(k)].rel);
+            if (!connecting_) continue;  // no placed variants (placement_factor() would be 0)
             if (const double c = placement_factor(scene, path, k); c > 0) {
                 sum += h(x[size_t(k)].rel * c);
                 if (k == s) placed_factor = c;
