@@ -343,6 +343,17 @@ public:
                              DistanceSampler::survival(strategy_, d))
                     : DistanceSampler::survival(strategy_, d);
     }
+    /// survival(d) and pdf(d) together, the same numbers from one exponential per rate (a
+    /// segment's densities need both; exp() was a tenth of BDPT's time in fog).
+    struct AtDistance {
+        double survival, pdf;
+    };
+    AtDistance at(double d) const {
+        const double e_strategy = DistanceSampler::survival(strategy_, d);
+        if (!mix_) return {e_strategy, strategy_ * e_strategy};
+        const double e_steady = DistanceSampler::survival(steady_, d);
+        return {0.5 * (e_steady + e_strategy), 0.5 * (steady_ * e_steady + strategy_ * e_strategy)};
+    }
 
 private:
     double steady_, strategy_;
@@ -400,8 +411,9 @@ public:
     /// The next piece from the segment's start (MediumPieces; null: vacuum).
     void piece(const Medium* medium, double length) override {
         if (!medium) return add_vacuum();
-        const DistanceMixture m(*medium, strategy_, mis_, ctx_);
-        add(m.survival(length), m.pdf(length));
+        const DistanceMixture::AtDistance at =
+            DistanceMixture(*medium, strategy_, mis_, ctx_).at(length);
+        add(at.survival, at.pdf);
     }
     /// A piece in vacuum (passed surely).
     void add_vacuum() { ++pieces_; }

@@ -545,7 +545,8 @@ private:
                 const DistanceSample ds =
                     sample_distance(*medium, walk.ray, tmax, strategy, u, sampler);
                 const double piece = ds.scattered ? ds.distance : tmax;
-                walk.segment.add(strategy.survival(piece), strategy.pdf(piece));
+                const DistanceMixture::AtDistance at = strategy.at(piece);
+                walk.segment.add(at.survival, at.pdf);
                 weight *= ds.weight;
                 if (ds.scattered) {
                     hit = Hit();  // a medium vertex has none

@@ -45,6 +45,7 @@ public:
             sigma_s_ = sigma_t_ * albedo;
         }
         majorant_ = std::max(sigma_t_.r, std::max(sigma_t_.g, sigma_t_.b));
+        grey_ = sigma_t_.r == sigma_t_.g && sigma_t_.g == sigma_t_.b;
     }
 
     bool homogeneous() const override { return true; }
@@ -52,6 +53,9 @@ public:
     Color sigma_t(const Vec3&) const override { return sigma_t_; }
     Color sigma_s(const Vec3&) const override { return sigma_s_; }
     Color transmittance(const Ray&, double distance, Sampler&) const override {
+        // One exponential when the channels agree (most media; exp() was 5 % of BDPT's
+        // instructions in fog with three of them).
+        if (grey_) return Color(float(std::exp(-double(sigma_t_.r) * distance)));
         Color tr;
         for (int c = 0; c < 3; ++c) tr[c] = float(std::exp(-double(sigma_t_[c]) * distance));
         return tr;
@@ -80,6 +84,7 @@ private:
 
     Color sigma_t_, sigma_s_;
     float majorant_ = 0.f;
+    bool grey_ = false;  // sigma_t the same in every channel
 };
 
 }  // namespace
