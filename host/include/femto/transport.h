@@ -333,18 +333,12 @@ public:
         return rate > 0.0 ? DistanceSampler::sample(rate, std::min(u, 1.0 - 1e-12)) : kInfinity;
     }
     /// Density of sample() returning r.
-    double pdf(double r) const {
-        return mix_ ? 0.5 * (DistanceSampler::pdf(steady_, r) + DistanceSampler::pdf(strategy_, r))
-                    : DistanceSampler::pdf(strategy_, r);
-    }
+    double pdf(double r) const { return at(r).pdf; }
     /// Probability that sample() returns more than d.
-    double survival(double d) const {
-        return mix_ ? 0.5 * (DistanceSampler::survival(steady_, d) +
-                             DistanceSampler::survival(strategy_, d))
-                    : DistanceSampler::survival(strategy_, d);
-    }
-    /// survival(d) and pdf(d) together, the same numbers from one exponential per rate (a
-    /// segment's densities need both; exp() was a tenth of BDPT's time in fog).
+    double survival(double d) const { return at(d).survival; }
+    /// survival(d) and pdf(d) together, from one exponential per rate (an exponential's density
+    /// is its rate times its survival; a segment's densities need both, and exp() was a tenth
+    /// of BDPT's time in fog).
     struct AtDistance {
         double survival, pdf;
     };
