@@ -31,6 +31,15 @@ bench_log_header() {
     } | tee "$log"
 }
 
+# Prints scene file SCENE with its integrator's type replaced by INTEGRATOR and its
+# time-sampling strategies dropped (steady sampling everywhere, which every integrator takes):
+#     steady_scene_with INTEGRATOR SCENE > COPY   (COPY next to SCENE: scenes include by
+#                                                  relative paths)
+steady_scene_with() {
+    sed -E -e "s/<integrator type=\"[^\"]+\"/<integrator type=\"$1\"/" \
+        -e '/<(distance|connection|angular) type=|name="mis"/d' "$2"
+}
+
 # Reads `femto render`'s output on stdin and prints its render time and ray rate: "SECONDS
 # MRAYS_PER_S" (fails, as grep does, when the summary line is missing).
 render_seconds_and_rate() {

@@ -5,9 +5,8 @@
 #
 # Each round renders SCENE_XML with INTEGRATOR from OLD_DIR, then from NEW_DIR (each through
 # `femto render --plugin-dir`: a folder holding the plugin's .so, and any other plugins of that
-# build to compare with it), then with transient_path from femto's own plugins. The scene's
-# integrator type is replaced and its time-sampling strategies dropped (steady sampling, as
-# run_ray_rate.sh does), in a copy next to the scene (it may include files by relative paths).
+# build to compare with it), then with transient_path from femto's own plugins, each in a
+# steady copy of the scene (common.sh's steady_scene_with, as run_ray_rate.sh renders).
 # Rows `round,build,integrator,seconds,mrays` go to OUT_CSV; tools/plugin_ab.py summarises them
 # (the new build's time over the old one's per round, each build's rays/s over the path
 # tracer's). How to get OLD_DIR: build the plugin at the old revision (or keep a copy of
@@ -16,7 +15,7 @@ set -euo pipefail
 
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 if [[ $# -lt 7 ]]; then
-    sed -n '2,14p' "$0"
+    sed -n '2,13p' "$0"
     exit 2
 fi
 out=$1 old=$2 new=$3 scene=$4 integrator=$5 rounds=$6 threads=$7
@@ -41,8 +40,7 @@ for round in $(seq 1 "$rounds"); do
             new) args=(--plugin-dir "$new") ;;
             path) name=transient_path ;;
         esac
-        sed -E -e "s/<integrator type=\"[^\"]+\"/<integrator type=\"$name\"/" \
-            -e '/<(distance|connection|angular) type=|name="mis"/d' "$scene" > "$xml"
+        steady_scene_with "$name" "$scene" > "$xml"
         line=$("$build/bin/femto" render "$xml" "$@" --threads "$threads" -o "$work/out" \
             "${args[@]}" 2>&1 | render_seconds_and_rate)
         rm -rf "$work"/out*

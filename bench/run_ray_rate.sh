@@ -35,11 +35,7 @@ for run in $(seq 1 "$runs"); do
             # Next to the scene: it includes files by paths relative to its folder.
             xml=$(mktemp -p "$root/scenes/$scene" ".ray-rate-$integrator-XXXXXX.xml")
             temp_scenes+=("$xml")
-            # The scene's integrator with its type replaced and its time-sampling strategies
-            # dropped (steady sampling everywhere, which every integrator takes).
-            sed -E -e "s/<integrator type=\"[^\"]+\"/<integrator type=\"$integrator\"/" \
-                -e '/<(distance|connection|angular) type=|name="mis"/d' \
-                "$root/scenes/$scene/scene.xml" > "$xml"
+            steady_scene_with "$integrator" "$root/scenes/$scene/scene.xml" > "$xml"
             line=$("$build/bin/femto" render "$xml" "${defines[@]}" --threads 2 \
                 -o "$work/out" 2>&1 | render_seconds_and_rate)
             read -r seconds rate <<< "$line"
