@@ -146,48 +146,74 @@ TEST(Render, DeterministicForSeedAndThreads) {
     EXPECT_NE(a, d);  // and the seed matters
 }
 
+namespace {
+
+// Every sum a film keeps (the cube, the pixels' weights), byte for byte, after a render of
+// `xml` at `spp` in an arena of `threads`.
+std::string film_sums(const std::string& xml, int threads, uint32_t spp) {
+    auto scene = load_scene_string(xml);
+    RenderOptions opt;
+    opt.threads = threads;
+    opt.spp = spp;
+    tbb::task_arena(threads).execute([&] { render(*scene, opt); });
+    std::string bytes;
+    for (const Accumulator& a : scene->sensor().film().accumulators())
+        bytes.append(static_cast<const char*>(a.data), a.count * a.element_bytes());
+    return bytes;
+}
+
+const std::string kOverlapBody =
+    "<shape type=\"sphere\"><point name=\"center\" x=\"0.3\" y=\"-0.2\" z=\"4\"/>"
+    "<emitter type=\"area\"><float name=\"radiance\" value=\"2\"/></emitter></shape>"
+    "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/><translate "
+    "z=\"6\"/></transform></shape>";
+const std::string kGaussianHdrFilm =
+    "<film type=\"hdrfilm\"><integer name=\"width\" value=\"160\"/><integer "
+    "name=\"height\" value=\"96\"/><rfilter type=\"gaussian\"/></film>";
+const std::string kGaussianCubeFilm =
+    "<film type=\"transient\"><integer name=\"width\" value=\"64\"/><integer "
+    "name=\"height\" value=\"48\"/><float name=\"start\" value=\"0\"/><float "
+    "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"40\"/><rfilter "
+    "type=\"gaussian\"/></film>";
+
+}  // namespace
+
 // Many tiles whose Gaussian filter borders overlap (hdrfilm: 32-pixel tiles; a transient cube:
 // smaller ones): the tiles of a pass run without a barrier between colours, and each block
 // merges only after the overlapping blocks of earlier colours, so a pixel sums its blocks in
 // one order at any thread count. An arena of 8 threads on fewer cores shuffles which tile
 // finishes first (the renderer's workers are as many as its arena's concurrency).
 TEST(Render, SameImageAtAnyThreadCountWithOverlappingTiles) {
-    const std::string body =
-        "<shape type=\"sphere\"><point name=\"center\" x=\"0.3\" y=\"-0.2\" z=\"4\"/>"
-        "<emitter type=\"area\"><float name=\"radiance\" value=\"2\"/></emitter></shape>"
-        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/><translate "
-        "z=\"6\"/></transform></shape>";
-    for (const std::string film :
-         {"<film type=\"hdrfilm\"><integer name=\"width\" value=\"160\"/><integer "
-          "name=\"height\" value=\"96\"/><rfilter type=\"gaussian\"/></film>",
-          "<film type=\"transient\"><integer name=\"width\" value=\"64\"/><integer "
-          "name=\"height\" value=\"48\"/><float name=\"start\" value=\"0\"/><float "
-          "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"40\"/><rfilter "
-          "type=\"gaussian\"/></film>",
-          // The kernel's pilot in the image: its 2 samples merge as each tile's pilot is done.
-          "<film type=\"transient\"><integer name=\"width\" value=\"64\"/><integer "
-          "name=\"height\" value=\"48\"/><float name=\"start\" value=\"0\"/><float "
-          "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"40\"/><rfilter "
-          "type=\"gaussian\"/><tfilter type=\"kernel\"><integer name=\"pilot_spp\" "
-          "value=\"2\"/></tfilter></film>"}) {
-        const std::string xml =
-            femto::test::scene_xml("<sensor type=\"perspective\">" + film + "</sensor>" + body);
-        auto render_with = [&](int threads) {
-            auto scene = load_scene_string(xml);
-            RenderOptions opt;
-            opt.threads = threads;
-            opt.spp = 4;
-            tbb::task_arena(threads).execute([&] { render(*scene, opt); });
-            // Every sum the film keeps (the cube, the pixels' weights), byte for byte.
-            std::string bytes;
-            for (const Accumulator& a : scene->sensor().film().accumulators())
-                bytes.append(static_cast<const char*>(a.data), a.count * a.element_bytes());
-            return bytes;
-        };
-        const auto one = render_with(1);
+    for (const std::string& film : std::vector<std::string>{
+             kGaussianHdrFilm, kGaussianCubeFilm,
+             // The kernel's pilot in the image: its 2 samples merge as each tile's pilot is done.
+             "<film type=\"transient\"><integer name=\"width\" value=\"64\"/><integer "
+             "name=\"height\" value=\"48\"/><float name=\"start\" value=\"0\"/><float "
+             "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"40\"/><rfilter "
+             "type=\"gaussian\"/><tfilter type=\"kernel\"><integer name=\"pilot_spp\" "
+             "value=\"2\"/></tfilter></film>"}) {
+        const std::string xml = femto::test::scene_xml("<sensor type=\"perspective\">" + film +
+                                                       "</sensor>" + kOverlapBody);
+        const auto one = film_sums(xml, 1, 4);
         ASSERT_GT(one.size(), 160u * 96 * 3 * 4 / 2) << film;  // the image's sums are there
-        EXPECT_TRUE(render_with(2) == one) << film;            // bit for bit
-        for (int run = 0; run < 3; ++run) EXPECT_TRUE(render_with(8) == one) << film;
+        EXPECT_TRUE(film_sums(xml, 2, 4) == one) << film;      // bit for bit
+        for (int run = 0; run < 3; ++run) EXPECT_TRUE(film_sums(xml, 8, 4) == one) << film;
+    }
+}
+
+// An integrator that splats (BDPT) runs the same tile loop, each tile's splats kept until the
+// pass's last tile and merged then in tile order: the same bits at any thread count, over
+// several passes (8 spp at 160x96 are two passes of 65,536 camera samples at most).
+TEST(Render, SplatsGiveTheSameImageAtAnyThreadCount) {
+    for (const std::string& film : {kGaussianHdrFilm, kGaussianCubeFilm}) {
+        const std::string xml = femto::test::scene_xml(
+            "<integrator type=\"transient_bdpt\"><integer name=\"max_depth\" "
+            "value=\"3\"/></integrator><sensor type=\"perspective\">" +
+            film + "</sensor>" + kOverlapBody);
+        const auto one = film_sums(xml, 1, 8);
+        ASSERT_FALSE(one.empty()) << film;
+        EXPECT_TRUE(film_sums(xml, 2, 8) == one) << film;  // bit for bit
+        EXPECT_TRUE(film_sums(xml, 8, 8) == one) << film;
     }
 }
 

@@ -24,6 +24,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "femto/bsdf.h"
@@ -386,17 +387,29 @@ public:
     // order they were made: every pixel receives them in the same order whatever the thread
     // count. Splats outside the film are dropped.
     void merge(Film& film, const std::vector<const SplatList*>& lists) {
-        const size_t tiles = size_t(columns_) * size_t(rows_);
+        // The splats bucketed by tile, in list order within a tile: each list counts its own
+        // per tile and then places them, the lists in parallel (a serial pass over a pass's
+        // splats would hold every other thread up), each at the offsets its counts give.
+        const size_t tiles = size_t(columns_) * size_t(rows_), n = lists.size();
+        next_.assign(n * tiles, 0);  // [list][tile]: the count, then the next slot
+        tbb::parallel_for(size_t(0), n, [&](size_t l) {
+            size_t* count = &next_[l * tiles];
+            for (const Splat& s : lists[l]->items())
+                if (const int64_t t = tile_of(s.pos); t >= 0) ++count[size_t(t)];
+        });
         start_.assign(tiles + 1, 0);
-        for (const SplatList* list : lists)
-            for (const Splat& s : list->items())
-                if (const int64_t t = tile_of(s.pos); t >= 0) ++start_[size_t(t) + 1];
-        for (size_t t = 0; t < tiles; ++t) start_[t + 1] += start_[t];
-        order_.resize(start_[tiles]);
-        std::vector<size_t> fill(start_.begin(), start_.end() - 1);
-        for (const SplatList* list : lists)
-            for (const Splat& s : list->items())
-                if (const int64_t t = tile_of(s.pos); t >= 0) order_[fill[size_t(t)]++] = &s;
+        size_t placed = 0;
+        for (size_t t = 0; t < tiles; ++t) {
+            start_[t] = placed;
+            for (size_t l = 0; l < n; ++l) placed += std::exchange(next_[l * tiles + t], placed);
+        }
+        start_[tiles] = placed;
+        order_.resize(placed);
+        tbb::parallel_for(size_t(0), n, [&](size_t l) {
+            size_t* next = &next_[l * tiles];
+            for (const Splat& s : lists[l]->items())
+                if (const int64_t t = tile_of(s.pos); t >= 0) order_[next[size_t(t)]++] = &s;
+        });
         for (const auto& group : by_colour_)
             tbb::parallel_for(size_t(0), group.size(), [&](size_t i) {
                 const Tile& tile = group[i];
@@ -433,7 +446,7 @@ private:
 
     int W_, H_, tile_, columns_, rows_ = 0;
     std::array<std::vector<Tile>, 4> by_colour_;
-    std::vector<size_t> start_;
+    std::vector<size_t> start_, next_;
     std::vector<const Splat*> order_;
 };
 
@@ -496,7 +509,9 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
 
     // Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
     // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp; camera
-    // integrators that splat keep a pass's splats in memory, so theirs are smaller. A
+    // integrators that splat keep a pass's splats in memory until its end, so theirs take at
+    // most 65,536 (BDPT's splats of a pass: ~10 MB on the Cornell box, which a larger pass
+    // would merge from beyond the cache: 256x256 at 4x this ran 7-10 % slower). A
     // distributed render runs pass p in process p % ranks, with about 16 passes per process.
     // A pass gives each pixel at least kMinPassSpp samples where every process still gets a
     // pass: a time-resolved film's merge updates a cache line of its cube per (pixel, bin) it
@@ -523,7 +538,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
                              "a separate pass",
                              pilot_of_image, tile, tile, kMaxKeptPilotSamples));
     const uint32_t first_spp = pilot_in_image ? pilot_of_image : 0;
-    const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 18 : 22);
+    const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 16 : 22);
     const uint64_t passes_wanted = uint64_t(16) * ranks, image_spp = spp - first_spp;
     const uint64_t least_spp = std::min<uint64_t>(kMinPassSpp, image_spp / ranks);
     const uint32_t pass_spp =
@@ -579,17 +594,23 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         };
         if (!splatting) {
             schedule.run(film, [&](const Tile& t) { return render_one(t, nullptr); });
-        } else {  // splats land anywhere: each colour's tiles, then their splats in tile order
-            for (const auto& tiles : by_colour) {
-                tile_splats.resize(std::max(tile_splats.size(), tiles.size()));
-                tbb::parallel_for(size_t(0), tiles.size(), [&](size_t t) {
-                    tile_splats[t].clear();
-                    film.merge(*render_one(tiles[t], &tile_splats[t]));
-                });
-                std::vector<const SplatList*> in_order;
-                for (size_t t = 0; t < tiles.size(); ++t) in_order.push_back(&tile_splats[t]);
-                merger.merge(film, in_order);
-            }
+        } else {
+            // Splats land anywhere: each tile keeps its own until the pass's last tile is done,
+            // and they merge then, in tile order. A pixel receives the camera blocks in
+            // TileSchedule's order and then the splats in theirs, whatever the thread count,
+            // and no worker waits between colours (a loop per colour, with the splats merged
+            // after each, left 3 % of 2 threads idle in BDPT and, with 16 tiles per colour,
+            // would leave most of 32 idle).
+            const std::vector<Tile>& tiles = schedule.tiles();
+            tile_splats.resize(tiles.size());
+            schedule.run(film, [&](const Tile& t) {
+                SplatList& splats = tile_splats[size_t(&t - tiles.data())];
+                splats.clear();
+                return render_one(t, &splats);
+            });
+            std::vector<const SplatList*> in_order;
+            for (const SplatList& splats : tile_splats) in_order.push_back(&splats);
+            merger.merge(film, in_order);
         }
         // (A pass in which no pixel has samples left, adaptive sampling's, is complete.)
         return expected == 0 ? 1.0 : double(taken.load()) / double(expected);
