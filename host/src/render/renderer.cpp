@@ -599,8 +599,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
             // and they merge then, in tile order. A pixel receives the camera blocks in
             // TileSchedule's order and then the splats in theirs, whatever the thread count,
             // and no worker waits between colours (a loop per colour, with the splats merged
-            // after each, left 3 % of 2 threads idle in BDPT and, with 16 tiles per colour,
-            // would leave most of 32 idle).
+            // after each, left 2-3 % of 2 threads idle in BDPT and, with 16 tiles per colour,
+            // would leave half of 32 idle).
             const std::vector<Tile>& tiles = schedule.tiles();
             tile_splats.resize(tiles.size());
             schedule.run(film, [&](const Tile& t) {

@@ -136,8 +136,8 @@ private:
 
     // to_local_.point(p).z and to_local_.vector(d), computed here from the matrix's rows as
     // Transform computes them (the same numbers): each light-tracing connection asks for both,
-    // and the library's calls took a third of sample_direct()'s instructions (a whole
-    // projective point for its depth alone).
+    // and the library's calls (a whole projective point for the depth alone) took almost half
+    // of sample_direct()'s instructions: 252 a call with them, 135 without.
     double depth(const Vec3& p) const {
         if (!affine_) return double(to_local_.point(p).z);  // the projective divide
         const auto& row = to_local_.matrix()[2];
