@@ -387,28 +387,35 @@ public:
     // order they were made: every pixel receives them in the same order whatever the thread
     // count. Splats outside the film are dropped.
     void merge(Film& film, const std::vector<const SplatList*>& lists) {
-        // The splats bucketed by tile, in list order within a tile: each list counts its own
-        // per tile and then places them, the lists in parallel (a serial pass over a pass's
-        // splats would hold every other thread up), each at the offsets its counts give.
+        // The splats bucketed by tile, in list order within a tile. The lists are cut into at
+        // most kBucketRuns runs of consecutive lists (a number that does not depend on the
+        // thread count, so neither does the order), which count their splats per tile and then
+        // place them at the offsets their counts give, the runs in parallel: a serial pass over
+        // a pass's splats held every other thread up, and a count table per list would grow as
+        // lists x tiles (with a list per tile, 2 GB for a 4096x4096 hdrfilm).
         const size_t tiles = size_t(columns_) * size_t(rows_), n = lists.size();
-        next_.assign(n * tiles, 0);  // [list][tile]: the count, then the next slot
-        tbb::parallel_for(size_t(0), n, [&](size_t l) {
-            size_t* count = &next_[l * tiles];
-            for (const Splat& s : lists[l]->items())
-                if (const int64_t t = tile_of(s.pos); t >= 0) ++count[size_t(t)];
+        const size_t runs = std::min(n, kBucketRuns);
+        auto splats_of_run = [&](size_t r, auto&& visit) {  // visit(tile, splat), in order
+            for (size_t l = r * n / runs; l < (r + 1) * n / runs; ++l)
+                for (const Splat& s : lists[l]->items())
+                    if (const int64_t t = tile_of(s.pos); t >= 0) visit(size_t(t), s);
+        };
+        next_.assign(runs * tiles, 0);  // [run][tile]: the count, then the next slot
+        tbb::parallel_for(size_t(0), runs, [&](size_t r) {
+            size_t* count = &next_[r * tiles];
+            splats_of_run(r, [&](size_t t, const Splat&) { ++count[t]; });
         });
         start_.assign(tiles + 1, 0);
         size_t placed = 0;
         for (size_t t = 0; t < tiles; ++t) {
             start_[t] = placed;
-            for (size_t l = 0; l < n; ++l) placed += std::exchange(next_[l * tiles + t], placed);
+            for (size_t r = 0; r < runs; ++r) placed += std::exchange(next_[r * tiles + t], placed);
         }
         start_[tiles] = placed;
         order_.resize(placed);
-        tbb::parallel_for(size_t(0), n, [&](size_t l) {
-            size_t* next = &next_[l * tiles];
-            for (const Splat& s : lists[l]->items())
-                if (const int64_t t = tile_of(s.pos); t >= 0) order_[next[size_t(t)]++] = &s;
+        tbb::parallel_for(size_t(0), runs, [&](size_t r) {
+            size_t* next = &next_[r * tiles];
+            splats_of_run(r, [&](size_t t, const Splat& s) { order_[next[t]++] = &s; });
         });
         for (const auto& group : by_colour_)
             tbb::parallel_for(size_t(0), group.size(), [&](size_t i) {
@@ -437,6 +444,7 @@ public:
 
 private:
     static constexpr size_t kPrefetchAhead = 16;  // splats
+    static constexpr size_t kBucketRuns = 16;     // lists' runs bucketed in parallel
 
     int64_t tile_of(Vec2 pos) const {
         if (!(pos.x >= 0 && pos.x < float(W_) && pos.y >= 0 && pos.y < float(H_))) return -1;
