@@ -158,9 +158,17 @@ private:
     }
     size_t append(uint64_t key) {  // a new zero entry
         const size_t e = entries.size();
+        // Small enough to inline into entry(), which every contribution calls: the AOVs'
+        // arrays and the overflow check are out of line.
+        if (e + 1 > std::numeric_limits<uint32_t>::max() || variance || counts)
+            return append_with_aovs(key);
+        entries.push_back({key, {0, 0, 0}});
+        return e;
+    }
+    [[gnu::noinline]] size_t append_with_aovs(uint64_t key) {
+        const size_t e = entries.size();
         if (e + 1 > std::numeric_limits<uint32_t>::max()) throw std::length_error("block entries");
         entries.push_back({key, {0, 0, 0}});
-        if (!variance && !counts) return e;
         try {  // an allocation that fails leaves the storage as it was
             if (variance) sq.insert(sq.end(), 3, 0.0);
             if (counts) count.push_back(0.f);
