@@ -86,6 +86,7 @@ struct Vertex {
     double segment_optical = 0;          // its optical length
     bool segment_single_medium = false;  // it lies in one medium, with no boundary on it
     bool delta = false;                  // scattered by a delta lobe: no connection can use it
+    bool smooth = false;  // surface vertices: the BSDF has a smooth lobe (connectible() asks)
     // A light vertex of an environment (constant, envmap): light from direction -n, from the
     // start plane of its plane wave (SceneSphere). Its densities are those of a direction,
     // and the next vertex takes the start disk's area density (pdf_light()).
@@ -98,7 +99,7 @@ struct Vertex {
     bool connectible() const {
         switch (kind) {
             case Kind::Surface:
-                return (bsdf->flags() & kBsdfSmooth) != 0;
+                return smooth;
             case Kind::Light:
                 return !emission.delta_direction;
             default:
@@ -575,7 +576,8 @@ private:
             }
             if (!found || !travel(hit.p, walk.medium.eta())) return false;
             const Bsdf& bsdf = *hit.shape->bsdf();
-            if (bsdf.is_null()) {
+            const uint32_t flags = bsdf.flags();  // once: connections ask for it again and again
+            if (flags == kBsdfNull) {             // Bsdf::is_null()
                 walk.medium.cross(hit, walk.ray.d);
                 walk.ray = hit.spawn(walk.ray.d);
                 if (hit.shape->emitter()) continue;  // a visible null emitter is not a vertex
@@ -586,6 +588,7 @@ private:
             v.wi = -walk.ray.d;
             v.n = hit.ng;
             v.bsdf = &bsdf;
+            v.smooth = (flags & kBsdfSmooth) != 0;
             v.emitter = hit.shape->emitter();
             v.medium = walk.medium;
             return true;
