@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <chrono>
 #include <cmath>
 #include <numeric>
+#include <thread>
 
 #include "femto/integrator.h"
 #include "femto/sensor.h"
@@ -150,12 +152,18 @@ namespace {
 
 // Every sum a film keeps (the cube, the pixels' weights), byte for byte, after a render of
 // `xml` at `spp` in an arena of `threads`.
-std::string film_sums(const std::string& xml, int threads, uint32_t spp) {
+// `stop` and `stats`, when given: the render's stop flag and what it reports.
+std::string film_sums(const std::string& xml, int threads, uint32_t spp,
+                      const std::atomic<bool>* stop = nullptr, RenderStats* stats = nullptr) {
     auto scene = load_scene_string(xml);
     RenderOptions opt;
     opt.threads = threads;
     opt.spp = spp;
-    tbb::task_arena(threads).execute([&] { render(*scene, opt); });
+    opt.stop = stop;
+    tbb::task_arena(threads).execute([&] {
+        const RenderStats s = render(*scene, opt);
+        if (stats) *stats = s;
+    });
     std::string bytes;
     for (const Accumulator& a : scene->sensor().film().accumulators())
         bytes.append(static_cast<const char*>(a.data), a.count * a.element_bytes());
@@ -215,6 +223,53 @@ TEST(Render, SplatsGiveTheSameImageAtAnyThreadCount) {
         ASSERT_FALSE(one.empty()) << film;
         EXPECT_TRUE(film_sums(xml, 2, 16) == one) << film;  // bit for bit
         EXPECT_TRUE(film_sums(xml, 8, 16) == one) << film;
+    }
+}
+
+// On a film of more pixels than a splatting pass's 65,536 camera samples, a pass is one sample
+// per pixel whose splats merge after each group of tiles: still the same image at any thread
+// count. (320x224: 71,680 pixels, 70 tiles, two groups.)
+TEST(Render, SplatGroupsGiveTheSameImageAtAnyThreadCount) {
+    const std::string xml = femto::test::scene_xml(
+        "<integrator type=\"bdpt\"><integer name=\"max_depth\" value=\"3\"/></integrator>"
+        "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" "
+        "value=\"320\"/><integer name=\"height\" value=\"224\"/><rfilter "
+        "type=\"gaussian\"/></film></sensor>" +
+        kOverlapBody);
+    const auto one = film_sums(xml, 1, 2);
+    ASSERT_FALSE(one.empty());
+    EXPECT_TRUE(film_sums(xml, 2, 2) == one);  // bit for bit
+    EXPECT_TRUE(film_sums(xml, 8, 2) == one);
+}
+
+// A stop request ends a splatting render at the end of a pass: its splats reach every pixel
+// and are normalised by each pixel's camera samples, so a pass stopped midway would leave
+// tile-sized steps in the image. Whenever the request comes, the render holds whole passes
+// (4 spp each here: 160x96 pixels, 65,536 / 15,360 rounded down) and equals, bit for bit, a
+// render asked for that many samples (same passes).
+TEST(Render, StoppedSplattingRenderKeepsWholePasses) {
+    const std::string xml = femto::test::scene_xml(
+        "<integrator type=\"bdpt\"><integer name=\"max_depth\" value=\"3\"/></integrator>"
+        "<sensor type=\"perspective\">" +
+        kGaussianHdrFilm + "</sensor>" + kOverlapBody);
+    constexpr uint32_t kSpp = 64, kPassSpp = 4;
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::string full = film_sums(xml, 2, kSpp);
+    const auto seconds = std::chrono::steady_clock::now() - t0;
+    std::atomic<bool> stop{false};
+    RenderStats stats;
+    std::thread stopper([&] {  // about a third into the render: in the middle of a pass
+        std::this_thread::sleep_for(seconds / 3);
+        stop = true;
+    });
+    const std::string stopped = film_sums(xml, 2, kSpp, &stop, &stats);
+    stopper.join();
+    EXPECT_EQ(stats.spp_done % kPassSpp, 0u) << stats.spp_done;
+    if (stats.spp_done == kSpp) {
+        EXPECT_TRUE(stopped == full);
+    } else if (stats.spp_done > 0) {
+        EXPECT_TRUE(stats.interrupted);
+        EXPECT_TRUE(stopped == film_sums(xml, 2, stats.spp_done)) << stats.spp_done;
     }
 }
 

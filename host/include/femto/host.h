@@ -71,7 +71,8 @@ struct RenderOptions {
     bool progress = false;   ///< progress line on stderr
     std::string scene_file;  ///< recorded in the outputs
     /// When set and becomes true, rendering stops within the current pass (within a few
-    /// samples' work); in a distributed render, at the end of the current round of passes.
+    /// samples' work); for an integrator that splats from camera samples (bdpt), at the end of
+    /// the current pass; in a distributed render, at the end of the current round of passes.
     const std::atomic<bool>* stop = nullptr;
     /// The processes sharing this render's passes; null: this process renders every pass.
     PassGroup* group = nullptr;

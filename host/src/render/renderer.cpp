@@ -185,13 +185,17 @@ public:
 
     const std::vector<Tile>& tiles() const { return tiles_; }
 
-    /// Runs render(tile) -> std::unique_ptr<FilmBlock> for every tile and merges the blocks
-    /// into `film` in the order above. An exception from a tile ends the loop (every tile taken
-    /// is still marked done, so that no worker waits for it) and is rethrown.
+    /// Runs render(tile) -> std::unique_ptr<FilmBlock> for the tiles [begin, end) and merges
+    /// the blocks into `film` in the order above. A pass runs [0, n) at once, or in ranges in
+    /// increasing order (a tile's predecessors come before it: those of an earlier range are
+    /// merged by then). An exception from a tile ends the loop (every tile taken is still
+    /// marked done, so that no worker waits for it) and is rethrown.
     template <typename Render>
-    void run(Film& film, Render&& render) {
-        for (size_t i = 0; i < tiles_.size(); ++i) merged_[i].store(false);
-        std::atomic<size_t> next{0};
+    void run(Film& film, Render&& render, size_t begin = 0, size_t end = SIZE_MAX) {
+        end = std::min(end, tiles_.size());
+        if (begin == 0)  // a new pass
+            for (size_t i = 0; i < tiles_.size(); ++i) merged_[i].store(false);
+        std::atomic<size_t> next{begin};
         std::atomic<bool> failed{false};
         std::exception_ptr error;
         std::mutex error_mutex;
@@ -199,7 +203,7 @@ public:
         tbb::parallel_for(
             tbb::blocked_range<int>(0, workers, 1),
             [&](const tbb::blocked_range<int>&) {
-                for (size_t i; !failed && (i = next.fetch_add(1)) < tiles_.size();) {
+                for (size_t i; !failed && (i = next.fetch_add(1)) < end;) {
                     try {
                         // Isolated: a nested TBB loop in a plugin (integrator, film, temporal
                         // filter) must not let this thread pick up another worker, whose wait
@@ -519,7 +523,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp; camera
     // integrators that splat keep a pass's splats in memory until its end, so theirs take at
     // most 65,536 (BDPT's splats of a pass: ~10 MB on the Cornell box, which a larger pass
-    // would merge from beyond the cache: 256x256 at 4x this ran 7-10 % slower). A
+    // would merge from beyond the cache: 256x256 at 4x this ran 7-10 % slower), and on films
+    // of more pixels than that, one sample per pixel, merged in groups of tiles. A
     // distributed render runs pass p in process p % ranks, with about 16 passes per process.
     // A pass gives each pixel at least kMinPassSpp samples where every process still gets a
     // pass: a time-resolved film's merge updates a cache line of its cube per (pixel, bin) it
@@ -583,42 +588,59 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     tbb::enumerable_thread_specific<ContributionList> lists;
     SplatMerger merger(W, H, tile);
 
-    // Camera samples [s0, s1) of every pixel: the tiles in TileSchedule's order, or, for an
-    // integrator that splats, one colour at a time with the splats of each colour's tiles merged
-    // after it; returns the share of the pass's samples taken (1 unless stopped).
-    std::vector<SplatList> tile_splats;
+    // Camera samples [s0, s1) of every pixel, the tiles in TileSchedule's order; returns the
+    // share of the pass's samples taken (1 unless stopped).
+    // An integrator that splats: each tile keeps its splats until the last tile of its group is
+    // done, and they merge then, in tile order; a group is a run of consecutive tiles of at
+    // most kSplatGroupSamples camera samples (or one tile), the whole pass unless the film
+    // has more pixels than that. A pixel receives the camera blocks and the splats in an order
+    // fixed by the tiles alone, whatever the thread count; memory holds one group's splats;
+    // workers wait only at a group's end (a loop per colour, with the splats merged after
+    // each, left 2-3 % of 2 threads idle in BDPT and, with 16 tiles per colour, would leave
+    // half of 32 idle). Such a pass is not stopped midway (outside a pilot): its splats are
+    // normalised by each pixel's own camera samples, so a pass that some tiles had finished
+    // and others not would leave tile-sized steps in the image's brightness. A stop takes
+    // effect at the pass's end.
+    constexpr uint64_t kSplatGroupSamples = uint64_t(1) << 16;
+    std::vector<SplatList> group_splats;
     TileSchedule schedule(by_colour, W, H, tile, film.filter_border());
-    auto run_camera_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1) {
+    auto run_camera_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
         std::atomic<uint64_t> taken{0};
         uint64_t expected = 0;  // in the film's active rows
         for (const Tile& t : schedule.tiles()) expected += counts.in(t, W, s0, s1, &film);
+        const std::atomic<bool>* stop = splatting && !pilot ? nullptr : pass_stop;
         auto render_one = [&](const Tile& t, SplatList* splats) {
             enable_flush_to_zero();
             RenderedTile r = render_tile(scene, t, seed, s0, s1, counts, differentials,
-                                         *samplers.local(), lists.local(), splats, pass_stop);
+                                         *samplers.local(), lists.local(), splats, stop);
             taken += r.taken;
             progress.advance(counts.in(t, W, s0, s1, nullptr));
             return std::move(r.block);
         };
+        const std::vector<Tile>& tiles = schedule.tiles();
         if (!splatting) {
             schedule.run(film, [&](const Tile& t) { return render_one(t, nullptr); });
         } else {
-            // Splats land anywhere: each tile keeps its own until the pass's last tile is done,
-            // and they merge then, in tile order. A pixel receives the camera blocks in
-            // TileSchedule's order and then the splats in theirs, whatever the thread count,
-            // and no worker waits between colours (a loop per colour, with the splats merged
-            // after each, left 2-3 % of 2 threads idle in BDPT and, with 16 tiles per colour,
-            // would leave half of 32 idle).
-            const std::vector<Tile>& tiles = schedule.tiles();
-            tile_splats.resize(tiles.size());
-            schedule.run(film, [&](const Tile& t) {
-                SplatList& splats = tile_splats[size_t(&t - tiles.data())];
-                splats.clear();
-                return render_one(t, &splats);
-            });
-            std::vector<const SplatList*> in_order;
-            for (const SplatList& splats : tile_splats) in_order.push_back(&splats);
-            merger.merge(film, in_order);
+            for (size_t begin = 0, end; begin < tiles.size(); begin = end) {
+                uint64_t samples = counts.in(tiles[begin], W, s0, s1, nullptr);
+                for (end = begin + 1; end < tiles.size(); ++end) {
+                    const uint64_t more = counts.in(tiles[end], W, s0, s1, nullptr);
+                    if (samples + more > kSplatGroupSamples) break;
+                    samples += more;
+                }
+                if (group_splats.size() < end - begin) group_splats.resize(end - begin);
+                schedule.run(
+                    film,
+                    [&](const Tile& t) {
+                        SplatList& splats = group_splats[size_t(&t - tiles.data()) - begin];
+                        splats.clear();
+                        return render_one(t, &splats);
+                    },
+                    begin, end);
+                std::vector<const SplatList*> in_order;
+                for (size_t i = 0; i < end - begin; ++i) in_order.push_back(&group_splats[i]);
+                merger.merge(film, in_order);
+            }
         }
         // (A pass in which no pixel has samples left, adaptive sampling's, is complete.)
         return expected == 0 ? 1.0 : double(taken.load()) / double(expected);
@@ -652,7 +674,8 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         return double(taken.load()) / double(std::max<uint64_t>(1, total));
     };
     auto run_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
-        return from_lights ? run_light_pass(seed, s0, s1, pilot) : run_camera_pass(seed, s0, s1);
+        return from_lights ? run_light_pass(seed, s0, s1, pilot)
+                           : run_camera_pass(seed, s0, s1, pilot);
     };
 
     const uint64_t rays_before = scene.rays_traced();
