@@ -318,9 +318,17 @@ public:
                 pool_.pop_back();
             }
         }
-        if (!st)
+        if (!st) {
+            {
+                // Room in the pool for every storage there is: a block returns its storage from
+                // its destructor, where an allocation that failed would end the program.
+                std::lock_guard<std::mutex> lock(pool_mutex_);
+                pool_.reserve(storages_ + 1);
+                ++storages_;
+            }
             st = std::make_unique<BlockStorage>(variance_enabled_, count_enabled_,
                                                 size_t(grid_.bins));
+        }
         if (st->weights.size() < pixels) {  // all zero between uses
             st->weights.resize(pixels);
             st->had_run.resize(pixels);
@@ -329,7 +337,7 @@ public:
     }
     void release_storage(std::unique_ptr<BlockStorage> st) const {
         std::lock_guard<std::mutex> lock(pool_mutex_);
-        pool_.push_back(std::move(st));
+        pool_.push_back(std::move(st));  // within the capacity acquire_storage() reserved
     }
 
     void merge(const FilmBlock& b) override {
@@ -466,6 +474,7 @@ public:
     std::vector<float> cube_, count_, sq_;
     mutable std::mutex pool_mutex_;
     mutable std::vector<std::unique_ptr<BlockStorage>> pool_;
+    mutable size_t storages_ = 0;  // made so far (the pool's reserved capacity)
     std::vector<PixelSums> weights_;
 };
 
