@@ -576,8 +576,7 @@ private:
             }
             if (!found || !travel(hit.p, walk.medium.eta())) return false;
             const Bsdf& bsdf = *hit.shape->bsdf();
-            const uint32_t flags = bsdf.flags();  // once: connections ask for it again and again
-            if (flags == kBsdfNull) {             // Bsdf::is_null()
+            if (bsdf.is_null()) {
                 walk.medium.cross(hit, walk.ray.d);
                 walk.ray = hit.spawn(walk.ray.d);
                 if (hit.shape->emitter()) continue;  // a visible null emitter is not a vertex
@@ -588,7 +587,7 @@ private:
             v.wi = -walk.ray.d;
             v.n = hit.ng;
             v.bsdf = &bsdf;
-            v.smooth = (flags & kBsdfSmooth) != 0;
+            v.smooth = (bsdf.flags() & kBsdfSmooth) != 0;  // once: connections ask again and again
             v.emitter = hit.shape->emitter();
             v.medium = walk.medium;
             return true;
