@@ -121,8 +121,8 @@ void trace_photon_path(const Scene& scene, const LightPathStarts& starts,
     PhotonPath path{emission_ray(es), LightClock(scene, *start.emitter, es.p, sampler),
                     starts.medium(*start.emitter, es, es.d), start.power() * float(scale)};
     path.start = path.power.max_component();
+    Hit hit;  // one for every vertex: Scene::intersect() sets all of it
     while (detail::photon_useful(rules, path.depth)) {
-        Hit hit;
         const bool found = scene.intersect(path.ray, hit);
         if (path.medium.medium) {
             const auto end = detail::photon_in_medium(rules, sampler, path, found, hit, visitor);

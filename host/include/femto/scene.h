@@ -38,7 +38,9 @@ public:
 
     /// Closest hit along `ray` within [tmin, tmax]; surfaces with a pure `null` material, no
     /// emitter and no media are invisible (a null surface that bounds a medium is hit, so
-    /// that paths can track the medium they travel in).
+    /// that paths can track the medium they travel in). On a hit every field of `hit` is
+    /// set, as on a fresh Hit: one Hit may serve all of a path's intersections. On a miss
+    /// `hit` is left as it was.
     bool intersect(const Ray& ray, Hit& hit) const;
     /// True when anything blocks `ray` within [tmin, tmax]; `null` surfaces never block.
     bool occluded(const Ray& ray) const;

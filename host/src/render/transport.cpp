@@ -31,8 +31,8 @@ ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, con
                               bool through_masks) {
     ShadowConnection c;
     Vec3 last = from;  // the latest actual point: lengths are measured between these
+    Hit hit;           // one for every boundary: intersect() sets all of it
     for (int crossings = 0; crossings < 256; ++crossings) {
-        Hit hit;
         const bool found = scene.intersect(ray, hit);
         const Vec3 next = found ? hit.p : to;
         const double length = distance_between(last, next);
@@ -84,8 +84,8 @@ MediumTracker medium_at(const Scene& scene, const Vec3& p) {
     const float dist = length(p - o);
     if (!(dist > 0)) return medium;
     Ray ray{o, (p - o) / dist, 0.f, dist};
+    Hit hit;
     for (int crossings = 0; crossings < 256; ++crossings) {
-        Hit hit;
         if (!scene.intersect(ray, hit)) break;
         medium.cross(hit, ray.d);
         const float left = ray.tmax - hit.t;

@@ -334,6 +334,9 @@ PixelFootprint pixel_footprint(const Shape& shape, const Ray& ray, const Hit& hi
 void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, Hit& hit) const {
     // The tangent only for materials that read it and for footprints (which need it).
     const bool tangent = fills_tangent_ || ray.differential;
+    // Every field of `hit` is written, so that an integrator may reuse one Hit for all of a
+    // path's intersections (zeroing a fresh one per ray costs more than this store).
+    hit.dpdu = Vec3();
     hit.t = t;
     hit.shape = this;
     hit.prim = prim;

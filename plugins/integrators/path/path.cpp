@@ -98,8 +98,8 @@ public:
                 ContributionList& out) const override {
         if (max_depth() == 0) return;
         PathState path(scene, ray, out);
+        Hit hit;  // one for every vertex: intersect() sets all of it
         for (;;) {
-            Hit hit;
             const bool found = scene.intersect(path.ray, hit);
             if (path.medium.medium) {
                 const SegmentEnd end = medium_segment(scene, sampler, path, found, hit);

@@ -69,7 +69,7 @@ struct Vertex {
     Vec3 p;
     Vec3 n;   // geometric normal of surface and area-light vertices; zero otherwise
     Vec3 wi;  // unit direction back to the previous vertex of its own subpath (zero at the ends)
-    Hit hit;  // surface vertices
+    Hit hit;  // surface vertices (others leave it stale: see reuse())
     const Bsdf* bsdf = nullptr;            // surface vertices
     const PhaseFunction* phase = nullptr;  // medium vertices
     const Emitter* emitter = nullptr;      // light vertices; surface vertices on an emitter
@@ -92,6 +92,24 @@ struct Vertex {
     // and the next vertex takes the start disk's area density (pdf_light()).
     bool environment = false;
 
+    // Makes a vertex of an earlier sample a fresh one, as `Vertex()` would but without zeroing
+    // `hit` (216 bytes): a surface vertex's hit comes from Scene::intersect(), which sets all of
+    // it, and no other vertex reads it. A new field must be reset here too.
+    void reuse() {
+        kind = Kind::Surface;
+        p = n = wi = Vec3();
+        bsdf = nullptr;
+        phase = nullptr;
+        emitter = nullptr;
+        emission = EmissionSample();
+        medium = MediumTracker();
+        event = VertexEvent();
+        pdf_fwd = pdf_rev = 0;
+        segment_fwd = segment_rev = 1;
+        segment_optical = 0;
+        segment_single_medium = delta = smooth = environment = false;
+    }
+
     bool on_surface() const {
         return kind == Kind::Surface || (kind == Kind::Light && n != Vec3());
     }
@@ -108,10 +126,39 @@ struct Vertex {
     }
 };
 
+// A subpath's vertices. Its storage lasts from sample to sample (Subpaths is one per thread),
+// and add() makes a new vertex of one an earlier sample left (Vertex::reuse()): building each
+// ~450-byte vertex from zero, and copying the first in, took ~5 % of a BDPT render (perf).
+class VertexList {
+public:
+    size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+    Vertex& operator[](size_t i) { return store_[i]; }
+    const Vertex& operator[](size_t i) const { return store_[i]; }
+    Vertex& back() { return store_[size_ - 1]; }
+    const Vertex& back() const { return store_[size_ - 1]; }
+    // A fresh vertex at the end (references to the others may move, as with std::vector).
+    Vertex& add() {
+        if (size_ == store_.size())
+            store_.emplace_back();
+        else
+            store_[size_].reuse();
+        return store_[size_++];
+    }
+    void pop_back() { --size_; }
+    void clear() { size_ = 0; }
+
+private:
+    std::vector<Vertex> store_;
+    size_t size_ = 0;
+};
+
 // A camera subpath with the weight and clock of each vertex, and a light subpath with the light
 // arriving at each vertex and its clock. Reused across samples (one per thread).
 struct Subpaths {
-    std::vector<Vertex> camera, light;
+    VertexList camera, light;
+    // A light sample's or a sensor sample's end vertex, for the MIS weight of its connection.
+    mutable Vertex connection_end;
     std::vector<Throughput> camera_beta;  // weight of light arriving, the vertex's event included
     std::vector<PathClock> camera_clock;  // after the vertex's delay
     std::vector<Color> light_power;       // light arriving (before the vertex's event and BSDF)
@@ -370,14 +417,13 @@ private:
                         ContributionList& out, Subpaths& paths, uint64_t dims) const {
         Walk walk{camera_ray, MediumTracker::at_sensor(scene), 0.0, segment_densities()};
         if (!paths.light.empty()) walk.has_target = true, walk.target = paths.light[0].p;
-        Vertex cam;
+        Vertex& cam = paths.camera.add();
         cam.kind = Vertex::Kind::Camera;
         cam.p = camera_ray.o;
         cam.pdf_fwd = 1.f;
         cam.medium = walk.medium;
         PathClock clock(scene, out, camera_ray.o);
         Throughput beta;
-        paths.camera.push_back(cam);
         paths.camera_beta.push_back(beta);
         paths.camera_clock.push_back(clock);
         walk.pdf_dir = scene.sensor().pdf_direction(camera_ray.d);
@@ -388,9 +434,8 @@ private:
         paths.camera_out.push_back({first_ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         while (int(paths.camera.size()) < max_vertices(true)) {
             sampler.advance_to(DimensionLayout::vertex(dims, paths.camera.size() - 1));
-            // The vertex is built in place (copying its ~500 bytes showed in the profile) and
-            // taken back where the walk ends before it.
-            Vertex& v = paths.camera.emplace_back();
+            // The vertex is built in place and taken back where the walk ends before it.
+            Vertex& v = paths.camera.add();
             const Vertex& prev = paths.camera[paths.camera.size() - 2];
             Color weight(1.f);
             const double before = clock.time();
@@ -441,7 +486,7 @@ private:
         if (!start) return;
         const Emitter* emitter = start.emitter;
         const EmissionSample& es = start.emission;
-        Vertex light;
+        Vertex& light = paths.light.add();
         light.kind = Vertex::Kind::Light;
         light.p = es.p;
         light.n = es.n;
@@ -455,8 +500,7 @@ private:
         light.medium = starts_.medium(*emitter, es, es.d);
         LightClock clock(scene, *emitter, es.p, sampler);
         paths.emission_time = clock.time();
-        if (clock.expired()) return;
-        paths.light.push_back(light);
+        if (clock.expired()) return paths.light.pop_back();
         paths.light_power.push_back(start.power());  // unused for the light vertex itself
         paths.light_clock.push_back(clock);
         Walk walk{emission_ray(es), light.medium, 0.0, segment_densities()};
@@ -466,7 +510,7 @@ private:
         Color power = start.power();
         while (int(paths.light.size()) < limit) {
             sampler.advance_to(DimensionLayout::vertex(dims, paths.light.size()));
-            Vertex& v = paths.light.emplace_back();  // in place, as on the camera subpath
+            Vertex& v = paths.light.add();  // in place, as on the camera subpath
             const Vertex& prev = paths.light[paths.light.size() - 2];
             Color weight(1.f);
             const double before = clock.time();
@@ -545,7 +589,6 @@ private:
         walk.segment.clear();
         Hit& hit = v.hit;  // found in place: a surface vertex keeps it
         for (int crossings = 0; crossings < 256; ++crossings) {
-            if (crossings > 0) hit = Hit();
             const bool found = scene.intersect(walk.ray, hit);
             if (crossings == 0) walk.first_end = found ? double(hit.t) : kInfinity;
             if (const Medium* medium = walk.medium.medium) {
@@ -560,8 +603,7 @@ private:
                 const DistanceMixture::AtDistance at = strategy.at(piece);
                 walk.segment.add(at.survival, at.pdf);
                 weight *= ds.weight;
-                if (ds.scattered) {
-                    hit = Hit();  // a medium vertex has none
+                if (ds.scattered) {  // v.hit (the surface beyond) stays: only surfaces read it
                     v.kind = Vertex::Kind::Medium;
                     v.p = walk.ray.at(float(ds.distance));
                     v.wi = -walk.ray.d;
@@ -599,7 +641,7 @@ private:
     // the densities: the next vertex's forward density (walk.pdf_dir) and the previous vertex's
     // reverse one. `scatter` gets the sample's weight (with the adjoint shading factor on light
     // subpaths). Returns false when sampling failed.
-    bool scatter_from(Sampler& sampler, Walk& walk, std::vector<Vertex>& path, bool light,
+    bool scatter_from(Sampler& sampler, Walk& walk, VertexList& path, bool light,
                       Color& scatter) const {
         Vertex& v = path.back();
         Vertex& prev = path[path.size() - 2];
@@ -690,7 +732,7 @@ private:
         const Vec3 d = walk.ray.d;
         const double eta = walk.medium.eta();
         for (const Emitter* env : scene.environment()) {
-            Vertex v;
+            Vertex& v = paths.camera.add();
             v.kind = Vertex::Kind::Light;
             v.environment = true;
             v.emitter = env;
@@ -698,8 +740,7 @@ private:
             v.n = -d;
             v.wi = -d;
             v.medium = walk.medium;
-            set_forward_density(walk, paths.camera.back(), v);
-            paths.camera.push_back(v);
+            set_forward_density(walk, paths.camera[paths.camera.size() - 2], v);
             Join join;
             join.path_time =
                 clock.time() + scene.sphere().plane_wave_distance(clock.position(), d) * eta;
@@ -761,7 +802,8 @@ private:
                 ? connect_to_light(scene, cv.hit, ls, cv.medium, sampler, &segment)
                 : connect_to_light(scene, cv.p, ls, cv.medium, sampler, &segment);
         if (c.blocked()) return;
-        Vertex light;
+        Vertex& light = paths.connection_end;
+        light.reuse();
         light.kind = Vertex::Kind::Light;
         light.p = ls.p;
         light.n = ls.n;
@@ -801,7 +843,8 @@ private:
                                         : lv.medium,
                                     sampler, lv.n, lv.emission.p_error, &segment);
         if (c.blocked()) return;
-        Vertex camera;
+        Vertex& camera = paths.connection_end;
+        camera.reuse();
         camera.kind = Vertex::Kind::Camera;
         camera.p = ss.p;
         camera.pdf_fwd = 1.f;
@@ -1142,7 +1185,7 @@ private:
     // scattered, which holds for every vertex a connection asks for here.
     double far_sums(const Subpaths& paths, bool light, int m) const {
         std::vector<double>& sums = light ? paths.light_far : paths.camera_far;
-        const std::vector<Vertex>& path = light ? paths.light : paths.camera;
+        const VertexList& path = light ? paths.light : paths.camera;
         const int first_joinable = light ? 0 : (to_sensor_ ? 1 : 2);  // camera: t' >= 1 or 2
         for (int i = int(sums.size()); i <= m; ++i) {
             const Vertex& v = path[size_t(i)];

@@ -219,8 +219,8 @@ void TransientBeams::sample(const Scene& scene, Sampler& sampler, const Ray& cam
                 Throughput{},
                 1,
                 camera_ray.o};
+    Hit hit;  // one for every vertex: intersect() sets all of it
     for (;;) {
-        Hit hit;
         const bool found = scene.intersect(eye.ray, hit);
         if (eye.medium.medium && !medium_segment(sampler, eye, found, hit)) return;
         if (!found) {  // the environment (MIS against the light samples)

@@ -91,8 +91,8 @@ public:
         path.start = path.power.max_component();
         if (path.clock.expired()) return;
         if (!hide_emitters()) emitter_seen(scene, sampler, path, *emitter, es, pmf, out);
+        Hit hit;  // one for every vertex: intersect() sets all of it
         for (;;) {
-            Hit hit;
             const bool found = scene.intersect(path.ray, hit);
             if (path.medium.medium) {
                 const SegmentEnd end = medium_segment(scene, sampler, path, found, hit, out);

@@ -223,8 +223,8 @@ void TransientPpm::sample(const Scene& scene, Sampler& sampler, const Ray& camer
     if (max_depth() == 0) return;
     EyePath eye{camera_ray, PathClock(scene, out, camera_ray.o), MediumTracker::at_sensor(scene),
                 Throughput{}};
+    Hit hit;  // one for every vertex: intersect() sets all of it
     for (;;) {
-        Hit hit;
         const bool found = scene.intersect(eye.ray, hit);
         if (eye.medium.medium && eye_in_medium(sampler, eye, found, hit) != SegmentEnd::Surface)
             return;
