@@ -342,7 +342,9 @@ public:
         for (int t = to_sensor_ ? 1 : 2; t <= nc; ++t)
             for (int s = 1; s <= nl; ++s) {
                 if (max_depth() >= 0 && s + t - 1 > max_depth()) break;
-                if (!wanted(s, t) || too_late(paths, s, t)) continue;
+                // Light vertices only get later along their subpath: the rest are late too.
+                if (too_late(paths, s, t)) break;
+                if (!wanted(s, t)) continue;
                 sampler.advance_to(dims.connection(s, t));
                 connect(scene, sampler, paths, s, t, out);
             }
