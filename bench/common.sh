@@ -46,6 +46,34 @@ render_seconds_and_rate() {
     grep -o "in [0-9.]* s ([0-9.]* M rays/s)" | sed -E 's/in ([0-9.]*) s \(([0-9.]*) M rays.*/\1 \2/'
 }
 
+# The scenes issue 11's ray rates are measured on (run_ray_rate.sh, run_build_ab.sh), each with
+# its -D settings: the path tracer renders about a second, BDPT 2-5.
+ray_rate_scenes=(
+    "cornell-box|-D res=64 -D spp=256"
+    "fog-object|-D res=32 -D spp=256"
+    "caustic|-D res=64 -D spp=256"
+)
+
+# Renders scenes/SCENE with INTEGRATOR (a steady_scene_with copy, next to the scene since it
+# includes files by relative paths, removed after) by the program FEMTO at THREADS threads into
+# OUTBASE, and prints "SECONDS MRAYS_PER_S". Further arguments go to `femto render`. A run
+# stopped midway leaves its copy: call remove_scene_copies from the script's EXIT trap.
+#     ray_rate_render FEMTO SCENE INTEGRATOR THREADS OUTBASE [ARGS...]
+ray_rate_render() {
+    local femto=$1 scene=$2 integrator=$3 threads=$4 outbase=$5
+    shift 5
+    local xml="$root/scenes/$scene/.bench-$$-$integrator.xml"  # $$: the script's, in subshells too
+    steady_scene_with "$integrator" "$root/scenes/$scene/scene.xml" > "$xml"
+    local status=0  # the render's (or, with no summary line, grep's), as the caller's $(...) had it
+    "$femto" render "$xml" "$@" --threads "$threads" -o "$outbase" 2>&1 | render_seconds_and_rate ||
+        status=$?
+    rm -f "$xml"
+    return "$status"
+}
+remove_scene_copies() {
+    rm -f "$root"/scenes/*/.bench-$$-*.xml
+}
+
 # Prints an LD_PRELOAD value for running femto under valgrind (empty when not needed): libhwy,
 # loaded with OpenImageIO, runs an instruction valgrind 3.19 cannot decode on some CPUs in a
 # static initializer; bench/tools/valgrind_hwy_shim.cpp stands in for that function. Built into

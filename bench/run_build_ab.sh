@@ -24,31 +24,21 @@ for dir in "$build_a" "$build_b"; do
 done
 
 work=$(mktemp -d)
-temp_scenes=()
-trap 'rm -rf "$work" "${temp_scenes[@]}"' EXIT
+trap 'rm -rf "$work"; remove_scene_copies' EXIT
 bench_log_header "$work/log" >&2
-scenes=(
-    "cornell-box|-D res=64 -D spp=256"
-    "fog-object|-D res=32 -D spp=256"
-    "caustic|-D res=64 -D spp=256"
-)
 echo "round,build,scene,integrator,seconds,mrays" > "$out"
 for round in $(seq 1 "$rounds"); do
-    order=("$build_a" "$build_b")
-    (( round % 2 == 0 )) && order=("$build_b" "$build_a")
-    for entry in "${scenes[@]}"; do
+    order=(A B)  # by name, not folder: the same folder twice measures the noise (an A/A run)
+    (( round % 2 == 0 )) && order=(B A)
+    for entry in "${ray_rate_scenes[@]}"; do
         scene=${entry%%|*}
         read -r -a defines <<< "${entry#*|}"
-        for dir in "${order[@]}"; do
+        for name in "${order[@]}"; do
+            dir=$([[ $name == A ]] && echo "$build_a" || echo "$build_b")
             for integrator in transient_path transient_bdpt; do
-                # Next to the scene: it includes files by paths relative to its folder.
-                xml=$(mktemp -p "$root/scenes/$scene" ".build-ab-$integrator-XXXXXX.xml")
-                temp_scenes+=("$xml")
-                steady_scene_with "$integrator" "$root/scenes/$scene/scene.xml" > "$xml"
-                line=$("$dir/bin/femto" render "$xml" "${defines[@]}" --threads "$threads" \
-                    -o "$work/out" 2>&1 | render_seconds_and_rate)
+                line=$(ray_rate_render "$dir/bin/femto" "$scene" "$integrator" "$threads" \
+                    "$work/out" "${defines[@]}")
                 read -r seconds rate <<< "$line"
-                name=$([[ $dir == "$build_a" ]] && echo A || echo B)
                 echo "$round,$name,$scene,$integrator,$seconds,$rate" | tee -a "$out"
             done
         done

@@ -16,28 +16,17 @@ log="$results/ray_rate_run.log"
 bench_log_header "$log"
 
 work=$(mktemp -d)
-temp_scenes=()
-trap 'rm -rf "$work" "${temp_scenes[@]}"' EXIT
-# scene, its -D settings (the path tracer renders about a second, BDPT 2-5)
-scenes=(
-    "cornell-box|-D res=64 -D spp=256"
-    "fog-object|-D res=32 -D spp=256"
-    "caustic|-D res=64 -D spp=256"
-)
+trap 'rm -rf "$work"; remove_scene_copies' EXIT
 integrators=(transient_path transient_bdpt transient_light)
 csv="$results/ray_rate.csv"
 echo "scene,integrator,run,seconds,mrays_per_s" > "$csv"
 for run in $(seq 1 "$runs"); do
-    for entry in "${scenes[@]}"; do
+    for entry in "${ray_rate_scenes[@]}"; do
         scene=${entry%%|*}
         read -r -a defines <<< "${entry#*|}"
         for integrator in "${integrators[@]}"; do
-            # Next to the scene: it includes files by paths relative to its folder.
-            xml=$(mktemp -p "$root/scenes/$scene" ".ray-rate-$integrator-XXXXXX.xml")
-            temp_scenes+=("$xml")
-            steady_scene_with "$integrator" "$root/scenes/$scene/scene.xml" > "$xml"
-            line=$("$build/bin/femto" render "$xml" "${defines[@]}" --threads 2 \
-                -o "$work/out" 2>&1 | render_seconds_and_rate)
+            line=$(ray_rate_render "$build/bin/femto" "$scene" "$integrator" 2 "$work/out" \
+                "${defines[@]}")
             read -r seconds rate <<< "$line"
             echo "$scene,$integrator,$run,$seconds,$rate" | tee -a "$csv"
         done
