@@ -5,7 +5,7 @@ set -euo pipefail
 PACKAGES=(
   g++ cmake ninja-build pkg-config git
   libembree-dev libtbb-dev libpugixml-dev libfmt-dev libcli11-dev libtinyobjloader-dev
-  libopenimageio-dev openimageio-tools libopenexr-dev libopencolorio-dev zlib1g-dev
+  libopenimageio-dev openimageio-tools libopenexr-dev libopencolorio-dev libpng-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   libopenmpi-dev openmpi-bin

@@ -8,13 +8,14 @@
 #include <OpenEXR/ImfIntAttribute.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
-#include <OpenImageIO/imageio.h>
 #include <dlfcn.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <png.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -22,12 +23,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
+#include <stdexcept>
 
 #include "femto/color.h"
 #include "femto/error.h"
 #include "femto/input_file.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
+#include "io/exr_util.h"
+#include "io/oiio_module.h"
 
 namespace fs = std::filesystem;
 namespace OCIO = OCIO_NAMESPACE;
@@ -77,6 +81,48 @@ OCIO::ConstCPUProcessorRcPtr display_processor() {
     return processor;
 }
 
+std::string write_png_rgb8(const std::string& path, int width, int height,
+                           const unsigned char* rgb) {
+    png_image image{};
+    image.version = PNG_IMAGE_VERSION;
+    image.width = png_uint_32(width);
+    image.height = png_uint_32(height);
+    image.format = PNG_FORMAT_RGB;  // 8-bit sRGB: libpng marks the file so (an sRGB chunk)
+    if (png_image_write_to_file(&image, path.c_str(), 0, rgb, 0, nullptr)) return {};
+    const std::string error = image.message[0] ? image.message : "unknown error";
+    png_image_free(&image);
+    return error;
+}
+
+const OiioModule& oiio_module() {
+    static std::once_flag once;
+    static const OiioModule* module = nullptr;
+    static std::string error;
+    std::call_once(once, [] {
+        // Beside libfemto_io, in the build tree and where it is installed.
+        fs::path path = "libfemto_oiio.so";
+        Dl_info info{};
+        if (dladdr(reinterpret_cast<void*>(&oiio_module), &info) && info.dli_fname)
+            path = fs::path(info.dli_fname).parent_path() / path;
+        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) {
+            const char* why = dlerror();
+            error = why ? why : path.string();
+            return;
+        }
+        auto entry = reinterpret_cast<OiioModuleEntry>(dlsym(handle, FEMTO_OIIO_ENTRY));
+        const OiioModule* found = entry ? entry() : nullptr;
+        if (!found || found->version != kOiioModuleVersion) {
+            error = fmt::format("{} is not this build's module", path.string());
+            return;
+        }
+        module = found;
+    });
+    if (!module)  // an incomplete installation: the message names the missing file
+        throw std::runtime_error(fmt::format("cannot load femto's OpenImageIO module: {}", error));
+    return *module;
+}
+
 }  // namespace detail
 
 using detail::temp_path_for;
@@ -85,8 +131,24 @@ namespace {
 
 void commit(const std::string& tmp, const std::string& path) { detail::commit_file(tmp, path); }
 
-// Header values that read as numbers are stored typed (int, double), so EXR tools show numbers
-// and scripts need not parse text. Integers beyond int32 stay text: a double would round them.
+std::string exe_relative_config() {
+    Dl_info info{};
+    if (dladdr(reinterpret_cast<void*>(&ocio_config_path), &info) && info.dli_fname) {
+        std::error_code ec;
+        const fs::path lib = fs::canonical(info.dli_fname, ec);
+        if (!ec) {
+            const fs::path installed =
+                lib.parent_path().parent_path() / "share" / FEMTO_OCIO_INSTALL_SUBDIR;
+            if (fs::exists(installed, ec)) return installed.string();
+        }
+    }
+    return {};
+}
+
+}  // namespace
+
+namespace detail {
+
 void insert_attribute(Imf::Header& header, const std::string& key, const std::string& value) {
     const char* first = value.data();
     const char* last = first + value.size();
@@ -106,21 +168,7 @@ void insert_attribute(Imf::Header& header, const std::string& key, const std::st
     header.insert(key, Imf::StringAttribute(value));
 }
 
-std::string exe_relative_config() {
-    Dl_info info{};
-    if (dladdr(reinterpret_cast<void*>(&ocio_config_path), &info) && info.dli_fname) {
-        std::error_code ec;
-        const fs::path lib = fs::canonical(info.dli_fname, ec);
-        if (!ec) {
-            const fs::path installed =
-                lib.parent_path().parent_path() / "share" / FEMTO_OCIO_INSTALL_SUBDIR;
-            if (fs::exists(installed, ec)) return installed.string();
-        }
-    }
-    return {};
-}
-
-}  // namespace
+}  // namespace detail
 
 std::string ocio_config_path() {
     if (const char* env = std::getenv("FEMTO_OCIO_CONFIG"); env && *env) return env;
@@ -150,7 +198,7 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
         if (depth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
         for (const std::string& n : extra.names)
             header.channels().insert(n, Imf::Channel(Imf::FLOAT));
-        for (const auto& [k, v] : attributes) insert_attribute(header, k, v);
+        for (const auto& [k, v] : attributes) detail::insert_attribute(header, k, v);
         Imf::FrameBuffer fb;
         const size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
         char* base = reinterpret_cast<char*>(const_cast<float*>(rgb));
@@ -190,11 +238,8 @@ void write_png_preview(const std::string& path, int width, int height, const flo
     for (size_t i = 0; i < bytes.size(); ++i)
         bytes[i] = static_cast<unsigned char>(std::lround(std::clamp(buf[i], 0.f, 1.f) * 255.f));
     const std::string tmp = temp_path_for(path);
-    auto out = OIIO::ImageOutput::create(tmp);
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) ||
-        !out->close()) {
-        const std::string err = out ? out->geterror() : OIIO::geterror();
+    if (const std::string err = detail::write_png_rgb8(tmp, width, height, bytes.data());
+        !err.empty()) {
         std::error_code ec;
         fs::remove(tmp, ec);
         throw SceneError(fmt::format("cannot write \"{}\": {}", path, err));
@@ -261,35 +306,6 @@ private:
     int saved_ = -1;
 };
 
-// OpenImageIO's error for `in` (or its global one), leaving no error pending: OpenImageIO
-// prints unretrieved errors when the process exits, after femto's own message.
-std::string take_oiio_error(const OIIO::ImageInput* in) {
-    std::string error = in ? in->geterror() : std::string();
-    const std::string global = OIIO::geterror();
-    if (error.empty()) error = global;
-    if (error.empty()) return "unknown error";
-    // Several lines (one per library layer) make one message: femto's errors are one line.
-    while (!error.empty() && error.back() == '\n') error.pop_back();
-    for (size_t nl; (nl = error.find('\n')) != std::string::npos;) error.replace(nl, 1, "; ");
-    return error;
-}
-
-// Reads all channels as float; returns "" or what went wrong.
-std::string decode_image(const std::string& path, OIIO::ImageSpec& spec,
-                         std::vector<float>& pixels) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) return take_oiio_error(nullptr);
-    spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 ||
-        int64_t(spec.width) * spec.height > kMaxImagePixels)
-        return fmt::format("unsupported size {}x{}x{} (at most 2^28 pixels)", spec.width,
-                           spec.height, spec.nchannels);
-    pixels.resize(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
-        return take_oiio_error(in.get());
-    return {};
-}
-
 }  // namespace
 
 std::vector<float> read_image_rgb(const std::string& path, int& width, int& height,
@@ -297,17 +313,17 @@ std::vector<float> read_image_rgb(const std::string& path, int& width, int& heig
     if (const std::string problem = input_file_problem(path); !problem.empty())
         throw SceneError(fmt::format("cannot read image \"{}\": {}", path, problem));
     limit_openexr_sizes();
-    OIIO::ImageSpec spec;
-    std::vector<float> pixels;
+    const detail::OiioModule& oiio = detail::oiio_module();  // before stderr is held
+    detail::DecodedImage image;
     HeldStderr held;
-    const std::string error = decode_image(path, spec, pixels);
+    const std::string error = oiio.decode(path, kMaxImagePixels, image);
     held.release(error.empty());
     if (!error.empty()) throw SceneError(fmt::format("cannot read image \"{}\": {}", path, error));
-    width = spec.width;
-    height = spec.height;
-    const int nc = spec.nchannels;
-    const bool decode = srgb_8bit && (spec.format == OIIO::TypeDesc::UINT8 ||
-                                      spec.format == OIIO::TypeDesc::UINT16);
+    width = image.width;
+    height = image.height;
+    const int nc = image.channels;
+    const std::vector<float>& pixels = image.pixels;
+    const bool decode = srgb_8bit && image.integer_8_or_16;
     std::vector<float> rgb(size_t(width) * height * 3);
     for (size_t i = 0; i < size_t(width) * height; ++i)
         for (int c = 0; c < 3; ++c) {
@@ -344,10 +360,8 @@ const std::string* Cube::attribute(const std::string& name) const {
     return nullptr;
 }
 
-namespace {
+namespace detail {
 
-// The header's text attributes and femto's numbers; not OpenEXR's own (pixelAspectRatio, ...),
-// which belong to this file's layout rather than to the render.
 Attributes read_attributes(const Imf::Header& header) {
     Attributes out;
     for (auto it = header.begin(); it != header.end(); ++it) {
@@ -366,6 +380,10 @@ Attributes read_attributes(const Imf::Header& header) {
     }
     return out;
 }
+
+}  // namespace detail
+
+namespace {
 
 Imf::Compression exr_compression(ExrCubeOptions::Compression c) {
     using C = ExrCubeOptions::Compression;
@@ -532,8 +550,8 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
             cube_part_header("frames", width, height * bins, height * bins, options, &tiling));
         for (const char* c : {"R", "G", "B"})
             headers[0].channels().insert(c, Imf::Channel(Imf::FLOAT));
-        for (const auto& [k, v] : attributes) insert_attribute(headers[0], k, v);
-        insert_attribute(headers[0], "femto:frame_height", std::to_string(height));
+        for (const auto& [k, v] : attributes) detail::insert_attribute(headers[0], k, v);
+        detail::insert_attribute(headers[0], "femto:frame_height", std::to_string(height));
         headers[0].insert("femto:layout",
                           Imf::StringAttribute("frames stacked top to bottom: bin t is rows "
                                                "[t * femto:frame_height, (t + 1) * "
@@ -656,7 +674,7 @@ Cube read_exr_cube(const std::string& path) {
         if (frames_part < 0 && legacy_bins == 0)
             throw std::runtime_error("it is not a femto transient cube (no part named \"frames\")");
         const Imf::Header& first = file.header(frames_part >= 0 ? frames_part : 0);
-        cube.attributes = read_attributes(first);
+        cube.attributes = detail::read_attributes(first);
         const Imath::Box2i dw = first.dataWindow();
         cube.width = dw.max.x - dw.min.x + 1;
         if (frames_part >= 0) {

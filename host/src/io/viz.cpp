@@ -2,7 +2,11 @@
 #include "femto/viz.h"
 
 #include <OpenColorIO/OpenColorIO.h>
-#include <OpenImageIO/imageio.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -11,6 +15,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <optional>
 
@@ -18,6 +23,8 @@
 #include "femto/input_file.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
+#include "io/exr_util.h"
+#include "io/oiio_module.h"
 
 namespace fs = std::filesystem;
 namespace OCIO = OCIO_NAMESPACE;
@@ -129,61 +136,62 @@ constexpr const char* kStreakLayout = "streak image: x to the right, time downwa
 
 bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
 
-// A header value as femto's attributes hold it: numbers (written typed) shortest round-trip.
-std::optional<std::string> attribute_text(const OIIO::ParamValue& p) {
-    if (p.type() == OIIO::TypeString) return std::string(p.get_string());
-    if (p.type() == OIIO::TypeInt) return std::to_string(p.get_int());
-    if (p.type() == OIIO::TypeDesc::DOUBLE)
-        return fmt::format("{}", *static_cast<const double*>(p.data()));
-    if (p.type() == OIIO::TypeFloat) return fmt::format("{}", p.get_float());
-    return std::nullopt;
-}
-
 // A streak image (write_streak_exr) as a cube of height 1; nullopt when the file's header does
-// not mark it as one (a cube, a steady image: read_exr_cube then names the problem).
+// not mark it as one (a cube, a steady image: read_exr_cube then names the problem), or is not
+// a single-part EXR that OpenEXR opens (read_exr_cube reports that too).
 std::optional<io::Cube> read_streak(const std::string& path) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-        (void)OIIO::geterror();  // not readable here: read_exr_cube reports it
+    std::unique_ptr<Imf::InputFile> file;
+    try {
+        file = std::make_unique<Imf::InputFile>(path.c_str());
+    } catch (const std::exception&) {
         return std::nullopt;
     }
-    const OIIO::ImageSpec& spec = in->spec();
-    if (!starts_with(std::string(spec.get_string_attribute("femto:layout")), "streak image") ||
-        !spec.find_attribute("femto:row"))
+    const Imf::Header& header = file->header();
+    const auto* layout = header.findTypedAttribute<Imf::StringAttribute>("femto:layout");
+    if (!layout || !starts_with(layout->value(), "streak image") ||
+        header.find("femto:row") == header.end())
         return std::nullopt;
-    const int W = spec.width, T = spec.height, nc = spec.nchannels;
-    if (W <= 0 || T <= 0 || spec.depth > 1 || int64_t(W) * T > (int64_t(1) << 28))
-        throw SceneError(fmt::format("streak image \"{}\" has an unsupported size {}x{}", path,
-                                     spec.width, spec.height));
+    const Imath::Box2i dw = header.dataWindow();
+    const int64_t W = int64_t(dw.max.x) - dw.min.x + 1, T = int64_t(dw.max.y) - dw.min.y + 1;
+    if (W <= 0 || T <= 0 || W * T > (int64_t(1) << 28))
+        throw SceneError(
+            fmt::format("streak image \"{}\" has an unsupported size {}x{}", path, W, T));
+    const Imf::ChannelList& channels = header.channels();
+    for (const char* c : {"R", "G", "B"})
+        if (!channels.findChannel(c))
+            throw SceneError(fmt::format("streak image \"{}\" has no channels R, G and B", path));
+    const bool has_depth = channels.findChannel("Z") != nullptr;
+    const size_t n = size_t(W) * size_t(T);
+    std::vector<float> planes((has_depth ? 4 : 3) * n);  // R, G, B (and Z) planes, rows of W
+    Imf::FrameBuffer fb;
     const char* names[4] = {"R", "G", "B", "Z"};
-    int channel[4] = {-1, -1, -1, -1};
-    for (int c = 0; c < nc; ++c)
-        for (int k = 0; k < 4; ++k)
-            if (spec.channelnames[size_t(c)] == names[k]) channel[k] = c;
-    if (channel[0] < 0 || channel[1] < 0 || channel[2] < 0)
-        throw SceneError(fmt::format("streak image \"{}\" has no channels R, G and B", path));
-    std::vector<float> pixels(size_t(W) * size_t(T) * size_t(nc));
-    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, pixels.data()))
-        throw SceneError(fmt::format("cannot read streak image \"{}\": {}", path, in->geterror()));
+    for (size_t k = 0; k < (has_depth ? 4u : 3u); ++k) {
+        // Slices address pixel (x, y) at base + x * xStride + y * yStride, from the window's
+        // origin.
+        char* base = reinterpret_cast<char*>(planes.data() + k * n) -
+                     (int64_t(dw.min.x) + int64_t(dw.min.y) * W) * int64_t(sizeof(float));
+        fb.insert(names[k], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(W)));
+    }
+    try {
+        file->setFrameBuffer(fb);
+        file->readPixels(dw.min.y, dw.max.y);
+    } catch (const std::exception& e) {
+        throw SceneError(fmt::format("cannot read streak image \"{}\": {}", path, e.what()));
+    }
     io::Cube cube;
-    cube.width = W;
+    cube.width = int(W);
     cube.height = 1;
-    cube.bins = T;
-    cube.data.resize(size_t(W) * size_t(T) * 3);
+    cube.bins = int(T);
+    cube.data.resize(n * 3);
     for (size_t t = 0; t < size_t(T); ++t)
         for (size_t x = 0; x < size_t(W); ++x)
             for (size_t c = 0; c < 3; ++c)
-                cube.data[(x * size_t(T) + t) * 3 + c] =
-                    pixels[(t * size_t(W) + x) * size_t(nc) + size_t(channel[c])];
-    if (channel[3] >= 0) {  // every time row holds the depth: take the first
-        cube.depth.resize(size_t(W));
-        for (size_t x = 0; x < size_t(W); ++x)
-            cube.depth[x] = pixels[x * size_t(nc) + size_t(channel[3])];
-    }
-    for (const OIIO::ParamValue& p : spec.extra_attribs)
-        if (starts_with(p.name().string(), "femto:"))
-            if (std::optional<std::string> value = attribute_text(p))
-                cube.attributes.emplace_back(p.name().string(), *value);
+                cube.data[(x * size_t(T) + t) * 3 + c] = planes[c * n + t * size_t(W) + x];
+    if (has_depth)  // every time row holds the depth: take the first
+        cube.depth.assign(planes.begin() + std::ptrdiff_t(3 * n),
+                          planes.begin() + std::ptrdiff_t(3 * n) + W);
+    for (auto& attribute : io::detail::read_attributes(header))
+        if (starts_with(attribute.first, "femto:")) cube.attributes.push_back(std::move(attribute));
     return cube;
 }
 
@@ -644,47 +652,36 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
     return result;
 }
 
-void write_png8(const std::string& path, int width, int height, const std::vector<float>& display) {
+namespace {
+// Display values in [0, 1] (others clamped, NaN black) as 8-bit values.
+std::vector<unsigned char> display_bytes(const std::vector<float>& display) {
     std::vector<unsigned char> bytes(display.size());
     for (size_t i = 0; i < bytes.size(); ++i)
         bytes[i] = static_cast<unsigned char>(std::lround(
             std::clamp(std::isfinite(display[i]) ? display[i] : 0.f, 0.f, 1.f) * 255.f));
+    return bytes;
+}
+}  // namespace
+
+void write_png8(const std::string& path, int width, int height, const std::vector<float>& display) {
+    const std::vector<unsigned char> bytes = display_bytes(display);
     const std::string tmp = temp_path_for(path);
-    auto out = OIIO::ImageOutput::create(tmp);
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) ||
-        !out->close())
-        fail_write(tmp, path, out ? out->geterror() : OIIO::geterror());
+    if (const std::string err = io::detail::write_png_rgb8(tmp, width, height, bytes.data());
+        !err.empty())
+        fail_write(tmp, path, err);
     commit(tmp, path);
 }
 
 void write_gif(const std::string& path, int width, int height,
                const std::vector<std::vector<float>>& frames, int fps) {
     if (frames.empty()) throw SceneError(fmt::format("cannot write \"{}\": no frames", path));
+    const io::detail::OiioModule& oiio = io::detail::oiio_module();
+    std::vector<std::vector<unsigned char>> bytes;
+    for (const std::vector<float>& frame : frames) bytes.push_back(display_bytes(frame));
     const std::string tmp = temp_path_for(path);
-    auto out = OIIO::ImageOutput::create(tmp);
-    if (!out) fail_write(tmp, path, OIIO::geterror());
-    if (!out->supports("multiimage"))
-        fail_write(tmp, path, "this OpenImageIO cannot write multi-image GIFs");
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    const int rate[2] = {std::max(1, fps), 1};
-    spec.attribute("FramesPerSecond", OIIO::TypeRational, rate);
-    spec.attribute("oiio:Movie", 1);
-    spec.attribute("oiio:LoopCount", 0);
-    const std::vector<OIIO::ImageSpec> specs(frames.size(), spec);
-    const bool append = out->supports("appendsubimage");
-    bool ok = append ? out->open(tmp, spec) : out->open(tmp, int(specs.size()), specs.data());
-    std::vector<unsigned char> bytes;
-    for (size_t f = 0; ok && f < frames.size(); ++f) {
-        if (f > 0) ok = out->open(tmp, spec, OIIO::ImageOutput::AppendSubimage);
-        bytes.resize(frames[f].size());
-        for (size_t i = 0; i < bytes.size(); ++i)
-            bytes[i] = static_cast<unsigned char>(std::lround(
-                std::clamp(std::isfinite(frames[f][i]) ? frames[f][i] : 0.f, 0.f, 1.f) * 255.f));
-        ok = ok && out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
-    }
-    ok = ok && out->close();
-    if (!ok) fail_write(tmp, path, out->geterror());
+    if (const std::string err = oiio.write_gif(tmp, width, height, bytes, std::max(1, fps));
+        !err.empty())
+        fail_write(tmp, path, err);
     commit(tmp, path);
 }
 
@@ -706,14 +703,20 @@ void write_streak_exr(const std::string& path, const io::Cube& cube, int y,
 void write_exr_gray(const std::string& path, int width, int height, const float* values,
                     const io::Attributes& attributes) {
     const std::string tmp = temp_path_for(path);
-    auto out = OIIO::ImageOutput::create(tmp);
-    OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = {"Y"};
-    spec.attribute("compression", "zip");
-    for (const auto& [k, v] : attributes) spec.attribute(k, v);
-    if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values) ||
-        !out->close())
-        fail_write(tmp, path, out ? out->geterror() : OIIO::geterror());
+    try {
+        Imf::Header header(width, height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+        for (const auto& [k, v] : attributes) io::detail::insert_attribute(header, k, v);
+        Imf::FrameBuffer fb;
+        fb.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(values)),
+                                  sizeof(float), sizeof(float) * size_t(width)));
+        Imf::OutputFile file(tmp.c_str(), header);
+        file.setFrameBuffer(fb);
+        file.writePixels(height);
+    } catch (const std::exception& e) {
+        fail_write(tmp, path, e.what());
+    }
     commit(tmp, path);
 }
 
