@@ -23,14 +23,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
-#include <stdexcept>
 
 #include "femto/color.h"
 #include "femto/error.h"
 #include "femto/input_file.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
-#include "io/exr_util.h"
+#include "io/exr_png.h"
 #include "io/oiio_module.h"
 
 namespace fs = std::filesystem;
@@ -99,17 +98,30 @@ const OiioModule& oiio_module() {
     static const OiioModule* module = nullptr;
     static std::string error;
     std::call_once(once, [] {
-        // Beside libfemto_io, in the build tree and where it is installed.
-        fs::path path = "libfemto_oiio.so";
+        // Beside libfemto_io, in the build tree and where it is installed: next to the file
+        // itself (through a symlinked libfemto_io, too), else next to the name it was loaded by.
+        const fs::path name = "libfemto_oiio.so";
+        std::vector<fs::path> candidates;
         Dl_info info{};
-        if (dladdr(reinterpret_cast<void*>(&oiio_module), &info) && info.dli_fname)
-            path = fs::path(info.dli_fname).parent_path() / path;
-        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-        if (!handle) {
-            const char* why = dlerror();
-            error = why ? why : path.string();
-            return;
+        if (dladdr(reinterpret_cast<void*>(&oiio_module), &info) && info.dli_fname) {
+            std::error_code ec;
+            if (const fs::path real = fs::canonical(info.dli_fname, ec); !ec)
+                candidates.push_back(real.parent_path() / name);
+            candidates.push_back(fs::path(info.dli_fname).parent_path() / name);
         }
+        // Not by its bare name: the loader would search the current folder too (an empty entry in
+        // a build tree's RUNPATH), and a module must come from femto's own installation.
+        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+        void* handle = nullptr;
+        fs::path path;
+        for (const fs::path& candidate : candidates) {
+            path = candidate;
+            if ((handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL))) break;
+            const char* why = dlerror();
+            error += (error.empty() ? "" : "; ") + std::string(why ? why : path.c_str());
+        }
+        if (!handle) return;
+        error.clear();
         auto entry = reinterpret_cast<OiioModuleEntry>(dlsym(handle, FEMTO_OIIO_ENTRY));
         const OiioModule* found = entry ? entry() : nullptr;
         if (!found || found->version != kOiioModuleVersion) {
@@ -118,8 +130,8 @@ const OiioModule& oiio_module() {
         }
         module = found;
     });
-    if (!module)  // an incomplete installation: the message names the missing file
-        throw std::runtime_error(fmt::format("cannot load femto's OpenImageIO module: {}", error));
+    if (!module)  // an incomplete installation: the message names the files tried
+        throw SceneError(fmt::format("cannot load femto's OpenImageIO module: {}", error));
     return *module;
 }
 

@@ -3,8 +3,8 @@
 //
 // Why: Debian's OpenImageIO pulls about 260 shared libraries into the process (DICOM, HEIF,
 // camera raw, OpenCV, ...), which costs ~0.4 s at every process start, while a render only writes
-// EXR (OpenEXR) and PNG (libpng) files. Reading images in other formats (textures,
-// environment maps) and writing animated GIFs (`femto viz frames --gif`) still go through
+// EXR (OpenEXR) and PNG (libpng) files. Reading images (textures and environment maps, in any
+// format, EXR too) and writing animated GIFs (`femto viz frames --gif`) still go through
 // OpenImageIO; only processes that do so load it. docs/design-notes.md has the measurements.
 #pragma once
 
@@ -23,7 +23,7 @@ struct DecodedImage {
 
 /// The module's functions. Each returns "" on success, or what went wrong (one line).
 struct OiioModule {
-    int version;  // kOiioModuleVersion: a module left from another build is refused
+    int version;  // kOiioModuleVersion: a module of another version of this interface is refused
     /// Reads `path` (any format OpenImageIO reads); images of more than `max_pixels` pixels
     /// are refused before their pixels are read.
     std::string (*decode)(const std::string& path, int64_t max_pixels, DecodedImage& out);
@@ -38,7 +38,7 @@ inline constexpr int kOiioModuleVersion = 1;
 using OiioModuleEntry = const OiioModule* (*)();
 
 /// Loads libfemto_oiio.so from libfemto_io's own folder on the first call; throws SceneError
-/// naming the file when it cannot be loaded.
+/// naming the files tried when it cannot be loaded.
 const OiioModule& oiio_module();
 
 }  // namespace femto::io::detail

@@ -23,7 +23,7 @@
 #include "femto/input_file.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
-#include "io/exr_util.h"
+#include "io/exr_png.h"
 #include "io/oiio_module.h"
 
 namespace fs = std::filesystem;
@@ -165,13 +165,9 @@ std::optional<io::Cube> read_streak(const std::string& path) {
     std::vector<float> planes((has_depth ? 4 : 3) * n);  // R, G, B (and Z) planes, rows of W
     Imf::FrameBuffer fb;
     const char* names[4] = {"R", "G", "B", "Z"};
-    for (size_t k = 0; k < (has_depth ? 4u : 3u); ++k) {
-        // Slices address pixel (x, y) at base + x * xStride + y * yStride, from the window's
-        // origin.
-        char* base = reinterpret_cast<char*>(planes.data() + k * n) -
-                     (int64_t(dw.min.x) + int64_t(dw.min.y) * W) * int64_t(sizeof(float));
-        fb.insert(names[k], Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(W)));
-    }
+    for (size_t k = 0; k < (has_depth ? 4u : 3u); ++k)  // each plane starts at the window's origin
+        fb.insert(names[k], Imf::Slice::Make(Imf::FLOAT, planes.data() + k * n, dw.min, W, T,
+                                             sizeof(float), sizeof(float) * size_t(W)));
     try {
         file->setFrameBuffer(fb);
         file->readPixels(dw.min.y, dw.max.y);
