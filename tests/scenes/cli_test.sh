@@ -210,18 +210,24 @@ bad_texture)
   expect_exit 2 '^femto: error: t\.xml:4:[0-9]+: "bitmap": cannot read image "[^"]*corrupt\.png": ' -- "$femto" render t.xml -o out/t -q
   [ "$(wc -l < stderr.txt)" -eq 1 ] || { cat stderr.txt >&2; fail "more than one line on stderr"; };;
 image_libraries)
-  # A render that reads no image writes its EXR and PNG files without OpenImageIO (whose ~260
-  # libraries take ~0.4 s to load); a bitmap texture loads it on demand (LD_DEBUG: the loader
-  # names every library it opens).
+  # A render that reads no image, or only EXR images, writes its EXR and PNG files without
+  # OpenImageIO (whose ~260 libraries take ~0.4 s to load); a PNG texture loads it on demand
+  # (LD_DEBUG: the loader names every library it opens).
   LD_DEBUG=files "$femto" render "$scene" -o out/plain -D spp=1 -D res=16 -q 2> plain.txt ||
     { cat plain.txt >&2; fail "render failed"; }
   [ -s out/plain.exr ] && [ -s out/plain.png ] || fail "outputs missing"
   grep -q 'file=libfemto_io' plain.txt || fail "LD_DEBUG printed nothing: cannot tell"
   ! grep -q 'libOpenImageIO' plain.txt || fail "OpenImageIO loaded by a render that reads no image"
-  printf '<scene version="3.0.0">\n<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>\n<shape type="rectangle"><bsdf type="diffuse">\n<texture type="bitmap" name="reflectance"><string name="filename" value="out/plain.png"/></texture></bsdf></shape>\n<emitter type="constant"/>\n</scene>\n' > tex.xml
-  LD_DEBUG=files "$femto" render tex.xml -o out/tex -q 2> tex.txt || { cat tex.txt >&2; fail "textured render failed"; }
-  grep -q 'libOpenImageIO' tex.txt || fail "OpenImageIO not loaded for a bitmap texture"
-  [ -s out/tex.png ] || fail "textured render: no PNG";;
+  for texture in plain_steady.exr plain.png; do
+    printf '<scene version="3.0.0">\n<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>\n<shape type="rectangle"><bsdf type="diffuse">\n<texture type="bitmap" name="reflectance"><string name="filename" value="out/%s"/></texture></bsdf></shape>\n<emitter type="constant"/>\n</scene>\n' "$texture" > tex.xml
+    LD_DEBUG=files "$femto" render tex.xml -o out/tex -q 2> tex.txt || { cat tex.txt >&2; fail "render with $texture failed"; }
+    [ -s out/tex.png ] || fail "render with $texture: no PNG"
+    if [ "$texture" = plain.png ]; then
+      grep -q 'libOpenImageIO' tex.txt || fail "OpenImageIO not loaded for a PNG texture"
+    else
+      ! grep -q 'libOpenImageIO' tex.txt || fail "OpenImageIO loaded for an EXR texture"
+    fi
+  done;;
 bad_volume)
   # Media volumes: a missing .vol, a truncated one, an unknown volume type, a negative constant;
   # each one located line and exit code 2, no image written.

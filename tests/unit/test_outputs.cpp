@@ -1,10 +1,12 @@
 // Output files: the transient cube's EXR layout (stacked frames, any bin count, the older
 // one-part-per-bin layout still read), typed header numbers, streamed .npy files, and
 // OutputSet (a render's files appear together, or the previous ones stay).
+#include <Imath/half.h>
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfMultiPartOutputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfOutputPart.h>
 #include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfStringAttribute.h>
@@ -13,6 +15,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -147,6 +150,80 @@ TEST(CubeLayout, TheOlderOnePartPerBinLayoutIsStillRead) {
     EXPECT_EQ(cube.bins, bins);
     EXPECT_EQ(cube.data, data);
     EXPECT_EQ(*cube.attribute("femto:start"), "1.5");
+}
+
+// EXR images are read through OpenEXR where they have half or float R, G and B channels (so
+// that an EXR texture does not load OpenImageIO), through OpenImageIO otherwise; either way the
+// pixels are the ones OpenImageIO reads (its channels 0-2, or 0 for one channel).
+void write_test_exr(const std::string& path, Imath::Box2i window,
+                    const std::vector<std::pair<std::string, Imf::PixelType>>& channels) {
+    const int w = window.max.x - window.min.x + 1, h = window.max.y - window.min.y + 1;
+    Imf::Header header(Imath::Box2i({0, 0}, {w - 1, h - 1}), window);
+    for (const auto& [name, type] : channels) header.channels().insert(name, Imf::Channel(type));
+    std::map<std::string, std::vector<float>> floats;
+    std::map<std::string, std::vector<half>> halves;
+    std::map<std::string, std::vector<uint32_t>> uints;
+    Imf::FrameBuffer fb;
+    size_t k = 0;
+    for (const auto& [name, type] : channels) {
+        const size_t n = size_t(w) * size_t(h);
+        char* base = nullptr;
+        size_t size = 0;
+        if (type == Imf::FLOAT) {
+            auto& v = floats[name];
+            for (size_t i = 0; i < n; ++i) v.push_back(float(i) * 0.37f + float(k) * 100.f);
+            base = reinterpret_cast<char*>(v.data()), size = sizeof(float);
+        } else if (type == Imf::HALF) {
+            auto& v = halves[name];
+            for (size_t i = 0; i < n; ++i) v.push_back(half(float(i) * 0.25f + float(k) * 8.f));
+            base = reinterpret_cast<char*>(v.data()), size = sizeof(half);
+        } else {
+            auto& v = uints[name];
+            for (size_t i = 0; i < n; ++i) v.push_back(uint32_t(i * 1000 + k));
+            base = reinterpret_cast<char*>(v.data()), size = sizeof(uint32_t);
+        }
+        fb.insert(name, Imf::Slice::Make(type, base, window.min, w, h, size, size * size_t(w)));
+        ++k;
+    }
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(h);
+}
+
+TEST(ImageRead, ExrPixelsAreThoseOpenImageIoReads) {
+    const auto dir = temp_dir("image-read-exr");
+    const Imath::Box2i shifted({3, -2}, {9, 4});
+    const std::vector<std::pair<std::string, std::vector<std::pair<std::string, Imf::PixelType>>>>
+        cases = {
+            {"float-rgb", {{"R", Imf::FLOAT}, {"G", Imf::FLOAT}, {"B", Imf::FLOAT}}},
+            {"half-bgra-z",
+             {{"Z", Imf::FLOAT},
+              {"B", Imf::HALF},
+              {"G", Imf::HALF},
+              {"R", Imf::HALF},
+              {"A", Imf::HALF}}},
+            {"gray", {{"Y", Imf::FLOAT}}},  // OpenImageIO's path: one channel
+            {"uint-rgb", {{"R", Imf::UINT}, {"G", Imf::UINT}, {"B", Imf::UINT}}},
+        };
+    for (const auto& [name, channels] : cases) {
+        SCOPED_TRACE(name);
+        const std::string path = (dir / (name + ".exr")).string();
+        write_test_exr(path, shifted, channels);
+        int w = 0, h = 0;
+        const std::vector<float> got = io::read_image_rgb(path, w, h, false);
+        auto in = OIIO::ImageInput::open(path);
+        ASSERT_TRUE(in);
+        const OIIO::ImageSpec spec = in->spec();
+        std::vector<float> all(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+        ASSERT_TRUE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()));
+        ASSERT_EQ(w, spec.width);
+        ASSERT_EQ(h, spec.height);
+        ASSERT_EQ(got.size(), size_t(w) * size_t(h) * 3);
+        const size_t nc = size_t(spec.nchannels);
+        for (size_t i = 0; i < size_t(w) * size_t(h); ++i)
+            for (size_t c = 0; c < 3; ++c)
+                ASSERT_EQ(got[3 * i + c], all[i * nc + (nc >= 3 ? c : 0)]) << "pixel " << i;
+    }
 }
 
 TEST(CubeLayout, HeaderNumbersAreTypedAndBigIntegersStayExact) {

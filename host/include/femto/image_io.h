@@ -32,7 +32,9 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
 /// config shipped with femto and writes an 8-bit PNG. `exposure` is in stops.
 void write_png_preview(const std::string& path, int width, int height, const float* rgb,
                        float exposure = 0.f);
-/// Reads an RGB(A) image through OpenImageIO as linear float RGB; throws SceneError.
+/// Reads an image as linear float RGB (a one-channel image as grey): EXR files with R, G and B
+/// channels through OpenEXR, any other file through OpenImageIO (loaded on first use); throws
+/// SceneError.
 std::vector<float> read_image_rgb(const std::string& path, int& width, int& height,
                                   bool srgb_to_linear_if_8bit = true);
 

@@ -3,9 +3,9 @@
 //
 // Why: Debian's OpenImageIO pulls about 260 shared libraries into the process (DICOM, HEIF,
 // camera raw, OpenCV, ...), which costs ~0.4 s at every process start, while a render only writes
-// EXR (OpenEXR) and PNG (libpng) files. Reading images (textures and environment maps, in any
-// format, EXR too) and writing animated GIFs (`femto viz frames --gif`) still go through
-// OpenImageIO; only processes that do so load it. docs/design-notes.md has the measurements.
+// EXR (OpenEXR) and PNG (libpng) files, and reads RGB EXR textures through OpenEXR too. Reading
+// images of other formats (textures and environment maps) and writing animated GIFs (`femto viz
+// frames --gif`) go through OpenImageIO; only processes that do so load it. docs/design-notes.md has the measurements.
 #pragma once
 
 #include <cstdint>
