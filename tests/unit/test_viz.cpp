@@ -13,6 +13,7 @@
 //    bins with the same weights: 2e-6 (the inputs' 1e-6 plus the rounding of each side).
 //  - PNG previews of equal images may differ by one 8-bit step (float rounding at a step).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -247,6 +248,26 @@ TEST(Viz, UnwarpFractionalShiftConservesEnergyAndMovesMeanTime) {
             EXPECT_NEAR(mean_time(back.cube, p, start_of(back.cube), bw),
                         mean_time(cam, p, 3.0, bw), 1e-5);
         }
+}
+
+// A wide streak image whose depths spread its pixels over more bins than memory holds: a
+// message (exit 2), not an allocation failure or the OOM killer.
+TEST(Viz, UnwarpRefusesACubeLargerThanMemory) {
+    const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    const int W = 1 << 17;
+    const double bins_needed = 0.9 * ram / (double(W) * 3 * sizeof(float));
+    if (!(ram > 0) || bins_needed > double(1 << 20) ||
+        0.9 * ram > double(int64_t(1) << 36))  // the fixed limits refuse it first
+        GTEST_SKIP() << "this machine's memory is beyond the fixed limits";
+    io::Cube c = make_cube(W, 1, 2, 0.0, 1.0);
+    c.depth.assign(size_t(W), 0.f);
+    c.depth[1] = float(bins_needed);  // a shift of that many bins (bin width 1)
+    try {
+        viz::unwarp(c, viz::time_grid(c), true);
+        FAIL() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("of this machine's"), std::string::npos) << e.what();
+    }
 }
 
 TEST(Viz, UnwarpNeedsDepthAndTimeFrame) {

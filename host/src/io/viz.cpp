@@ -630,9 +630,17 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
         k_hi = std::max<int64_t>(0, int64_t(snapped_ceil(shifts.max)));
     }
     const int64_t new_bins = int64_t(cube.bins) + k_hi - k_lo;
-    if (new_bins > (int64_t(1) << 20) ||
-        double(pixels) * double(new_bins) * 3 * sizeof(float) > double(int64_t(1) << 36))
+    const double bytes = double(pixels) * double(new_bins) * 3 * sizeof(float);
+    if (new_bins > (int64_t(1) << 20) || bytes > double(int64_t(1) << 36))
         throw SceneError(fmt::format("the unwarped cube would need {} bins: too large", new_bins));
+    // Allocated beside the cube read: more than the machine holds would end in an allocation
+    // failure or the kernel's OOM killer, not a message.
+    const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    if (ram > 0 && bytes > 0.75 * ram)
+        throw SceneError(
+            fmt::format("the unwarped cube would need {} bins, {:.1f} GiB: more than "
+                        "3/4 of this machine's {:.1f} GiB of memory",
+                        new_bins, bytes / double(1 << 30), ram / double(1 << 30)));
     UnwarpResult result;
     io::Cube& out = result.cube;
     out.width = cube.width;
