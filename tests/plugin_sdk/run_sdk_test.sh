@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs femto into a temporary prefix, builds tests/plugin_sdk against the installed SDK
-# and renders a scene naming the plugin, found through FEMTO_PLUGIN_PATH.
+# and renders a scene naming the plugin, found through FEMTO_PLUGIN_PATH; the installed femto
+# also reads a PNG texture (its OpenImageIO module, installed beside libfemto_io).
 # Usage: run_sdk_test.sh BUILD_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 build=$1 src=$2 work=$3
@@ -25,6 +26,20 @@ echo "AO min $min max $max"
 # Unoccluded plane far from the sphere: exactly 1. Near the contact: clearly occluded. The
 # sphere's top sees the open sky (1) as well.
 awk -v a="$min" -v b="$max" 'BEGIN { exit !(b == 1 && a < 0.6) }' || { echo "FAIL: AO range [$min, $max]"; exit 1; }
+# The installed libfemto_io finds its OpenImageIO module beside it: a PNG texture needs it.
+cat > "$work/texture.xml" <<XML
+<scene version="3.0.0">
+  <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+  <shape type="rectangle"><bsdf type="diffuse">
+    <texture type="bitmap" name="reflectance"><string name="filename" value="$work/ao.png"/></texture>
+  </bsdf></shape>
+  <emitter type="constant"/>
+</scene>
+XML
+LD_DEBUG=files "$femto" render "$work/texture.xml" -o "$work/texture" -q 2> "$work/texture-ld.txt" ||
+  { grep -v '^ *[0-9]*:' "$work/texture-ld.txt"; echo "FAIL: the installed femto cannot read a PNG texture"; exit 1; }
+grep -q "file=$work/install/lib[^ ]*/libfemto_oiio.so" "$work/texture-ld.txt" ||
+  { echo "FAIL: the OpenImageIO module was not loaded from the installation"; exit 1; }
 # Without the plugin path the type is unknown: a clean error, exit 2.
 set +e
 FEMTO_PLUGIN_PATH= "$femto" render "$src/tests/plugin_sdk/scene.xml" -o "$work/none" -q 2> "$work/err.txt"
