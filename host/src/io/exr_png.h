@@ -5,6 +5,7 @@
 #include <OpenEXR/ImfHeader.h>
 
 #include <string>
+#include <vector>
 
 #include "femto/image_io.h"
 
@@ -18,9 +19,22 @@ void insert_attribute(Imf::Header& header, const std::string& key, const std::st
 /// which belong to the file's layout rather than to the render.
 Attributes read_attributes(const Imf::Header& header);
 
-/// Writes 8-bit sRGB pixels (rows top first, 3 bytes a pixel) as a PNG file through libpng;
-/// returns "" or what went wrong.
-std::string write_png_rgb8(const std::string& path, int width, int height,
-                           const unsigned char* rgb);
+/// One float channel of an image to write: pixel (x, y) at first[(y * width + x) * stride].
+struct ExrChannel {
+    std::string name;
+    const float* first;
+    size_t stride;
+};
+/// Writes `channels` (float, ZIP-compressed) and `attributes` (insert_attribute) as an EXR
+/// file, atomically; throws SceneError.
+void write_exr_channels(const std::string& path, int width, int height,
+                        const std::vector<ExrChannel>& channels, const Attributes& attributes);
+
+/// Display values in [0, 1] (others clamped, NaN black) as 8-bit values.
+std::vector<unsigned char> display_bytes(const std::vector<float>& display);
+/// Writes display values (3 a pixel, rows top first) as an 8-bit sRGB PNG file through libpng,
+/// atomically; throws SceneError.
+void write_png_display(const std::string& path, int width, int height,
+                       const std::vector<float>& display);
 
 }  // namespace femto::io::detail

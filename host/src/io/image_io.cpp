@@ -84,19 +84,6 @@ OCIO::ConstCPUProcessorRcPtr display_processor() {
     return processor;
 }
 
-std::string write_png_rgb8(const std::string& path, int width, int height,
-                           const unsigned char* rgb) {
-    png_image image{};
-    image.version = PNG_IMAGE_VERSION;
-    image.width = png_uint_32(width);
-    image.height = png_uint_32(height);
-    image.format = PNG_FORMAT_RGB;  // 8-bit sRGB: libpng marks the file so (an sRGB chunk)
-    if (png_image_write_to_file(&image, path.c_str(), 0, rgb, 0, nullptr)) return {};
-    const std::string error = image.message[0] ? image.message : "unknown error";
-    png_image_free(&image);
-    return error;
-}
-
 const OiioModule& oiio_module() {
     static std::once_flag once;
     static const OiioModule* module = nullptr;
@@ -146,6 +133,21 @@ using detail::temp_path_for;
 namespace {
 
 void commit(const std::string& tmp, const std::string& path) { detail::commit_file(tmp, path); }
+
+// Writes 8-bit sRGB pixels (rows top first, 3 bytes a pixel) as a PNG file through libpng;
+// returns "" or what went wrong.
+std::string write_png_rgb8(const std::string& path, int width, int height,
+                           const unsigned char* rgb) {
+    png_image image{};
+    image.version = PNG_IMAGE_VERSION;
+    image.width = png_uint_32(width);
+    image.height = png_uint_32(height);
+    image.format = PNG_FORMAT_RGB;  // 8-bit sRGB: libpng marks the file so (an sRGB chunk)
+    if (png_image_write_to_file(&image, path.c_str(), 0, rgb, 0, nullptr)) return {};
+    const std::string error = image.message[0] ? image.message : "unknown error";
+    png_image_free(&image);
+    return error;
+}
 
 std::string exe_relative_config() {
     Dl_info info{};
@@ -206,31 +208,31 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
                             "or used twice",
                             path, n));
     }
+    std::vector<detail::ExrChannel> channels;
+    for (size_t c = 0; c < 3; ++c) channels.push_back({std::string(1, "RGB"[c]), rgb + c, 3});
+    if (depth) channels.push_back({"Z", depth, 1});
+    for (size_t k = 0; k < extra.names.size(); ++k)
+        channels.push_back({extra.names[k], extra.data + k, extra.names.size()});
+    detail::write_exr_channels(path, width, height, channels, attributes);
+}
+
+namespace detail {
+
+void write_exr_channels(const std::string& path, int width, int height,
+                        const std::vector<ExrChannel>& channels, const Attributes& attributes) {
     const std::string tmp = temp_path_for(path);
     try {
         Imf::Header header(width, height);
         header.compression() = Imf::ZIP_COMPRESSION;
-        for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
-        if (depth) header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
-        for (const std::string& n : extra.names)
-            header.channels().insert(n, Imf::Channel(Imf::FLOAT));
-        for (const auto& [k, v] : attributes) detail::insert_attribute(header, k, v);
+        for (const ExrChannel& c : channels)
+            header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
+        for (const auto& [k, v] : attributes) insert_attribute(header, k, v);
         Imf::FrameBuffer fb;
-        const size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
-        char* base = reinterpret_cast<char*>(const_cast<float*>(rgb));
-        fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
-        fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
-        fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
-        if (depth)
-            fb.insert("Z",
-                      Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(depth)),
-                                 sizeof(float), sizeof(float) * size_t(width)));
-        const size_t n_extra = extra.names.size();
-        char* extra_base = reinterpret_cast<char*>(const_cast<float*>(extra.data));
-        for (size_t k = 0; k < n_extra; ++k)
-            fb.insert(extra.names[k],
-                      Imf::Slice(Imf::FLOAT, extra_base + k * sizeof(float),
-                                 n_extra * sizeof(float), n_extra * sizeof(float) * size_t(width)));
+        for (const ExrChannel& c : channels)
+            fb.insert(
+                c.name,
+                Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(c.first)),
+                           c.stride * sizeof(float), c.stride * sizeof(float) * size_t(width)));
         Imf::OutputFile file(tmp.c_str(), header);
         file.setFrameBuffer(fb);
         file.writePixels(height);
@@ -242,6 +244,28 @@ void write_exr_rgb(const std::string& path, int width, int height, const float* 
     commit(tmp, path);
 }
 
+std::vector<unsigned char> display_bytes(const std::vector<float>& display) {
+    std::vector<unsigned char> bytes(display.size());
+    for (size_t i = 0; i < bytes.size(); ++i)
+        bytes[i] = static_cast<unsigned char>(std::lround(
+            std::clamp(std::isfinite(display[i]) ? display[i] : 0.f, 0.f, 1.f) * 255.f));
+    return bytes;
+}
+
+void write_png_display(const std::string& path, int width, int height,
+                       const std::vector<float>& display) {
+    const std::vector<unsigned char> bytes = display_bytes(display);
+    const std::string tmp = temp_path_for(path);
+    if (const std::string err = write_png_rgb8(tmp, width, height, bytes.data()); !err.empty()) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw SceneError(fmt::format("cannot write \"{}\": {}", path, err));
+    }
+    commit(tmp, path);
+}
+
+}  // namespace detail
+
 void write_png_preview(const std::string& path, int width, int height, const float* rgb,
                        float exposure) {
     const size_t n = size_t(width) * size_t(height);
@@ -250,17 +274,7 @@ void write_png_preview(const std::string& path, int width, int height, const flo
     for (float& v : buf) v = std::isfinite(v) ? std::max(0.f, v * scale) : 0.f;
     OCIO::PackedImageDesc desc(buf.data(), width, height, 3);
     detail::display_processor()->apply(desc);
-    std::vector<unsigned char> bytes(3 * n);
-    for (size_t i = 0; i < bytes.size(); ++i)
-        bytes[i] = static_cast<unsigned char>(std::lround(std::clamp(buf[i], 0.f, 1.f) * 255.f));
-    const std::string tmp = temp_path_for(path);
-    if (const std::string err = detail::write_png_rgb8(tmp, width, height, bytes.data());
-        !err.empty()) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw SceneError(fmt::format("cannot write \"{}\": {}", path, err));
-    }
-    commit(tmp, path);
+    detail::write_png_display(path, width, height, buf);
 }
 
 namespace {

@@ -5,7 +5,8 @@
 // camera raw, OpenCV, ...), which costs ~0.4 s at every process start, while a render only writes
 // EXR (OpenEXR) and PNG (libpng) files, and reads RGB EXR textures through OpenEXR too. Reading
 // images of other formats (textures and environment maps) and writing animated GIFs (`femto viz
-// frames --gif`) go through OpenImageIO; only processes that do so load it. docs/design-notes.md has the measurements.
+// frames --gif`) go through OpenImageIO; only processes that do so load it.
+// docs/design-notes.md has the measurements.
 #pragma once
 
 #include <cstdint>

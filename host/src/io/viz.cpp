@@ -5,7 +5,6 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfInputFile.h>
-#include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <fmt/format.h>
 #include <unistd.h>
@@ -656,24 +655,8 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
     return result;
 }
 
-namespace {
-// Display values in [0, 1] (others clamped, NaN black) as 8-bit values.
-std::vector<unsigned char> display_bytes(const std::vector<float>& display) {
-    std::vector<unsigned char> bytes(display.size());
-    for (size_t i = 0; i < bytes.size(); ++i)
-        bytes[i] = static_cast<unsigned char>(std::lround(
-            std::clamp(std::isfinite(display[i]) ? display[i] : 0.f, 0.f, 1.f) * 255.f));
-    return bytes;
-}
-}  // namespace
-
 void write_png8(const std::string& path, int width, int height, const std::vector<float>& display) {
-    const std::vector<unsigned char> bytes = display_bytes(display);
-    const std::string tmp = temp_path_for(path);
-    if (const std::string err = io::detail::write_png_rgb8(tmp, width, height, bytes.data());
-        !err.empty())
-        fail_write(tmp, path, err);
-    commit(tmp, path);
+    io::detail::write_png_display(path, width, height, display);
 }
 
 void write_gif(const std::string& path, int width, int height,
@@ -681,7 +664,8 @@ void write_gif(const std::string& path, int width, int height,
     if (frames.empty()) throw SceneError(fmt::format("cannot write \"{}\": no frames", path));
     const io::detail::OiioModule& oiio = io::detail::oiio_module();
     std::vector<std::vector<unsigned char>> bytes;
-    for (const std::vector<float>& frame : frames) bytes.push_back(display_bytes(frame));
+    for (const std::vector<float>& frame : frames)
+        bytes.push_back(io::detail::display_bytes(frame));
     const std::string tmp = temp_path_for(path);
     if (const std::string err = oiio.write_gif(tmp, width, height, bytes, std::max(1, fps));
         !err.empty())
@@ -706,22 +690,7 @@ void write_streak_exr(const std::string& path, const io::Cube& cube, int y,
 
 void write_exr_gray(const std::string& path, int width, int height, const float* values,
                     const io::Attributes& attributes) {
-    const std::string tmp = temp_path_for(path);
-    try {
-        Imf::Header header(width, height);
-        header.compression() = Imf::ZIP_COMPRESSION;
-        header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
-        for (const auto& [k, v] : attributes) io::detail::insert_attribute(header, k, v);
-        Imf::FrameBuffer fb;
-        fb.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(values)),
-                                  sizeof(float), sizeof(float) * size_t(width)));
-        Imf::OutputFile file(tmp.c_str(), header);
-        file.setFrameBuffer(fb);
-        file.writePixels(height);
-    } catch (const std::exception& e) {
-        fail_write(tmp, path, e.what());
-    }
-    commit(tmp, path);
+    io::detail::write_exr_channels(path, width, height, {{"Y", values, 1}}, attributes);
 }
 
 }  // namespace femto::viz
