@@ -228,6 +228,24 @@ image_libraries)
       ! grep -q 'libOpenImageIO' tex.txt || fail "OpenImageIO loaded for an EXR texture"
     fi
   done;;
+bad_film_size)
+  # A cube that fits the fixed limits but not the machine: refused when the scene loads, with
+  # the film's location (not an allocation failure or the OOM killer), and nothing written.
+  ram_kb=$(sed -n 's/^MemTotal: *\([0-9]*\) kB$/\1/p' /proc/meminfo)
+  bins=$(( ram_kb * 1024 * 8 / 10 / (1024 * 1024 * 12) + 1 ))  # 4/5 of memory at 1024x1024
+  if [ -z "$ram_kb" ] || [ $(( bins * 1024 * 1024 * 12 )) -gt $(( 1 << 36 )) ]; then
+    echo "SKIP [$case_name]: this machine's memory is beyond the film's fixed 64 GiB limit"
+    exit 77
+  fi
+  expect_exit 2 '^femto: error: .*cornell-box/scene\.xml:[0-9]+:[0-9]+: "transient": the cube and its AOVs would need [0-9.]+ GiB, more than 3/4 of this machine.s [0-9.]+ GiB of memory' \
+    -- "$femto" render "$scene" -D res=1024 -D bins=$bins -o out/huge -q
+  # The streak film's rows likewise: 24 rows of 8192 pixels.
+  rows=$(seq -s, 0 23)
+  streak_scene | sed -e 's|value="32"/><integer name="height"|value="8192"/><integer name="height"|' \
+    -e "s|value=\"5, 12\"|value=\"$rows\"|" -e "s|name=\"bins\" value=\"30\"|name=\"bins\" value=\"$((bins * 1024 * 1024 / (24 * 8192) + 1))\"|" > streak.xml
+  expect_exit 2 '^femto: error: streak\.xml:[0-9]+:[0-9]+: "streak": the streak images would need [0-9.]+ GiB, more than 3/4 of this machine.s' \
+    -- "$femto" render streak.xml -o out/streak -q
+  [ -z "$(ls -A out 2>/dev/null)" ] || fail "something was written";;
 bad_volume)
   # Media volumes: a missing .vol, a truncated one, an unknown volume type, a negative constant;
   # each one located line and exit code 2, no image written.

@@ -13,7 +13,6 @@
 //    bins with the same weights: 2e-6 (the inputs' 1e-6 plus the rounding of each side).
 //  - PNG previews of equal images may differ by one 8-bit step (float rounding at a step).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -28,6 +27,7 @@
 #include "femto/film.h"
 #include "femto/host.h"
 #include "femto/image_io.h"
+#include "femto/memory.h"
 #include "femto/sensor.h"
 #include "femto/tfilter.h"
 #include "femto/viz.h"
@@ -253,7 +253,7 @@ TEST(Viz, UnwarpFractionalShiftConservesEnergyAndMovesMeanTime) {
 // A wide streak image whose depths spread its pixels over more bins than memory holds: a
 // message (exit 2), not an allocation failure or the OOM killer.
 TEST(Viz, UnwarpRefusesACubeLargerThanMemory) {
-    const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    const double ram = physical_memory_bytes();
     const int W = 1 << 17;
     const double bins_needed = 0.9 * ram / (double(W) * 3 * sizeof(float));
     if (!(ram > 0) || bins_needed > double(1 << 20) ||

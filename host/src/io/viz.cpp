@@ -7,7 +7,6 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -20,6 +19,7 @@
 
 #include "femto/error.h"
 #include "femto/input_file.h"
+#include "femto/memory.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
 #include "io/exr_png.h"
@@ -634,12 +634,10 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
         throw SceneError(fmt::format("the unwarped cube would need {} bins: too large", new_bins));
     // Allocated beside the cube read: more than the machine holds would end in an allocation
     // failure or the kernel's OOM killer, not a message.
-    const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-    if (ram > 0 && bytes > 0.75 * ram)
-        throw SceneError(
-            fmt::format("the unwarped cube would need {} bins, {:.1f} GiB: more than "
-                        "3/4 of this machine's {:.1f} GiB of memory",
-                        new_bins, bytes / double(1 << 30), ram / double(1 << 30)));
+    if (const std::string problem =
+            memory_shortfall(bytes, fmt::format("the unwarped cube ({} bins)", new_bins));
+        !problem.empty())
+        throw SceneError(problem);
     UnwarpResult result;
     io::Cube& out = result.cube;
     out.width = cube.width;

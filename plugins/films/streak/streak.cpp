@@ -20,6 +20,7 @@
 
 #include "femto/film.h"
 #include "femto/image_io.h"
+#include "femto/memory.h"
 #include "femto/plugin.h"
 #include "femto/tfilter.h"
 #include "femto/time.h"
@@ -108,6 +109,9 @@ public:
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the streak images would need {:.1f} GiB (limit 64 GiB)",
                                            bytes / double(1 << 30)));
+        if (const std::string problem = memory_shortfall(bytes, "the streak images");
+            !problem.empty())
+            props.fail("bins", problem);
         slot_of_row_.assign(size_t(height_), -1);
         for (size_t i = 0; i < rows_.size(); ++i) slot_of_row_[size_t(rows_[i])] = int(i);
         // A sample in pixel row y lies in [y, y + 1); it reaches pixel row r when

@@ -10,7 +10,6 @@
 // Sums are accumulated per sample, then per pass in a block, then into the cube, so a single
 // small contribution is never added directly to a large running total.
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
@@ -22,6 +21,7 @@
 
 #include "femto/film.h"
 #include "femto/image_io.h"
+#include "femto/memory.h"
 #include "femto/plugin.h"
 #include "femto/tfilter.h"
 #include "femto/time.h"
@@ -269,12 +269,9 @@ public:
         // files stream a pixel at a time): 1/8 keeps a margin for OpenEXR's line buffers.
         const double total =
             bytes * (1 + (variance_enabled_ ? 1 : 0) + (count_enabled_ ? 1.0 / 3 : 0) + 1.0 / 8);
-        const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-        if (ram > 0 && total > 0.75 * ram)
-            props.fail("bins",
-                       fmt::format("the cube and its AOVs would need {:.1f} GiB, more than 3/4 of "
-                                   "this machine's {:.1f} GiB of memory",
-                                   total / double(1 << 30), ram / double(1 << 30)));
+        if (const std::string problem = memory_shortfall(total, "the cube and its AOVs");
+            !problem.empty())
+            props.fail("bins", problem);
         cube_.assign(pixels * size_t(grid_.bins) * 3, 0.f);
         if (count_enabled_) count_.assign(pixels * size_t(grid_.bins), 0.f);
         if (variance_enabled_) sq_.assign(cube_.size(), 0.f);
