@@ -22,9 +22,10 @@ function(femto_add_plugin name)
     set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${FEMTO_PLUGIN_OUTPUT_DIR})
   endif()
   if(DEFINED FEMTO_PLUGIN_INSTALL_DIR AND TARGET femto)
-    # Installed plugins find libfemto_io (films, textures) next to libfemto, two levels up,
-    # whichever program loads them (the femto CLI links it; a test program may not).
-    set_target_properties(${target} PROPERTIES INSTALL_RPATH "$ORIGIN/../..")
+    # Plugins find libfemto_io (films, textures) next to libfemto, whichever program loads
+    # them (the femto CLI links it; a test program may not): two levels up when installed
+    # (<libdir>/femto/plugins), in ../lib in the build tree (femto_runpath, CMakeLists.txt).
+    femto_runpath(${target} "$ORIGIN/../.." "$ORIGIN/../lib")
     install(TARGETS ${target} LIBRARY DESTINATION ${FEMTO_PLUGIN_INSTALL_DIR})
     set_property(GLOBAL APPEND PROPERTY FEMTO_PLUGIN_TARGETS ${target})
   endif()
