@@ -100,8 +100,8 @@ const OiioModule& oiio_module() {
                 candidates.push_back(real.parent_path() / name);
             candidates.push_back(fs::path(info.dli_fname).parent_path() / name);
         }
-        // Not by its bare name: the loader would search the current folder too (an empty entry in
-        // a build tree's RUNPATH), and a module must come from femto's own installation.
+        // Not by its bare name: the loader would search LD_LIBRARY_PATH and the system's
+        // folders, and a module must come from femto's own installation.
         candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
         void* handle = nullptr;
         fs::path path;
