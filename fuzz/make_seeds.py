@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,serialized,vol,btf}.
+"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,serialized,vol,btf,exr}.
 
 xml: every scenes/*/scene.xml of the repository (as <folder>.xml) with its film shrunk to 8 x 8
 pixels and 8 time bins (loading allocates the film: at the scenes' sizes, up to 200 MB, a load
@@ -8,6 +8,8 @@ binary kind (by names relative to the scene), so that mutated scenes reach those
 ply, obj, vol, btf: small valid files of each variant the readers handle (scenes/ holds none;
 the BTFs are Bonn BDI, DFMF and FMF files of 3 directions and 2 x 2 texels, in the layout
 host/src/btf/btf_write.cpp writes).
+exr: small scan-line EXRs (uncompressed and ZIPS) of half and float RGB, RGBA and luminance,
+one with a data window off the origin, written here from the OpenEXR file layout.
 
 Usage: make_seeds.py REPO_DIR OUT_DIR
 """
@@ -167,6 +169,56 @@ def btf(kind):
     return out + struct.pack("<BIII", size, k, 3 * n * n, w * h) + matrix(1) + matrix(3 * n * n) + matrix(w * h)
 
 
+# OpenEXR's pixel types and the struct codes of their values.
+EXR_UINT, EXR_HALF, EXR_FLOAT = 0, 1, 2
+EXR_CODES = {EXR_UINT: "I", EXR_HALF: "e", EXR_FLOAT: "f"}
+
+
+def exr_attribute(name, kind, value):
+    return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+
+def exr_zips(raw):
+    # ZIPS: the bytes split into even and odd halves, then delta-coded, then zlib.
+    reordered = bytearray(raw[0::2] + raw[1::2])
+    for i in range(len(reordered) - 1, 0, -1):
+        reordered[i] = (reordered[i] - reordered[i - 1] + 128) % 256
+    packed = zlib.compress(bytes(reordered))
+    return packed if len(packed) < len(raw) else raw
+
+
+def exr(channels, pixel_type, width, height, origin=(0, 0), zips=False):
+    """A single-part scan-line EXR: `channels` (sorted, as the format requires) of `pixel_type`,
+    a ramp of values, one scan line per block (uncompressed or ZIPS)."""
+    chlist = b"".join(c.encode() + b"\0" + struct.pack("<iB3xii", pixel_type, 0, 1, 1)
+                      for c in channels) + b"\0"
+    x0, y0 = origin
+    window = struct.pack("<4i", x0, y0, x0 + width - 1, y0 + height - 1)
+    header = (exr_attribute("channels", "chlist", chlist)
+              + exr_attribute("compression", "compression", bytes([2 if zips else 0]))
+              + exr_attribute("dataWindow", "box2i", window)
+              + exr_attribute("displayWindow", "box2i", window)
+              + exr_attribute("lineOrder", "lineOrder", bytes([0]))
+              + exr_attribute("pixelAspectRatio", "float", struct.pack("<f", 1))
+              + exr_attribute("screenWindowCenter", "v2f", struct.pack("<2f", 0, 0))
+              + exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1)) + b"\0")
+    start = b"\x76\x2f\x31\x01" + struct.pack("<i", 2) + header
+    code = EXR_CODES[pixel_type]
+    blocks = []
+    for y in range(height):
+        ramp = [[(c + x + y) % 7 for x in range(width)] for c in range(len(channels))]
+        line = b"".join(struct.pack(f"<{width}{code}", *(v if code == "I" else v / 4 for v in row))
+                        for row in ramp)
+        data = exr_zips(line) if zips else line
+        blocks.append(struct.pack("<ii", y0 + y, len(data)) + data)
+    offset = len(start) + 8 * height
+    table = b""
+    for block in blocks:
+        table += struct.pack("<Q", offset)
+        offset += len(block)
+    return start + table + b"".join(blocks)
+
+
 def main():
     repo, out = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     files = {
@@ -188,6 +240,11 @@ def main():
         "btf/a.bdi": btf("bdi"),
         "btf/a.dfmf": btf("dfmf"),
         "btf/a.fmf": btf("fmf"),
+        "exr/half-rgb.exr": exr(["B", "G", "R"], EXR_HALF, 4, 3),
+        "exr/float-rgb-window.exr": exr(["B", "G", "R"], EXR_FLOAT, 3, 2, origin=(-2, 5)),
+        "exr/half-rgba-zips.exr": exr(["A", "B", "G", "R"], EXR_HALF, 5, 4, zips=True),
+        "exr/float-y-zips.exr": exr(["Y"], EXR_FLOAT, 4, 4, zips=True),
+        "exr/uint-rgb.exr": exr(["B", "G", "R"], EXR_UINT, 2, 2),
     }
     for scene in sorted(repo.glob("scenes/*/scene.xml")):
         text = re.sub(r'(<default name="(res|bins)" value=")[0-9]+"', r'\g<1>8"', scene.read_text())

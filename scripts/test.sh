@@ -36,5 +36,5 @@ cmake --build build-sanitize -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j "$JOBS" \
   -R '^(AliasTable|Mutation|Loader|BtfFile|BtfMaterial|AdaptiveSampling|LightCone|DirectionMesh|VGroove|HitTangent|PeerTransient|Instancing|ShapeCylinder|MaskErrors|MaskRender|EmitterCollimated|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|MeasurementSensors|Stress|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^(LightTracer|Bdpt)\.(BadInput|BitIdentical|TofPlaneArrival|GlassSlab|SplatsConserve|EachStrategyAloneEstimatesTheSameImage$)|^DistantLight\.(BadInput|EnvmapMapsPixels|MitsubaFiles)|^StreakFilm\.EqualsTransientRowsKernel|^WarpChi2\.AliasTable|^cli\.(bad|unknown|missing|unwritable|compat)' 
 # Fuzzing (fuzz/, docs/fuzzing.md): each libFuzzer harness (the scene loader, the PLY, OBJ,
-# serialized, .vol and BTF readers) for 20 s on its seed corpus, in the sanitizer build above.
+# serialized, .vol, BTF and EXR readers) for 20 s on its seed corpus, in the sanitizer build above.
 FEMTO_FUZZ_BUILD=build-sanitize scripts/fuzz.sh 20

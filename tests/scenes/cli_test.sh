@@ -227,7 +227,15 @@ image_libraries)
     else
       ! grep -q 'libOpenImageIO' tex.txt || fail "OpenImageIO loaded for an EXR texture"
     fi
-  done;;
+  done
+  # An EXR whose header OpenEXR refuses: OpenEXR's message (exit 2), OpenImageIO not loaded.
+  head -c 60 out/plain_steady.exr > out/cut.exr
+  sed 's|out/plain.png|out/cut.exr|' tex.xml > cut.xml
+  LD_DEBUG=files "$femto" render cut.xml -o out/cut -q 2> cut.txt; code=$?
+  [ "$code" -eq 2 ] || { cat cut.txt >&2; fail "a cut EXR texture: exit $code, expected 2"; }
+  grep -q '^femto: error: cut\.xml:4:[0-9]*: "bitmap": cannot read image "[^"]*cut\.exr": ' cut.txt ||
+    { grep -v '^ *[0-9]*:' cut.txt >&2; fail "a cut EXR texture: no located message"; }
+  ! grep -q 'libOpenImageIO' cut.txt || fail "OpenImageIO loaded for an EXR OpenEXR refuses";;
 bad_film_size)
   # A cube that fits the fixed limits but not the machine: refused when the scene loads, with
   # the film's location (not an allocation failure or the OOM killer), and nothing written.

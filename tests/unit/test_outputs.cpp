@@ -13,8 +13,10 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
 #include <tuple>
@@ -224,6 +226,58 @@ TEST(ImageRead, ExrPixelsAreThoseOpenImageIoReads) {
             for (size_t c = 0; c < 3; ++c)
                 ASSERT_EQ(got[3 * i + c], all[i * nc + (nc >= 3 ? c : 0)]) << "pixel " << i;
     }
+}
+
+// femto reports an EXR whose header OpenEXR refuses itself, without asking OpenImageIO (which
+// reads EXRs through OpenEXR too). That must never refuse a file OpenImageIO reads: every
+// truncation of a small EXR, and every single-byte change to its header, that femto refuses,
+// OpenImageIO refuses as well.
+TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
+    const auto dir = temp_dir("image-read-bad-exr");
+    const std::string good = (dir / "good.exr").string();
+    write_test_exr(good, Imath::Box2i({0, 0}, {5, 3}),
+                   {{"R", Imf::HALF}, {"G", Imf::HALF}, {"B", Imf::HALF}});
+    std::string bytes;
+    {
+        std::ifstream in(good, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const size_t header_end = bytes.find("screenWindowWidth") + 40;  // past the last attribute
+    ASSERT_LT(header_end, bytes.size());
+    std::vector<std::string> variants;
+    for (size_t n = 4; n < bytes.size(); n += 3) variants.push_back(bytes.substr(0, n));
+    for (size_t i = 4; i < header_end; ++i)
+        for (const unsigned char x : {0x01, 0x80, 0xff}) {
+            std::string changed = bytes;
+            changed[i] = char(changed[i] ^ x);
+            variants.push_back(changed);
+        }
+    const std::string path = (dir / "bad.exr").string();
+    int refused = 0, by_femtos_reader = 0;
+    for (size_t v = 0; v < variants.size(); ++v) {
+        std::ofstream(path, std::ios::binary | std::ios::trunc) << variants[v];
+        int w = 0, h = 0;
+        try {
+            io::read_image_rgb(path, w, h, false);
+            continue;
+        } catch (const SceneError& e) {
+            ++refused;
+            const std::string what = e.what();
+            ASSERT_NE(what.find("cannot read image \"" + path + "\": "), std::string::npos) << what;
+            by_femtos_reader += what.find("OpenEXR exception") == std::string::npos;
+        }
+        auto in = OIIO::ImageInput::open(path);
+        if (!in) continue;
+        const OIIO::ImageSpec spec = in->spec();
+        std::vector<float> all(size_t(std::max(spec.width, 0)) * size_t(std::max(spec.height, 0)) *
+                               size_t(std::max(spec.nchannels, 0)));
+        EXPECT_FALSE(!all.empty() &&
+                     in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
+            << "variant " << v << ": femto refused a file OpenImageIO reads";
+        OIIO::geterror();
+    }
+    EXPECT_GT(refused, int(variants.size()) / 4);
+    EXPECT_GT(by_femtos_reader, 0);  // refused by femto's reader, not OpenImageIO's
 }
 
 TEST(CubeLayout, HeaderNumbersAreTypedAndBigIntegersStayExact) {
