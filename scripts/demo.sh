@@ -14,7 +14,7 @@ build/bin/femto viz peak-time out/cornell-box.exr -o out/cornell-box-peak-time.p
 cat <<MSG
 Pictures in $(pwd)/out:
   cornell-box.png              time-integrated preview (cornell-box_steady.exr: linear HDR)
-  cornell-box.exr              the x-y-t cube, one EXR part per time bin
+  cornell-box.exr              the x-y-t cube: the time bins' frames stacked, and depth
   cornell-box-frames/          one PNG per time bin and an animated GIF
   cornell-box-peak-time.png    when each pixel is brightest (thesis ch. 4.5)
 MSG
