@@ -23,10 +23,19 @@ function(femto_add_plugin name)
   endif()
   if(DEFINED FEMTO_PLUGIN_INSTALL_DIR AND TARGET femto)
     # Plugins find libfemto_io (films, textures) next to libfemto, whichever program loads
-    # them (the femto CLI links it; a test program may not): two levels up when installed
-    # (<libdir>/femto/plugins), in ../lib in the build tree (femto_runpath, CMakeLists.txt).
-    femto_runpath(${target} "$ORIGIN/../.." "$ORIGIN/../lib")
+    # them (the femto CLI links it; a test program may not): in the build tree, in the library
+    # folder beside theirs (femto_runpath, CMakeLists.txt); installed, two levels up
+    # (<libdir>/femto/plugins), which the install writes in place of the first (no longer, so
+    # it fits without padding).
+    file(RELATIVE_PATH _lib_dir ${FEMTO_PLUGIN_OUTPUT_DIR} ${CMAKE_LIBRARY_OUTPUT_DIRECTORY})
+    femto_runpath(${target} "$ORIGIN/${_lib_dir}")
     install(TARGETS ${target} LIBRARY DESTINATION ${FEMTO_PLUGIN_INSTALL_DIR})
+    install(CODE "set(_plugin \"${FEMTO_PLUGIN_INSTALL_DIR}/${name}.so\")
+      if(NOT IS_ABSOLUTE \"\${_plugin}\")
+        set(_plugin \"\${CMAKE_INSTALL_PREFIX}/\${_plugin}\")
+      endif()
+      file(RPATH_CHANGE FILE \"\$ENV{DESTDIR}\${_plugin}\"
+           OLD_RPATH \"\$ORIGIN/${_lib_dir}\" NEW_RPATH \"\$ORIGIN/../..\")")
     set_property(GLOBAL APPEND PROPERTY FEMTO_PLUGIN_TARGETS ${target})
   endif()
 endfunction()

@@ -7,6 +7,11 @@ set -euo pipefail
 build=$1 src=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
 cmake --install "$build" --prefix "$work/install" > "$work/install.log"
+# The installed binaries look for femto's libraries inside the installation only.
+checked=$(bash "$src/tests/check_runpath.sh" "$work/install" "$work/install"/bin/* \
+  "$work/install"/lib*/*.so* "$work/install"/lib*/femto/plugins/*.so) ||
+  { echo "FAIL: $checked"; exit 1; }
+[ "$checked" -gt 10 ] || { echo "FAIL: only $checked installed binaries have a RUNPATH"; exit 1; }
 cmake -S "$src/tests/plugin_sdk" -B "$work/sdk-build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/install" > "$work/configure.log"
 cmake --build "$work/sdk-build" > "$work/build.log"
