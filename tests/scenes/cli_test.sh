@@ -251,7 +251,7 @@ bad_film_size)
   rows=$(seq -s, 0 23)
   streak_scene | sed -e 's|value="32"/><integer name="height"|value="8192"/><integer name="height"|' \
     -e "s|value=\"5, 12\"|value=\"$rows\"|" -e "s|name=\"bins\" value=\"30\"|name=\"bins\" value=\"$((bins * 1024 * 1024 / (24 * 8192) + 1))\"|" > streak.xml
-  expect_exit 2 '^femto: error: streak\.xml:[0-9]+:[0-9]+: "streak": the streak images would need [0-9.]+ GiB, more than 3/4 of this machine.s' \
+  expect_exit 2 '^femto: error: streak\.xml:[0-9]+:[0-9]+: "streak": the streak images and their copies would need [0-9.]+ GiB, more than 3/4 of this machine.s' \
     -- "$femto" render streak.xml -o out/streak -q
   [ -z "$(ls -A out 2>/dev/null)" ] || fail "something was written";;
 runpath)

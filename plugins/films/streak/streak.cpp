@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include "femto/film.h"
 #include "femto/image_io.h"
@@ -109,7 +110,8 @@ public:
         if (bytes > double(size_t(1) << 36))
             props.fail("bins", fmt::format("the streak images would need {:.1f} GiB (limit 64 GiB)",
                                            bytes / double(1 << 30)));
-        if (const std::string problem = memory_shortfall(bytes, "the streak images");
+        if (const std::string problem =
+                memory_shortfall(bytes + working_bytes(), "the streak images and their copies");
             !problem.empty())
             props.fail("bins", problem);
         slot_of_row_.assign(size_t(height_), -1);
@@ -124,6 +126,17 @@ public:
                     active_[size_t(y)] = 1;
         data_.assign(rows_.size() * size_t(width_) * size_t(grid_.bins) * 3, 0.f);
         sums_.assign(rows_.size() * size_t(width_), PixelSums());
+    }
+
+    // What a render holds besides the images, at most: a block per worker thread, each a tile's
+    // recorded rows in double (the renderer's tiles are at most 32 pixels across, plus the
+    // filter's border), and while writing, one row's cube, its two slices and its depth.
+    double working_bytes() const {
+        const double tile = 32.0 + 2.0 * filter_border();
+        const double row = double(width_) * grid_.bins * 3 * sizeof(float);
+        const double block = std::min(double(rows_.size()), tile) * std::min(double(width_), tile) *
+                             grid_.bins * 3 * sizeof(double);
+        return 3.5 * row + double(std::max(1u, std::thread::hardware_concurrency())) * block;
     }
 
     std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const override {
