@@ -243,7 +243,8 @@ def main():
         "exr/half-rgb.exr": exr(["B", "G", "R"], EXR_HALF, 4, 3),
         "exr/float-rgb-window.exr": exr(["B", "G", "R"], EXR_FLOAT, 3, 2, origin=(-2, 5)),
         "exr/half-rgba-zips.exr": exr(["A", "B", "G", "R"], EXR_HALF, 5, 4, zips=True),
-        "exr/float-y-zips.exr": exr(["Y"], EXR_FLOAT, 4, 4, zips=True),
+        "exr/float-rgb-zips.exr": exr(["B", "G", "R"], EXR_FLOAT, 16, 3, zips=True),
+        "exr/float-y.exr": exr(["Y"], EXR_FLOAT, 4, 4),
         "exr/uint-rgb.exr": exr(["B", "G", "R"], EXR_UINT, 2, 2),
     }
     for scene in sorted(repo.glob("scenes/*/scene.xml")):

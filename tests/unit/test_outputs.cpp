@@ -242,7 +242,9 @@ TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
         std::ifstream in(good, std::ios::binary);
         bytes.assign(std::istreambuf_iterator<char>(in), {});
     }
-    const size_t header_end = bytes.find("screenWindowWidth") + 40;  // past the last attribute
+    const size_t last_attribute = bytes.find("screenWindowWidth");
+    ASSERT_NE(last_attribute, std::string::npos);
+    const size_t header_end = last_attribute + 40;  // past its value
     ASSERT_LT(header_end, bytes.size());
     std::vector<std::string> variants;
     for (size_t n = 4; n < bytes.size(); n += 3) variants.push_back(bytes.substr(0, n));
