@@ -39,6 +39,10 @@ btf::Format parse_format(const std::string& name) {
 int run_synth() {
     btf::synth::Options o;
     o.kind = g_synth.kind == "vgroove" ? btf::synth::Kind::VGroove : btf::synth::Kind::Harmonic;
+    // CLI::Range lets NaN through (every comparison with it is false).
+    if (!(g_synth.slope >= 1 && g_synth.slope <= 89))
+        throw SceneError(
+            fmt::format("--slope must be from 1 to 89 degrees, got {}", g_synth.slope));
     o.vgroove_slope_deg = g_synth.slope;
     o.format = parse_format(g_synth.format);
     o.width = g_synth.width;

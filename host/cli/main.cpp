@@ -299,7 +299,15 @@ int cmd_render(const std::string& scene_path, std::string out_base,
         quiet = true;
         femto::silence_log(true);
     }
-    for (const auto& d : defines) opts.defines.push_back(parse_define(d));
+    for (const auto& d : defines) {
+        auto define = parse_define(d);
+        // Which of two values would win is not obvious, and the loser would never be checked.
+        for (const auto& [name, value] : opts.defines)
+            if (name == define.first)
+                throw femto::SceneError(fmt::format("-D {} is given twice (\"{}\" and \"{}\")",
+                                                    name, value, define.second));
+        opts.defines.push_back(std::move(define));
+    }
     femto::plugin_search_path(opts);  // checks the --plugin-dir folders before any work
     if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
     out_base = strip_output_extension(out_base);

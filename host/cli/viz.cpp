@@ -48,6 +48,9 @@ void announce(const std::string& path) {
 void prepare_file(const std::string& path, const char* what) {
     if (path.empty() || path.back() == '/')
         throw SceneError(fmt::format("{} \"{}\" must name a file", what, path));
+    std::error_code folder_ec;
+    if (fs::is_directory(path, folder_ec))
+        throw SceneError(fmt::format("{} \"{}\" is a folder: name a file", what, path));
     fs::path dir = fs::path(path).parent_path();
     if (dir.empty()) dir = ".";
     std::error_code ec;
@@ -173,16 +176,16 @@ int cmd_peak_time(const io::Cube& cube, const TimeGrid& grid) {
     if (g_opts.isochrones < 0) throw SceneError("--isochrones must be >= 0");
     const std::vector<float> img =
         viz::peak_time_image(cube, g_opts.isochrones, g_opts.level, g_opts.exposure);
-    viz::write_png8(g_opts.output, cube.width, cube.height, img);
-    announce(g_opts.output);
+    io::OutputSet files;  // the PNG and the EXR appear together or not at all
+    viz::write_png8(files.add(g_opts.output), cube.width, cube.height, img);
     if (!g_opts.exr.empty()) {
         const std::vector<float> times = viz::peak_times(cube, grid);
         io::Attributes attrs = time_attributes(cube);
         attrs.emplace_back("femto:content",
                            "peak time per pixel (bin centre, scene units); NaN where black");
-        viz::write_exr_gray(g_opts.exr, cube.width, cube.height, times.data(), attrs);
-        announce(g_opts.exr);
+        viz::write_exr_gray(files.add(g_opts.exr), cube.width, cube.height, times.data(), attrs);
     }
+    for (const std::string& file : files.commit()) announce(file);
     return 0;
 }
 
@@ -198,15 +201,15 @@ int cmd_rainbow(const io::Cube& cube) {
     const size_t pixels = size_t(cube.width) * size_t(cube.height);
     const float reference =
         g_opts.level ? *g_opts.level : viz::reference_level(rgb, viz::emitter_pixels(cube));
-    viz::write_png8(g_opts.output, cube.width, cube.height,
+    io::OutputSet files;  // the PNG and the EXR appear together or not at all
+    viz::write_png8(files.add(g_opts.output), cube.width, cube.height,
                     viz::tone_map(rgb.data(), pixels, reference, g_opts.exposure, tone));
-    announce(g_opts.output);
     if (!g_opts.exr.empty()) {
         io::Attributes attrs = time_attributes(cube);
         attrs.emplace_back("femto:content", "rainbow fusion (thesis ch. 4.5)");
-        io::write_exr_rgb(g_opts.exr, cube.width, cube.height, rgb.data(), attrs);
-        announce(g_opts.exr);
+        io::write_exr_rgb(files.add(g_opts.exr), cube.width, cube.height, rgb.data(), attrs);
     }
+    for (const std::string& file : files.commit()) announce(file);
     return 0;
 }
 
@@ -231,16 +234,16 @@ int cmd_streak(const io::Cube& cube) {
     }
     const size_t pixels = size_t(cube.width) * size_t(cube.bins);
     const float reference = g_opts.level ? *g_opts.level : streak_level(cube, img);
-    viz::write_png8(g_opts.output, cube.width, cube.bins,
+    io::OutputSet files;  // the PNG and the EXR appear together or not at all
+    viz::write_png8(files.add(g_opts.output), cube.width, cube.bins,
                     viz::tone_map(img.data(), pixels, reference, g_opts.exposure, tone));
-    announce(g_opts.output);
     if (!g_opts.exr.empty()) {
         // The streak film's format, with the row's depth in channel Z when the cube has it.
         io::Attributes attrs = time_attributes(cube);
         attrs.emplace_back("femto:row", std::to_string(g_opts.row));
-        viz::write_streak_exr(g_opts.exr, cube, g_opts.row, std::move(attrs));
-        announce(g_opts.exr);
+        viz::write_streak_exr(files.add(g_opts.exr), cube, g_opts.row, std::move(attrs));
     }
+    for (const std::string& file : files.commit()) announce(file);
     return 0;
 }
 
@@ -368,6 +371,11 @@ CLI::App* add_viz_command(CLI::App& app) {
 int run_viz_command() {
     if (g_opts.level && !(*g_opts.level > 0 && std::isfinite(*g_opts.level)))
         throw SceneError(fmt::format("--level must be a positive number, got {}", *g_opts.level));
+    if (!std::isfinite(g_opts.exposure))
+        throw SceneError(
+            fmt::format("--exposure must be a finite number of stops, got {}", g_opts.exposure));
+    if (g_opts.start && !std::isfinite(*g_opts.start))
+        throw SceneError(fmt::format("--start must be a finite time, got {}", *g_opts.start));
     const io::Cube cube = viz::load_cube(g_opts.cube);
     if (viz::is_streak(cube) && !g_unwarp->parsed()) {
         // Frames, peak-time and rainbow images of one row are a pixel tall, and a streak

@@ -153,7 +153,12 @@ EOF
 bench_bad_input)
   printf '<experiment>\n<scenery/>\n</experiment>\n' > e.xml
   expect_exit 2 'e\.xml:2:1: unknown element <scenery> in <experiment>' -- "$femto" bench e.xml
-  expect_exit 2 'experiment file "none\.xml" cannot be read' -- "$femto" bench none.xml;;
+  expect_exit 2 'experiment file "none\.xml" cannot be read' -- "$femto" bench none.xml
+  # A folder where the study keeps a file of its own: refused before anything renders.
+  printf '<experiment name="t">\n<scene file="%s"><define name="res" value="8"/><define name="bins" value="8"/></scene>\n<variant name="a"/>\n<budgets spp="1"/>\n</experiment>\n' "$scene" > ok.xml
+  mkdir -p res/results.csv
+  expect_exit 2 '^femto: error: "res/results\.csv" is not a file: the study writes its results\.csv there$' -- "$femto" bench ok.xml -o res -q
+  [ -z "$(ls -A res/cache 2>/dev/null)" ] || fail "something was rendered";;
 render_demo)
   "$femto" render "$scene" -o out/demo -D spp=4 -D res=64 -q || fail "render failed"
   [ -s out/demo.exr ] && [ -s out/demo.png ] || fail "outputs missing"
@@ -293,7 +298,10 @@ output_extension)
 bad_define)
   expect_exit 2 'expected name=value' -- "$femto" render "$scene" -D novalue -q
   expect_exit 2 'width must be in' -- "$femto" render "$scene" -D res=-1 -o out/d -q
-  expect_exit 2 'scene\.xml:[0-9]+:[0-9]+: integer "width": "nan" is not an integer' -- "$femto" render "$scene" -D res=nan -o out/d -q;;
+  expect_exit 2 'scene\.xml:[0-9]+:[0-9]+: integer "width": "nan" is not an integer' -- "$femto" render "$scene" -D res=nan -o out/d -q
+  # A name given twice: neither value silently wins (the loser would never be checked).
+  expect_exit 2 '^femto: error: -D res is given twice \("8" and "-1"\)$' -- "$femto" render "$scene" -D res=8 -D res=-1 -o out/d -q
+  [ ! -e out/d.exr ] || fail "output written";;
 unused_define)
   # A -D the scene does not use is a typo until proven otherwise: an error naming the scene's
   # parameters and the closest one; --lenient makes it a warning and renders.
@@ -495,12 +503,25 @@ viz_bad_input)
   expect_exit 2 'level must be a positive number' -- "$femto" viz peak-time out/cb.exr -o out/p.png --level 0
   expect_exit 2 'must end in \.exr' -- "$femto" viz unwarp out/cb.exr -o out/u.png --to world
   expect_exit 2 'needs a viz command' -- "$femto" viz
+  expect_exit 2 '^femto: error: --exposure must be a finite number of stops, got nan$' -- "$femto" viz frames out/cb.exr -o out/f --exposure nan
+  expect_exit 2 '^femto: error: --start must be a finite time, got inf$' -- "$femto" viz peak-time out/cb.exr -o out/p.png --start inf
+  # A tiny bin width shifts pixels by more bins than 64-bit indices hold: a message, not overflow.
+  "$femto" render "$scene" -o out/d -D spp=1 -D res=8 -D bins=8 -q || fail "render failed"
+  expect_exit 2 'shift pixels by up to .* bins of width 1e-20: too many' -- "$femto" viz unwarp out/d.exr -o out/u.exr --to world --bin-width 1e-20
+  # An output that is a folder: refused before anything is written (the PNG was written first).
+  mkdir -p out/folder.exr
+  expect_exit 2 '^femto: error: --exr "out/folder\.exr" is a folder: name a file$' -- "$femto" viz rainbow out/cb.exr -o out/r.png --exr out/folder.exr
+  [ ! -e out/r.png ] || fail "the PNG was written although the EXR could not be"
   # A FIFO (of either name) is refused at once, not read: opening it would block forever.
   mkfifo cube.npy cube.exr || fail "mkfifo"
   for f in cube.npy cube.exr; do
     expect_exit 2 "\"$f\": it is not a regular file" -- timeout 10 "$femto" viz peak-time $f -o out/p.png
   done
-  [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written";;
+  [ ! -e out/u.exr ] && [ ! -e out/p.png ] && [ ! -e out/s.png ] || fail "output written"
+  # A whole-number --start over a cube whose start is fractional (OpenEXR had refused to
+  # replace the header's double with an int).
+  "$femto" viz peak-time out/cb.exr -o out/p6.png --exr out/p6.exr --start 6 -q || fail "--start 6"
+  [ "$(exr_attr out/p6.exr femto:start)" = 6 ] || fail "--start 6 not recorded";;
 btf_synth)
   # femto btf synth writes each format, femto btf info reads it back, and a scene renders it.
   for f in bdi dfmf fmf; do
@@ -525,6 +546,7 @@ bad_btf)
   expect_exit 2 'color-model 11.*dfmf only' -- "$femto" btf synth -o x.btf --format bdi --color-model 11
   expect_exit 2 'width' -- "$femto" btf synth -o x.btf --width 0
   expect_exit 2 'vgroove is written as --format bdi or dfmf' -- "$femto" btf synth -o x.btf --kind vgroove --format fmf
+  expect_exit 2 '^femto: error: --slope must be from 1 to 89 degrees, got nan$' -- "$femto" btf synth -o x.btf --kind vgroove --slope nan
   expect_exit 2 'needs a btf command|subcommand' -- "$femto" btf
   [ ! -e x.btf ] && [ ! -e out/s.exr ] || fail "output written";;
 streak_film)

@@ -338,6 +338,25 @@ TEST(Npy, StreamedPixelsAndWriteErrorsSayWhy) {
     }
 }
 
+// A dimension beyond 64 bits (std::stoull's out_of_range, which reached the CLI as an internal
+// error, exit 1) is a bad shape like any other.
+TEST(Npy, ADimensionBeyond64BitsIsABadShape) {
+    const auto dir = temp_dir("npy-huge-dim");
+    std::string header =
+        "{'descr': '<f4', 'fortran_order': False, 'shape': (99999999999999999999999, 2), }";
+    header.resize(128 - 10 - 1, ' ');
+    header += '\n';
+    const std::string pre("\x93NUMPY\x01\x00", 8);
+    write_text(dir / "huge.npy", pre + char(header.size()) + char(0) + header);
+    std::vector<size_t> shape;
+    try {
+        io::read_npy((dir / "huge.npy").string(), shape);
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("bad shape"), std::string::npos) << e.what();
+    }
+}
+
 TEST(Npy, AShapeLargerThanTheFileIsRefusedBeforeAllocating) {
     // 2^16 x 2^16 x 2 floats (32 GiB, more than a test machine has) in a file of 128 bytes.
     const auto dir = temp_dir("npy-short");

@@ -450,6 +450,13 @@ void prepare_out_dir(const std::string& setup, const fs::path& dir) {
     fs::create_directories(dir / "cache", ec);
     if (ec || access(dir.c_str(), W_OK) != 0)
         throw SceneError(fmt::format("cannot write into the output folder \"{}\"", dir.string()));
+    // The study's own files must be files (or not exist yet): a folder in their place would
+    // fail only when a run ends, after its time was spent.
+    for (const char* name : {"results.csv", "frames.csv", "profiles.csv", "experiment.digest",
+                             "report.md", "plot.svg"})
+        if (fs::exists(dir / name, ec) && !fs::is_regular_file(dir / name, ec))
+            throw SceneError(fmt::format("\"{}\" is not a file: the study writes its {} there",
+                                         (dir / name).string(), name));
     const fs::path digest = dir / "experiment.digest";
     if (fs::exists(dir / "results.csv") && fs::exists(digest)) {
         std::string old = read_bytes(digest);
@@ -461,7 +468,9 @@ void prepare_out_dir(const std::string& setup, const fs::path& dir) {
                 "changed since): give another -o folder, or delete its results.csv to start over",
                 dir.string()));
     }
-    std::ofstream(digest) << setup << "\n";
+    std::ofstream out(digest);
+    if (!(out << setup << "\n").flush())
+        throw SceneError(fmt::format("cannot write \"{}\"", digest.string()));
 }
 
 std::optional<Cube> render_reference(const Experiment& e, const SceneSpec& scene,
@@ -708,11 +717,17 @@ std::vector<RunRow> read_results(const std::string& csv_path, const Experiment& 
             throw SceneError(fmt::format("{}:{}: expected {} fields, found {}", csv_path, number,
                                          columns, f.size()));
         RunRow r;
+        // A whole number up to `max`: std::stoull alone reads "-1" as 2^64 - 1.
+        auto count = [](const std::string& s, uint64_t max) {
+            const uint64_t v = std::stoull(s);
+            if (s.find('-') != std::string::npos || v > max) throw std::out_of_range(s);
+            return v;
+        };
         try {
             r.scene = f[0], r.variant = f[1], r.budget = f[2];
-            r.seed = std::stoull(f[3]), r.spp = uint32_t(std::stoul(f[4]));
-            r.samples = std::stoull(f[5]), r.seconds = std::stod(f[6]);
-            r.cores_used = std::stod(f[7]), r.rays = std::stoull(f[8]);
+            r.seed = count(f[3], UINT64_MAX), r.spp = uint32_t(count(f[4], UINT32_MAX));
+            r.samples = count(f[5], UINT64_MAX), r.seconds = std::stod(f[6]);
+            r.cores_used = std::stod(f[7]), r.rays = count(f[8], UINT64_MAX);
             r.peak_mb = std::stod(f[9]), r.rel_mse = std::stod(f[10]);
             r.pixel_rel_mse = std::stod(f[11]), r.frame_rel_mse = std::stod(f[12]);
             r.energy = std::stod(f[13]), r.rel_mse_raw = std::stod(f[14]);

@@ -61,7 +61,8 @@ void commit_file(const std::string& tmp, const std::string& path) {
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) {
-        fs::remove(tmp, ec);
+        std::error_code ignored;  // the rename's reason is the one to report
+        fs::remove(tmp, ignored);
         throw SceneError(fmt::format("cannot write \"{}\": {}", path, ec.message()));
     }
 }
@@ -168,6 +169,9 @@ std::string exe_relative_config() {
 namespace detail {
 
 void insert_attribute(Imf::Header& header, const std::string& key, const std::string& value) {
+    // A later value of a key replaces an earlier one (a viz option overriding the cube's), even
+    // when its text reads as another type ("6" after "6.5"), which OpenEXR refuses to insert.
+    if (header.find(key) != header.end()) header.erase(key);
     const char* first = value.data();
     const char* last = first + value.size();
     int i = 0;
@@ -897,7 +901,12 @@ std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape)
         const std::string item =
             dims.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
         if (item.find_first_of("0123456789") != std::string::npos) {
-            const size_t d = std::stoull(item);
+            size_t d = 0;
+            try {
+                d = std::stoull(item);
+            } catch (const std::exception&) {  // not a number, or beyond 64 bits
+                throw SceneError(fmt::format("\"{}\": bad shape", path));
+            }
             if (d == 0 || d > (size_t(1) << 32))
                 throw SceneError(fmt::format("\"{}\": bad shape", path));
             shape.push_back(d);
