@@ -118,26 +118,36 @@ int cmd_frames(const io::Cube& cube) {
                                      ec ? ": " + ec.message() : ""));
     if (access(dir.c_str(), W_OK) != 0)
         throw SceneError(fmt::format("the output folder \"{}\" is not writable", dir));
+    auto frame_path = [&](int t) {
+        return (fs::path(dir) / fmt::format("frame_{:05}.png", t)).string();
+    };
+    const std::string gif_path = (fs::path(dir) / "frames.gif").string();
+    // A folder in the place of a file would stop the writing halfway: refused first.
+    for (int t = 0; t <= cube.bins; ++t) {
+        const std::string path = t < cube.bins ? frame_path(t) : gif_path;
+        if (fs::is_directory(path, ec))
+            throw SceneError(
+                fmt::format("\"{}\" is a folder: femto viz frames writes a file there", path));
+    }
     // One exposure for every frame, from the whole cube, so that frames are comparable.
     const float reference = g_opts.level ? *g_opts.level : viz::reference_level(cube);
     const size_t pixels = size_t(cube.width) * size_t(cube.height);
     std::vector<std::vector<float>> frames;
+    io::OutputSet files;  // the frames (and the GIF) appear together or not at all
     for (int t = 0; t < cube.bins; ++t) {
         const std::vector<float> rgb = viz::frame(cube, t);
         std::vector<float> display =
             viz::tone_map(rgb.data(), pixels, reference, g_opts.exposure, tone);
-        const std::string path = (fs::path(dir) / fmt::format("frame_{:05}.png", t)).string();
-        viz::write_png8(path, cube.width, cube.height, display);
+        viz::write_png8(files.add(frame_path(t)), cube.width, cube.height, display);
         if (g_opts.gif) frames.push_back(std::move(display));
     }
+    if (g_opts.gif)
+        viz::write_gif(files.add(gif_path), cube.width, cube.height, frames, g_opts.fps);
+    files.commit();
     if (!g_opts.quiet)
         fmt::print(stderr, "wrote {} frames {}/frame_00000.png ... (reference level {:.6g})\n",
                    cube.bins, dir, reference);
-    if (g_opts.gif) {
-        const std::string path = (fs::path(dir) / "frames.gif").string();
-        viz::write_gif(path, cube.width, cube.height, frames, g_opts.fps);
-        announce(path);
-    }
+    if (g_opts.gif) announce(gif_path);
     if (g_opts.mp4) {
         const std::string ffmpeg = find_on_path("ffmpeg");
         if (ffmpeg.empty()) {

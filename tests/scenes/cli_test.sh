@@ -512,6 +512,9 @@ viz_bad_input)
   mkdir -p out/folder.exr
   expect_exit 2 '^femto: error: --exr "out/folder\.exr" is a folder: name a file$' -- "$femto" viz rainbow out/cb.exr -o out/r.png --exr out/folder.exr
   [ ! -e out/r.png ] || fail "the PNG was written although the EXR could not be"
+  mkdir -p out/fr/frame_00005.png
+  expect_exit 2 '"out/fr/frame_00005\.png" is a folder' -- "$femto" viz frames out/cb.exr -o out/fr
+  [ "$(ls out/fr)" = frame_00005.png ] || fail "frames written before the folder in their way was found"
   # A FIFO (of either name) is refused at once, not read: opening it would block forever.
   mkfifo cube.npy cube.exr || fail "mkfifo"
   for f in cube.npy cube.exr; do
