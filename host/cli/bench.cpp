@@ -56,9 +56,10 @@ CLI::App* add_bench_command(CLI::App& app) {
                       "Plugin folder searched first by every variant (repeatable)");
     bench->add_flag("-q,--quiet", g_args.quiet, "No line per run");
     bench->add_flag("--check", g_args.check,
-                    "Only load every scene with every variant and let each integrator check it "
-                    "(as every study does first), render nothing, and exit: 0 when all can run, "
-                    "2 naming the first that cannot");
+                    "Only load every scene with every variant and let each integrator check it, "
+                    "check the <pixel>s and a reference file against each film (as every study "
+                    "does first), render nothing, and exit: 0 when all can run, 2 naming the "
+                    "first that cannot");
     bench
         ->add_option("--runs-per-machine", g_args.runs_per_machine,
                      "Under mpirun: processes of each machine that take runs at the same time "

@@ -158,7 +158,14 @@ bench_bad_input)
   printf '<experiment name="t">\n<scene file="%s"><define name="res" value="8"/><define name="bins" value="8"/></scene>\n<variant name="a"/>\n<budgets spp="1"/>\n</experiment>\n' "$scene" > ok.xml
   mkdir -p res/results.csv
   expect_exit 2 '^femto: error: "res/results\.csv" is not a file: the study writes its results\.csv there$' -- "$femto" bench ok.xml -o res -q
-  [ -z "$(ls -A res/cache 2>/dev/null)" ] || fail "something was rendered";;
+  [ -z "$(ls -A res/cache 2>/dev/null)" ] || fail "something was rendered"
+  # --check finds a <pixel> outside the film and a reference file of another shape (a study
+  # found them only after rendering its reference or its first run).
+  sed 's|<budgets spp="1"/>|<budgets spp="1"/><reference variant="a" spp="2"/><pixel name="p" x="100" y="0"/>|' ok.xml > pixel.xml
+  expect_exit 2 '^femto: error: pixel\.xml:4:[0-9]+: pixel \(100, 0\) is outside scene "[^"]*".s 8 x 8 film' -- "$femto" bench pixel.xml --check
+  "$femto" render "$scene" -D res=4 -D bins=8 --spp 1 --npy -o small -q || fail "render failed"
+  sed 's|<budgets spp="1"/>|<budgets spp="1"/><reference file="small.npy"/>|' ok.xml > ref.xml
+  expect_exit 2 '^femto: error: ref\.xml:4:[0-9]+: reference "[^"]*small\.npy" is \[4, 4, 8\] \(H, W, T\), but scene "[^"]*" renders \[8, 8, 8\]' -- "$femto" bench ref.xml --check;;
 render_demo)
   "$femto" render "$scene" -o out/demo -D spp=4 -D res=64 -q || fail "render failed"
   [ -s out/demo.exr ] && [ -s out/demo.png ] || fail "outputs missing"

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
@@ -774,19 +775,59 @@ void write_received_runs(const RunnerOptions& options, const Experiment& e, cons
     });
 }
 
+namespace {
+
+// What a render of `scene` gives: [H, W, T] (T = 1 for a steady film).
+std::array<size_t, 3> film_shape(const Scene& scene) {
+    const Film& film = scene.sensor().film();
+    const auto* timed = dynamic_cast<const TimeResolvedFilm*>(&film);
+    return {size_t(film.height()), size_t(film.width()), timed ? size_t(timed->grid().bins) : 1};
+}
+
+// The <pixel>s and a reference file against the film a scene renders into: what a study would
+// otherwise find only after rendering its reference or its first run.
+void check_against_film(const Experiment& e, const SceneSpec& scene,
+                        const std::array<size_t, 3>& film, const Cube* reference) {
+    const auto [H, W, T] = film;
+    for (const PixelSpec& p : e.pixels)
+        if (p.x < 0 || p.y < 0 || size_t(p.x) >= W || size_t(p.y) >= H)
+            throw SceneError(p.location, fmt::format("pixel ({}, {}) is outside scene \"{}\"'s "
+                                                     "{} x {} film",
+                                                     p.x, p.y, scene.name, W, H));
+    if (reference && (reference->H != H || reference->W != W || reference->T != T))
+        throw SceneError(e.reference.location,
+                         fmt::format("reference \"{}\" is [{}, {}, {}] (H, W, T), but scene \"{}\" "
+                                     "renders [{}, {}, {}]",
+                                     e.reference.file, reference->H, reference->W, reference->T,
+                                     scene.name, H, W, T));
+}
+
+}  // namespace
+
 size_t check_experiment(const Experiment& e, const RunnerOptions& options) {
+    std::optional<Cube> reference;
+    if (!e.reference.file.empty()) {
+        try {
+            reference = read_reference_file(e.reference.file);
+        } catch (const SceneError& err) {
+            throw SceneError(e.reference.location, err.what());
+        }
+    }
     size_t pairs = 0;
     for (const SceneSpec& scene : e.scenes)
         for (const Variant& v : e.variants) {
+            std::array<size_t, 3> film{};
             try {
                 const std::unique_ptr<Scene> loaded =
                     load_scene(scene.file, load_options(scene, v, options));
                 loaded->integrator().preprocess(*loaded);
+                film = film_shape(*loaded);
             } catch (const SceneError& err) {
                 throw SceneError(v.location, fmt::format("variant \"{}\" cannot render scene "
                                                          "\"{}\": {}",
                                                          v.name, scene.name, err.what()));
             }
+            check_against_film(e, scene, film, reference ? &*reference : nullptr);
             ++pairs;
         }
     return pairs;
