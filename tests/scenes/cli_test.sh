@@ -510,6 +510,8 @@ viz_bad_input)
   expect_exit 2 'level must be a positive number' -- "$femto" viz peak-time out/cb.exr -o out/p.png --level 0
   expect_exit 2 'must end in \.exr' -- "$femto" viz unwarp out/cb.exr -o out/u.png --to world
   expect_exit 2 'needs a viz command' -- "$femto" viz
+  : > empty.npy
+  expect_exit 2 '^femto: error: "empty\.npy" is not a \.npy file$' -- "$femto" viz frames empty.npy -o out/f
   expect_exit 2 '^femto: error: --exposure must be a finite number of stops, got nan$' -- "$femto" viz frames out/cb.exr -o out/f --exposure nan
   expect_exit 2 '^femto: error: --start must be a finite time, got inf$' -- "$femto" viz peak-time out/cb.exr -o out/p.png --start inf
   # A tiny bin width shifts pixels by more bins than 64-bit indices hold: a message, not overflow.
@@ -557,6 +559,8 @@ bad_btf)
   expect_exit 2 'width' -- "$femto" btf synth -o x.btf --width 0
   expect_exit 2 'vgroove is written as --format bdi or dfmf' -- "$femto" btf synth -o x.btf --kind vgroove --format fmf
   expect_exit 2 '^femto: error: --slope must be from 1 to 89 degrees, got nan$' -- "$femto" btf synth -o x.btf --kind vgroove --slope nan
+  mkdir -p taken.btf
+  expect_exit 2 '^femto: error: cannot write "taken\.btf": Is a directory$' -- "$femto" btf synth -o taken.btf --width 2 --height 2
   expect_exit 2 'needs a btf command|subcommand' -- "$femto" btf
   [ ! -e x.btf ] && [ ! -e out/s.exr ] || fail "output written";;
 streak_film)

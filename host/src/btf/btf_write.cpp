@@ -2,7 +2,9 @@
 // btf_bdi.cpp, in the layouts the Bonn btflib writes (meta data version 4, RGB channels).
 #include <Imath/half.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 
 #include "femto/btf.h"
@@ -15,7 +17,7 @@ namespace {
 class Writer {
 public:
     explicit Writer(const std::string& path) : path_(path), out_(path, std::ios::binary) {
-        if (!out_) throw SceneError("cannot write \"" + path + "\"");
+        if (!out_) throw SceneError("cannot write \"" + path + "\": " + std::strerror(errno));
     }
     ~Writer() = default;
     template <typename T>

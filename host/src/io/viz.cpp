@@ -205,7 +205,8 @@ io::Cube load_cube(const std::string& path) {
     char magic[8] = {};
     // A FIFO would block here (and in the readers below) forever: InputFile refuses it.
     InputFile(path, SourceLocation{}).read(magic, 8);
-    if (std::string(magic, 6) != "\x93NUMPY") {
+    // By its magic number, or, for a file named .npy, as one (whose reader says what is wrong).
+    if (std::string(magic, 6) != "\x93NUMPY" && fs::path(path).extension() != ".npy") {
         // A single-part OpenEXR file (the version field's multi-part bit, 0x1000, is clear)
         // may be a streak image; a cube has a frames part and (usually) a depth part.
         const bool single_part_exr =
