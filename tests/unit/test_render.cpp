@@ -79,6 +79,29 @@ TEST(Render, WorldTimeWindowEndsUnboundedPaths) {
                                       "max_depth -1");
 }
 
+// The direct integrator's sample counts are bounded: a camera sample keeps one contribution
+// per emitter and BSDF sample in memory, so 2^31 of them asked for ~100 GB (a sweep of bad
+// values found it). Each bad count is an error at its own parameter's line.
+TEST(Render, DirectSampleCountsOutsideTheirRangeAreLocatedErrors) {
+    for (const char* name : {"shading_samples", "emitter_samples", "bsdf_samples"})
+        for (const char* value : {"-1", "65537", "2147483648"}) {
+            SCOPED_TRACE(std::string(name) + " = " + value);
+            const std::string xml =
+                std::string("<scene version=\"3.0.0\">\n<integrator type=\"direct\">\n") +
+                "<integer name=\"" + name + "\" value=\"" + value +
+                "\"/>\n</integrator>\n</scene>\n";
+            const std::string error = femto::test::load_error(xml);
+            EXPECT_NE(error.find(":3:"), std::string::npos) << error;
+            EXPECT_NE(error.find(std::string(name) + " must be in [0, 65536], got " + value),
+                      std::string::npos)
+                << error;
+        }
+    EXPECT_NO_THROW(load_scene_string(
+        "<scene version=\"3.0.0\"><integrator type=\"direct\">"
+        "<integer name=\"emitter_samples\" value=\"65536\"/>"
+        "</integrator><sensor type=\"perspective\"/><emitter type=\"constant\"/></scene>"));
+}
+
 TEST(Render, PointLightOverLambertianPlane) {
     // L(x) = rho/pi * I * cos(theta) / d^2 with cos(theta) = h/d, viewed orthographically.
     const double I = 5, h = 1.5, rho = 0.6;

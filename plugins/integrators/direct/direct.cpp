@@ -3,6 +3,8 @@
 // combined with the power heuristic. Time follows the same rules as every integrator
 // (PathClock): the first surface that scatters sets the sensor distance, its vertex event
 // (a fluorescent material's delay and colour transfer) applies to all light leaving it.
+#include <fmt/format.h>
+
 #include "femto/bsdf.h"
 #include "femto/error.h"
 #include "femto/integrator.h"
@@ -19,12 +21,21 @@ using namespace femto;
 class Direct final : public Integrator {
 public:
     explicit Direct(const Properties& props) {
+        // A camera sample's contributions (one per emitter or BSDF sample) stay in memory until
+        // the film takes them: 2^16 of each is already far more than a render needs.
+        constexpr int64_t kMaxSamples = int64_t(1) << 16;
+        auto check = [&](const char* name, int64_t count) {
+            if (count < 0 || count > kMaxSamples)
+                props.fail(name,
+                           fmt::format("{} must be in [0, {}], got {}", name, kMaxSamples, count));
+        };
         const int64_t shading = props.get_int("shading_samples", 1);
+        check("shading_samples", shading);  // first: the other two default to it
         emitter_samples_ = props.get_int("emitter_samples", shading);
         bsdf_samples_ = props.get_int("bsdf_samples", shading);
         hide_emitters_ = props.get_bool("hide_emitters", false);
-        if (emitter_samples_ < 0) props.fail("emitter_samples", "emitter_samples must be >= 0");
-        if (bsdf_samples_ < 0) props.fail("bsdf_samples", "bsdf_samples must be >= 0");
+        check("emitter_samples", emitter_samples_);
+        check("bsdf_samples", bsdf_samples_);
         if (emitter_samples_ + bsdf_samples_ == 0)
             props.fail("emitter_samples", "emitter_samples and bsdf_samples cannot both be 0");
     }
@@ -124,7 +135,7 @@ private:
 FEMTO_PLUGIN(Direct, femto::PluginKind::Integrator, "direct",
              "Direct illumination: emitter and BSDF sampling combined with MIS",
              {{"shading_samples", "integer", "1",
-               "default for both emitter_samples and bsdf_samples"},
-              {"emitter_samples", "integer", "1", "emitter samples per camera ray"},
-              {"bsdf_samples", "integer", "1", "BSDF samples per camera ray"},
+               "default for both emitter_samples and bsdf_samples (0 to 65536)"},
+              {"emitter_samples", "integer", "1", "emitter samples per camera ray (0 to 65536)"},
+              {"bsdf_samples", "integer", "1", "BSDF samples per camera ray (0 to 65536)"},
               {"hide_emitters", "boolean", "false", "hide directly visible emitters"}})
