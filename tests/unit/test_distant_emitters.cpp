@@ -494,7 +494,8 @@ TEST(DistantLight, MitsubaFilesLoadUnchanged) {
         "<scene version=\"0.6.0\">" +
         integrator("path", "<integer name=\"maxDepth\" value=\"3\"/>") + body +
         "<emitter type=\"envmap\"><string name=\"filename\" value=\"env.exr\"/><float "
-        "name=\"scale\" value=\"0.5\"/><boolean name=\"cache\" value=\"false\"/><transform "
+        "name=\"scale\" value=\"0.5\"/><boolean name=\"cache\" value=\"false\"/><float "
+        "name=\"gamma\" value=\"2.2\"/><transform "
         "name=\"toWorld\"><rotate x=\"1\" angle=\"90\"/></transform></emitter><emitter "
         "type=\"directional\"><vector name=\"direction\" x=\"0\" y=\"0.6\" z=\"-0.8\"/><rgb "
         "name=\"irradiance\" value=\"2\"/></emitter><emitter type=\"constant\"><spectrum "

@@ -231,10 +231,12 @@ private:
             log_note(props.location_of("mis_compensation"),
                      "femto ignores mis_compensation=true: it samples the map by luminance (a "
                      "compensated density would starve light paths of dim directions)");
-        if (props.has("gamma"))
+        if (props.has("gamma")) {
+            props.get_float("gamma");  // read: a Mitsuba file that sets it loads unchanged
             log_note(props.location_of("gamma"),
                      "femto ignores gamma: 8-bit images are decoded as sRGB, float images are "
                      "linear");
+        }
         if (props.has("cache")) props.get_bool("cache");  // 0.6's MIP-map cache: nothing to do
     }
 
