@@ -1,5 +1,7 @@
 #include "femto/fresnel.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -229,6 +231,10 @@ std::string conductor_preset_names() {
     return names;
 }
 
+/// Indices of refraction (and conductors' eta and k) above this are refused: far beyond any
+/// material's (a few, or tens for metals' k), and the Fresnel terms overflow to NaN near 1e19.
+constexpr double kMaxIor = 1e4;
+
 /// Reads an index of refraction given as a positive number or a name known to lookup_ior()
 /// (case-insensitive); `def` (a number or a name) when absent.
 float read_ior(const Properties& props, const std::string& name, const std::string& def) {
@@ -244,7 +250,10 @@ float read_ior(const Properties& props, const std::string& name, const std::stri
                              "\"; give a number or one of: " + ior_names());
     }
     const double v = props.get_float(name);
-    if (!(v > 0.0)) props.fail(name, "\"" + name + "\" must be a positive index of refraction");
+    if (!(v > 0.0 && v <= kMaxIor))
+        props.fail(name, fmt::format("\"{}\" must be a positive index of refraction of at most {}, "
+                                     "got {}",
+                                     name, kMaxIor, v));
     return static_cast<float>(v);
 }
 
@@ -260,8 +269,10 @@ ConductorIor read_conductor_ior(const Properties& props) {
         const Color eta = props.get_color("eta", Color(0.f));
         const Color k = props.get_color("k", Color(1.f));
         for (int i = 0; i < 3; ++i) {
-            if (!(eta[i] >= 0.f)) props.fail("eta", "\"eta\" must be non-negative");
-            if (!(k[i] >= 0.f)) props.fail("k", "\"k\" must be non-negative");
+            if (!(eta[i] >= 0.f && eta[i] <= kMaxIor))
+                props.fail("eta", fmt::format("\"eta\" must be from 0 to {}", kMaxIor));
+            if (!(k[i] >= 0.f && k[i] <= kMaxIor))
+                props.fail("k", fmt::format("\"k\" must be from 0 to {}", kMaxIor));
         }
         ior.eta = eta / ext_eta;
         ior.k = k / ext_eta;

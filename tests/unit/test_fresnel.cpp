@@ -12,7 +12,9 @@
 #include <utility>
 #include <vector>
 
+#include "femto/error.h"
 #include "femto/fresnel.h"
+#include "femto/properties.h"
 
 namespace {
 
@@ -170,3 +172,29 @@ TEST(FresnelLookup, ConductorPresets) {
 }
 
 }  // namespace
+
+// Indices past 1e4 (and non-finite ones) are located errors: the parameter sweep found that
+// 1e30 overflowed the conductor and plastic Fresnel terms to NaN (dropped by the film with a
+// warning) instead of being refused.
+TEST(FresnelLookup, AbsurdIndicesAreLocatedErrors) {
+    const femto::SourceLocation at{"ior.xml", 3, 5};
+    for (const double v : {1e30, 1e4 * 1.001, HUGE_VAL, -1.0, 0.0, std::nan("")}) {
+        SCOPED_TRACE(v);
+        femto::Properties props("dielectric", {"ior.xml", 2, 1});
+        props.set("int_ior", femto::Properties::Type::Float, v, at);
+        try {
+            femto::read_ior(props, "int_ior", "1.5");
+            ADD_FAILURE() << "no error";
+        } catch (const femto::SceneError& e) {
+            EXPECT_EQ(e.location().line, 3) << e.what();
+        }
+    }
+    femto::Properties fine("dielectric", {"ior.xml", 2, 1});
+    fine.set("int_ior", femto::Properties::Type::Float, 1e4, at);
+    EXPECT_EQ(femto::read_ior(fine, "int_ior", "1.5"), 1e4f);
+    for (const char* name : {"eta", "k"}) {
+        femto::Properties props("conductor", {"ior.xml", 2, 1});
+        props.set(name, femto::Properties::Type::Color, femto::Color(1e30f), at);
+        EXPECT_THROW(femto::read_conductor_ior(props), femto::SceneError) << name;
+    }
+}

@@ -63,9 +63,9 @@ std::optional<ComplexIor> lookup_conductor_preset(std::string_view name);
 /// The names lookup_conductor_preset() accepts, in table order, as "a-C, Ag, Al, ...".
 std::string conductor_preset_names();
 
-/// Reads an index of refraction given as a positive number or a name known to lookup_ior()
-/// (case-insensitive); `def` (a number or a name, as the schema documents it) when absent.
-/// Bad values are located SceneErrors.
+/// Reads an index of refraction given as a positive number (at most 1e4) or a name known to
+/// lookup_ior() (case-insensitive); `def` (a number or a name, as the schema documents it) when
+/// absent. Bad values are located SceneErrors.
 float read_ior(const Properties& props, const std::string& name, const std::string& def);
 
 /// Relative complex index of refraction of a conductor (eta + i k, already divided by the
