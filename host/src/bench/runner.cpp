@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
@@ -22,6 +21,7 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <utility>
 
 #include "bench/measures.h"
 #include "bench/raw_rays.h"
@@ -57,17 +57,27 @@ LoadOptions load_options(const SceneSpec& scene, const Variant& variant,
     return lo;
 }
 
+// The film's cube without its data: its shape [H, W, T, 3] (T = 1 for a steady film) and
+// time grid.
+Cube film_shape(const Film& film) {
+    Cube c;
+    c.H = size_t(film.height()), c.W = size_t(film.width()), c.T = 1, c.C = 3;
+    if (const auto* trf = dynamic_cast<const TimeResolvedFilm*>(&film)) {
+        c.T = size_t(trf->grid().bins);
+        c.start = trf->grid().start, c.bin_width = trf->grid().bin_width;
+    }
+    return c;
+}
+
 // Writes the film's result as STEM.npy and returns the cube's shape and time grid (no data): a
 // time-resolved film's cube through its own writer, with its other outputs (as `femto render
 // --npy` writes them), else the steady image as [H, W, 1, 3].
 Cube write_film_npy(Scene& scene, const RenderOptions& ro, const RenderStats& stats,
                     const std::string& stem) {
     const Film& film = scene.sensor().film();
-    Cube out;
-    out.H = size_t(film.height()), out.W = size_t(film.width()), out.T = 1, out.C = 3;
+    const Cube out = film_shape(film);
     fs::create_directories(fs::path(stem).parent_path());
-    if (const auto* trf = dynamic_cast<const TimeResolvedFilm*>(&film)) {
-        out.start = trf->grid().start, out.bin_width = trf->grid().bin_width;
+    if (dynamic_cast<const TimeResolvedFilm*>(&film)) {
         RenderInfo info = make_render_info(scene, ro, stats);
         info.write_npy = true;
         film.write(stem, info);
@@ -502,15 +512,14 @@ void share_cube(StudyGroup& group, Cube& c) {
     group.broadcast(c.variance);
 }
 
-// The scene's reference: the experiment's file, or its reference variant rendered in two
-// independent halves (seeds seed and seed + 1, spp / 2 each): their mean is the reference and
-// (a - b)^2 / 4 per voxel the variance of that mean (valid for any sampler), which the measures
-// take out. Both are kept in OUT/cache under `key` (reference_keys()). Empty when the user
-// stopped it.
+// The scene's reference variant rendered in two independent halves (seeds seed and seed + 1,
+// spp / 2 each): their mean is the reference and (a - b)^2 / 4 per voxel the variance of that
+// mean (valid for any sampler), which the measures take out. Both are kept in OUT/cache under
+// `key` (reference_keys()). Empty when the user stopped it. (A reference file is read by
+// check_experiment().)
 std::optional<Cube> reference_cube(const Experiment& e, const SceneSpec& scene,
                                    const std::string& key, const RunnerOptions& options,
                                    int threads, const fs::path& dir) {
-    if (!e.reference.file.empty()) return read_reference_file(e.reference.file);
     const std::string stem = (dir / "cache" / ("reference-" + scene.name + "-" + key)).string();
     const std::string mean_file = stem + "-mean.npy", variance_file = stem + "-variance.npy";
     // A distributed study: rank 0 keeps the cache, every process renders, all get the cube.
@@ -777,18 +786,11 @@ void write_received_runs(const RunnerOptions& options, const Experiment& e, cons
 
 namespace {
 
-// What a render of `scene` gives: [H, W, T] (T = 1 for a steady film).
-std::array<size_t, 3> film_shape(const Scene& scene) {
-    const Film& film = scene.sensor().film();
-    const auto* timed = dynamic_cast<const TimeResolvedFilm*>(&film);
-    return {size_t(film.height()), size_t(film.width()), timed ? size_t(timed->grid().bins) : 1};
-}
-
-// The <pixel>s and a reference file against the film a scene renders into: what a study would
-// otherwise find only after rendering its reference or its first run.
-void check_against_film(const Experiment& e, const SceneSpec& scene,
-                        const std::array<size_t, 3>& film, const Cube* reference) {
-    const auto [H, W, T] = film;
+// The <pixel>s and a reference file against the film a scene renders into (film_shape()): what
+// a study would otherwise find only after rendering its reference or its first run.
+void check_against_film(const Experiment& e, const SceneSpec& scene, const Cube& film,
+                        const Cube* reference) {
+    const size_t H = film.H, W = film.W, T = film.T;
     for (const PixelSpec& p : e.pixels)
         if (p.x < 0 || p.y < 0 || size_t(p.x) >= W || size_t(p.y) >= H)
             throw SceneError(p.location, fmt::format("pixel ({}, {}) is outside scene \"{}\"'s "
@@ -802,10 +804,10 @@ void check_against_film(const Experiment& e, const SceneSpec& scene,
                                      scene.name, H, W, T));
 }
 
-}  // namespace
-
-size_t check_experiment(const Experiment& e, const RunnerOptions& options) {
-    std::optional<Cube> reference;
+// check_experiment(), which also reads the experiment's reference file (if it has one) into
+// `reference`, for run_experiment() to measure against without reading it again.
+size_t check_experiment(const Experiment& e, const RunnerOptions& options,
+                        std::optional<Cube>& reference) {
     if (!e.reference.file.empty()) {
         try {
             reference = read_reference_file(e.reference.file);
@@ -816,12 +818,12 @@ size_t check_experiment(const Experiment& e, const RunnerOptions& options) {
     size_t pairs = 0;
     for (const SceneSpec& scene : e.scenes)
         for (const Variant& v : e.variants) {
-            std::array<size_t, 3> film{};
+            Cube film;
             try {
                 const std::unique_ptr<Scene> loaded =
                     load_scene(scene.file, load_options(scene, v, options));
                 loaded->integrator().preprocess(*loaded);
-                film = film_shape(*loaded);
+                film = film_shape(loaded->sensor().film());
             } catch (const SceneError& err) {
                 throw SceneError(v.location, fmt::format("variant \"{}\" cannot render scene "
                                                          "\"{}\": {}",
@@ -833,8 +835,16 @@ size_t check_experiment(const Experiment& e, const RunnerOptions& options) {
     return pairs;
 }
 
+}  // namespace
+
+size_t check_experiment(const Experiment& e, const RunnerOptions& options) {
+    std::optional<Cube> reference;
+    return check_experiment(e, options, reference);
+}
+
 bool run_experiment(const Experiment& e, const RunnerOptions& options) {
-    check_experiment(e, options);
+    std::optional<Cube> file_reference;  // the experiment's reference file, read by the check
+    check_experiment(e, options, file_reference);
     StudyGroup* group = options.group;
     const bool root = !group || group->rank() == 0;
     if (group && e.raw_rays_seconds > 0)
@@ -861,7 +871,10 @@ bool run_experiment(const Experiment& e, const RunnerOptions& options) {
         if (stopped) break;
         std::optional<Cube> reference;
         if (e.has_reference()) {
-            reference = reference_cube(e, e.reference_scene(scene), keys[s], options, threads, dir);
+            // A reference file fits one scene (load_experiment): it is used once.
+            reference = file_reference ? std::exchange(file_reference, std::nullopt)
+                                       : reference_cube(e, e.reference_scene(scene), keys[s],
+                                                        options, threads, dir);
             stopped = !reference;
             if (stopped) break;
             if (root) write_reference_profiles(e, scene, *reference, dir);
