@@ -11,6 +11,7 @@
 #include "femto/btf.h"
 #include "femto/btf_prefilter.h"
 #include "femto/error.h"
+#include "output_folder.h"
 
 namespace fs = std::filesystem;
 
@@ -67,14 +68,7 @@ int run_synth() {
             fmt::format("a {}x{} BDI of {} directions would take {:.1f} GB; use "
                         "--format dfmf or a smaller texture",
                         o.width, o.height, n, double(bytes) / (1 << 30)));
-    // The output's folder is made, as render and viz make theirs.
-    if (const fs::path dir = fs::path(g_synth.output).parent_path(); !dir.empty()) {
-        std::error_code ec;
-        fs::create_directories(dir, ec);
-        if (ec)
-            throw SceneError(fmt::format("cannot create the output folder \"{}\": {}", dir.string(),
-                                         ec.message()));
-    }
+    prepare_output_folder(fs::path(g_synth.output).parent_path());  // as render and viz do
     btf::synth::write(g_synth.output, o);
     fmt::print(stderr, "wrote {} ({} {}x{}, {} light x {} view directions)\n", g_synth.output,
                btf::format_name(o.format), o.width, o.height, n, n);

@@ -21,6 +21,7 @@
 #include "femto/integrator.h"
 #include "femto/log.h"
 #include "femto/sensor.h"
+#include "output_folder.h"
 #include "stop_signals.h"
 #include "util/strings.h"
 #include "viz.h"
@@ -105,15 +106,7 @@ void prepare_output(const std::string& out_base) {
         if (fs::is_directory(out_base + suffix, ec))
             throw femto::SceneError(
                 fmt::format("cannot write \"{}{}\": a folder has that name", out_base, suffix));
-    fs::path dir = fs::path(out_base).parent_path();
-    if (dir.empty()) dir = ".";
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir))
-        throw femto::SceneError(fmt::format("cannot create the output folder \"{}\"{}",
-                                            dir.string(), ec ? ": " + ec.message() : ""));
-    if (access(dir.c_str(), W_OK) != 0)
-        throw femto::SceneError(
-            fmt::format("the output folder \"{}\" is not writable", dir.string()));
+    femto::cli::prepare_output_folder(fs::path(out_base).parent_path());
 }
 
 std::pair<std::string, std::string> parse_define(const std::string& text) {

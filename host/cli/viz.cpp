@@ -20,6 +20,7 @@
 
 #include "femto/error.h"
 #include "femto/viz.h"
+#include "output_folder.h"
 
 namespace fs = std::filesystem;
 
@@ -48,18 +49,10 @@ void announce(const std::string& path) {
 void prepare_file(const std::string& path, const char* what) {
     if (path.empty() || path.back() == '/')
         throw SceneError(fmt::format("{} \"{}\" must name a file", what, path));
-    std::error_code folder_ec;
-    if (fs::is_directory(path, folder_ec))
-        throw SceneError(fmt::format("{} \"{}\" is a folder: name a file", what, path));
-    fs::path dir = fs::path(path).parent_path();
-    if (dir.empty()) dir = ".";
     std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir))
-        throw SceneError(fmt::format("cannot create the output folder \"{}\"{}", dir.string(),
-                                     ec ? ": " + ec.message() : ""));
-    if (access(dir.c_str(), W_OK) != 0)
-        throw SceneError(fmt::format("the output folder \"{}\" is not writable", dir.string()));
+    if (fs::is_directory(path, ec))
+        throw SceneError(fmt::format("{} \"{}\" is a folder: name a file", what, path));
+    prepare_output_folder(fs::path(path).parent_path());
 }
 
 void check_extension(const std::string& path, const char* ext, const char* option) {
@@ -111,13 +104,8 @@ int run_program(const std::vector<std::string>& args) {
 int cmd_frames(const io::Cube& cube) {
     const viz::Tone tone = viz::parse_tone(g_opts.tone);
     const std::string dir = g_opts.output;
+    prepare_output_folder(dir);
     std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir))
-        throw SceneError(fmt::format("cannot create the output folder \"{}\"{}", dir,
-                                     ec ? ": " + ec.message() : ""));
-    if (access(dir.c_str(), W_OK) != 0)
-        throw SceneError(fmt::format("the output folder \"{}\" is not writable", dir));
     auto frame_path = [&](int t) {
         return (fs::path(dir) / fmt::format("frame_{:05}.png", t)).string();
     };
