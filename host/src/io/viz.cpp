@@ -626,11 +626,12 @@ UnwarpResult unwarp(const io::Cube& cube, const TimeGrid& grid, bool to_world, b
     const PixelShifts shifts = pixel_shifts(cube, grid.bin_width, to_world);
     // Bin indices are 64-bit: a shift past 2^40 bins (a tiny --bin-width) would overflow them,
     // and would move every pixel's light far outside any window the cube could have.
-    if (std::max(std::abs(shifts.min), std::abs(shifts.max)) > double(int64_t(1) << 40))
+    if (const double largest = std::max(std::abs(shifts.min), std::abs(shifts.max));
+        largest > double(int64_t(1) << 40))
         throw SceneError(
-            fmt::format("the depths shift pixels by up to {:.3g} bins of width {}: too "
-                        "many (is the bin width right?)",
-                        std::max(std::abs(shifts.min), std::abs(shifts.max)), grid.bin_width));
+            fmt::format("the depths shift pixels by up to {:.3g} bins of width {}: "
+                        "too many (is the bin width right?)",
+                        largest, grid.bin_width));
     int64_t k_lo = 0, k_hi = 0;  // the window grows by these many bins (unless kept)
     if (!keep_window && shifts.any) {
         k_lo = std::min<int64_t>(0, int64_t(snapped_floor(shifts.min)));
