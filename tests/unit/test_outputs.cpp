@@ -338,40 +338,36 @@ TEST(Npy, StreamedPixelsAndWriteErrorsSayWhy) {
     }
 }
 
-// A dimension beyond 64 bits (std::stoull's out_of_range, which reached the CLI as an internal
-// error, exit 1) is a bad shape like any other.
-TEST(Npy, ADimensionBeyond64BitsIsABadShape) {
-    const auto dir = temp_dir("npy-huge-dim");
-    std::string header =
-        "{'descr': '<f4', 'fortran_order': False, 'shape': (99999999999999999999999, 2), }";
+// The message of reading a 128-byte .npy file (no data) whose header declares `shape`.
+std::string npy_header_error(const fs::path& path, const std::string& shape) {
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape + ", }";
     header.resize(128 - 10 - 1, ' ');
     header += '\n';
     const std::string pre("\x93NUMPY\x01\x00", 8);
-    write_text(dir / "huge.npy", pre + char(header.size()) + char(0) + header);
-    std::vector<size_t> shape;
+    write_text(path, pre + char(header.size()) + char(0) + header);
+    std::vector<size_t> dims;
     try {
-        io::read_npy((dir / "huge.npy").string(), shape);
-        ADD_FAILURE() << "no error";
+        io::read_npy(path.string(), dims);
     } catch (const SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("bad shape"), std::string::npos) << e.what();
+        return e.what();
     }
+    ADD_FAILURE() << "no error for shape " << shape;
+    return {};
+}
+
+// A dimension beyond 64 bits (std::stoull's out_of_range, which reached the CLI as an internal
+// error, exit 1) is a bad shape like any other.
+TEST(Npy, ADimensionBeyond64BitsIsABadShape) {
+    const std::string error =
+        npy_header_error(temp_dir("npy-huge-dim") / "huge.npy", "(99999999999999999999999, 2)");
+    EXPECT_NE(error.find("bad shape"), std::string::npos) << error;
 }
 
 TEST(Npy, AShapeLargerThanTheFileIsRefusedBeforeAllocating) {
     // 2^16 x 2^16 x 2 floats (32 GiB, more than a test machine has) in a file of 128 bytes.
-    const auto dir = temp_dir("npy-short");
-    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (65536, 65536, 2), }";
-    header.resize(128 - 10 - 1, ' ');
-    header += '\n';
-    const std::string pre("\x93NUMPY\x01\x00", 8);
-    write_text(dir / "big.npy", pre + char(header.size()) + char(0) + header);
-    std::vector<size_t> shape;
-    try {
-        io::read_npy((dir / "big.npy").string(), shape);
-        ADD_FAILURE() << "no error";
-    } catch (const SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("is truncated"), std::string::npos) << e.what();
-    }
+    const std::string error =
+        npy_header_error(temp_dir("npy-short") / "big.npy", "(65536, 65536, 2)");
+    EXPECT_NE(error.find("is truncated"), std::string::npos) << error;
 }
 
 TEST(OutputSet, FilesAppearTogetherOnCommit) {
