@@ -288,7 +288,13 @@ bad_volume)
   printf "$head"'<volume name="sigma_t" type="constvolume"><float name="value" value="-2"/></volume></medium></shape>\n</scene>\n' > v4.xml
   expect_exit 2 '^femto: error: v4\.xml:4:[0-9]+: "constvolume": a constvolume.s value must be >= 0' -- "$femto" render v4.xml -o out/v4 -q
   [ "$(wc -l < stderr.txt)" -eq 1 ] || { cat stderr.txt >&2; fail "more than one line on stderr"; }
-  [ ! -e out/v4.exr ] || fail "an output was written";;
+  [ ! -e out/v4.exr ] || fail "an output was written"
+  # A medium so dense that a free flight rounds to no move: paths could never end (this hung).
+  printf '<scene version="3.0.0">\n<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>\n<medium type="homogeneous"><float name="sigma_t" value="1e30"/><float name="albedo" value="1"/></medium></sensor>\n<shape type="sphere"/><emitter type="point"/>\n</scene>\n' > v5.xml
+  expect_exit 2 '^femto: error: v5\.xml:3:[0-9]+: the medium.s extinction reaches 1e\+30 per scene unit: a mean free path of 1e-30, below the spacing of positions' -- timeout 60 "$femto" render v5.xml -o out/v5 -q
+  [ ! -e out/v5.exr ] || fail "an output was written"
+  sed 's/"1e30"/"1e20"\/><float name="scale" value="1e20"/' v5.xml > v6.xml
+  expect_exit 2 '^femto: error: v6\.xml:3:[0-9]+: "homogeneous": the coefficients times scale \(1e\+20\) overflow a float' -- "$femto" render v6.xml -o out/v6 -q;;
 bad_spp)
   expect_exit 2 '^femto: error: --spp: expected a whole number from 1 to 4294967295, got "0"' -- "$femto" render "$scene" --spp 0 -q
   expect_exit 2 '^femto: error: --spp: expected a whole number .*got "-3"' -- "$femto" render "$scene" --spp -3 -q

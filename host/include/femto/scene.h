@@ -88,6 +88,7 @@ public:
 
 private:
     void place_distant_emitters();
+    void check_media_precision() const;
 
     struct Accel;
     std::unique_ptr<Accel> accel_;

@@ -5,10 +5,14 @@
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <mutex>
+#include <vector>
 
 #include "accel/embree_scene.h"
+#include "femto/error.h"
 #include "femto/integrator.h"
 #include "femto/medium.h"
 #include "femto/sensor.h"
@@ -78,6 +82,35 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
     accel_ = std::make_unique<Accel>(shapes_);
     bounds_ = accel_->embree.bounds();
     place_distant_emitters();
+    check_media_precision();
+}
+
+// A path in a medium moves by free flights of about 1 / sigma_t. When that is below the spacing
+// of float positions where the scene lies, a flight rounds to no move at all, time stops
+// advancing with it, and a path never ends (a medium of sigma_t 1e30 hung the render). Such a
+// medium is refused at load; denser than this but still resolvable is merely slow.
+void Scene::check_media_precision() const {
+    std::vector<const Medium*> media;
+    if (sensor_->medium()) media.push_back(sensor_->medium());
+    for (const auto& s : shapes_)
+        for (const Medium* m : detail::shape_media(*s)) media.push_back(m);
+    for (const Emitter* e : emitter_list_)
+        if (e->medium()) media.push_back(e->medium());
+    const float reach = std::max({std::abs(sphere_.center.x), std::abs(sphere_.center.y),
+                                  std::abs(sphere_.center.z)}) +
+                        sphere_.radius;
+    const float spacing = std::nextafter(reach, kInfinity) - reach;
+    for (const Medium* m : media) {
+        const float free_path = 1.f / m->majorant();  // inf for a vacuum-like medium
+        if (free_path >= spacing) continue;
+        throw SceneError(
+            m->location(),
+            fmt::format("the medium's extinction reaches {:g} per scene unit: a mean free path "
+                        "of {:g}, below the spacing of positions ({:g}) in a scene reaching "
+                        "{:g} units from the origin, so paths in it could not move. Lower "
+                        "sigma_t, sigma_s + sigma_a or scale.",
+                        m->majorant(), free_path, spacing, reach));
+    }
 }
 
 // Distant emitters measure their light from a sphere around everything paths start from (the

@@ -111,4 +111,16 @@ bool shape_has_media(const Shape& shape) {
     return false;
 }
 
+std::vector<const Medium*> shape_media(const Shape& shape) {
+    std::vector<const Medium*> media;
+    const auto add = [&](const Shape& s) {
+        for (const Medium* m : {s.interior(), s.exterior()})
+            if (m) media.push_back(m);
+    };
+    add(shape);
+    if (const auto* inst = dynamic_cast<const ShapeInstance*>(&shape))
+        for (const auto& s : inst->group().shapes()) add(*s);
+    return media;
+}
+
 }  // namespace femto::detail

@@ -44,6 +44,11 @@ public:
             sigma_t_ = st * float(scale);
             sigma_s_ = sigma_t_ * albedo;
         }
+        if (!sigma_t_.is_finite())
+            props.fail(props.has("scale") ? "scale"
+                       : absorbing        ? "sigma_s"
+                                          : "sigma_t",
+                       fmt::format("the coefficients times scale ({:g}) overflow a float", scale));
         majorant_ = std::max(sigma_t_.r, std::max(sigma_t_.g, sigma_t_.b));
         grey_ = sigma_t_.r == sigma_t_.g && sigma_t_.g == sigma_t_.b;
     }
