@@ -257,13 +257,13 @@ bad_film_size)
     echo "SKIP [$case_name]: this machine's memory is beyond the film's fixed 64 GiB limit"
     exit 77
   fi
-  expect_exit 2 '^femto: error: .*cornell-box/scene\.xml:[0-9]+:[0-9]+: "transient": the cube and its AOVs would need [0-9.]+ GiB, more than 3/4 of this machine.s [0-9.]+ GiB of memory' \
+  expect_exit 2 '^femto: error: .*cornell-box/scene\.xml:[0-9]+:[0-9]+: "transient": the cube and its AOVs would need [0-9.]+ GiB, more than 3/4 of (this machine.s memory|this process.s memory limit \(control group\)), [0-9.]+ GiB$' \
     -- "$femto" render "$scene" -D res=1024 -D bins=$bins -o out/huge -q
   # The streak film's rows likewise: 24 rows of 8192 pixels.
   rows=$(seq -s, 0 23)
   streak_scene | sed -e 's|value="32"/><integer name="height"|value="8192"/><integer name="height"|' \
     -e "s|value=\"5, 12\"|value=\"$rows\"|" -e "s|name=\"bins\" value=\"30\"|name=\"bins\" value=\"$((bins * 1024 * 1024 / (24 * 8192) + 1))\"|" > streak.xml
-  expect_exit 2 '^femto: error: streak\.xml:[0-9]+:[0-9]+: "streak": the streak images and their copies would need [0-9.]+ GiB, more than 3/4 of this machine.s' \
+  expect_exit 2 '^femto: error: streak\.xml:[0-9]+:[0-9]+: "streak": the streak images and their copies would need [0-9.]+ GiB, more than 3/4 of (this machine.s memory|this process.s memory limit)' \
     -- "$femto" render streak.xml -o out/streak -q
   [ -z "$(ls -A out 2>/dev/null)" ] || fail "something was written";;
 runpath)

@@ -32,6 +32,7 @@
 #include "femto/tfilter.h"
 #include "femto/viz.h"
 #include "scene_util.h"
+#include "util/memory_limit.h"
 
 using namespace femto;
 
@@ -253,7 +254,7 @@ TEST(Viz, UnwarpFractionalShiftConservesEnergyAndMovesMeanTime) {
 // A wide streak image whose depths spread its pixels over more bins than memory holds: a
 // message (exit 2), not an allocation failure or the OOM killer.
 TEST(Viz, UnwarpRefusesACubeLargerThanMemory) {
-    const double ram = physical_memory_bytes();
+    const double ram = usable_memory_bytes();
     const int W = 1 << 17;
     const double bins_needed = 0.9 * ram / (double(W) * 3 * sizeof(float));
     if (!(ram > 0) || bins_needed > double(1 << 20) ||
@@ -266,7 +267,25 @@ TEST(Viz, UnwarpRefusesACubeLargerThanMemory) {
         viz::unwarp(c, viz::time_grid(c), true);
         FAIL() << "no error";
     } catch (const SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("of this machine's"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("GiB, more than 3/4 of this"), std::string::npos)
+            << e.what();
+    }
+}
+
+// A container's limit is what the OOM killer enforces, so the memory rule reads it: "max" (v2)
+// sets none, a count is bytes, v1's "no limit" is a huge count the physical memory undercuts.
+TEST(Memory, ReadsAControlGroupsLimit) {
+    EXPECT_FALSE(detail::parse_cgroup_limit("max\n"));
+    EXPECT_FALSE(detail::parse_cgroup_limit(""));
+    EXPECT_FALSE(detail::parse_cgroup_limit("-1\n"));
+    EXPECT_FALSE(detail::parse_cgroup_limit("12abc\n"));
+    EXPECT_FALSE(detail::parse_cgroup_limit("0\n"));
+    EXPECT_EQ(detail::parse_cgroup_limit("2147483648\n"), 2147483648.0);
+    EXPECT_EQ(detail::parse_cgroup_limit("9223372036854771712\n"), 9223372036854771712.0);
+    const double ram = physical_memory_bytes(), usable = usable_memory_bytes();
+    if (ram > 0) {
+        EXPECT_GT(usable, 0.0);
+        EXPECT_LE(usable, ram);
     }
 }
 
