@@ -227,6 +227,9 @@ public:
     /// Border (in pixels) a block needs around its tile for this film's filter.
     int filter_border() const { return std::max(0, int(std::ceil(rfilter_->radius() - 0.5f))); }
 
+    /// The renderer's tiles are at most this many pixels across (w, h of make_block()): a
+    /// film sizing its working memory counts blocks of this size plus the filter's border.
+    static constexpr int kMaxTileSize = 32;
     /// Workspace for pixels [x0, x0+w) x [y0, y0+h) plus the filter's border.
     virtual std::unique_ptr<FilmBlock> make_block(int x0, int y0, int w, int h) const = 0;
     /// Adds a finished block into the film. The renderer never merges overlapping blocks

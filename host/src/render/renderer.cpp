@@ -40,7 +40,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr int kTileSize = 32;
+constexpr int kTileSize = Film::kMaxTileSize;
 constexpr uint64_t kMaxKeptPilotSamples = uint64_t(1) << 16;
 constexpr uint64_t kMinPassSpp = 8;  // samples per pixel of a pass, where there are enough
 

@@ -129,10 +129,10 @@ public:
     }
 
     // What a render holds besides the images, at most: a block per worker thread, each a tile's
-    // recorded rows in double (the renderer's tiles are at most 32 pixels across, plus the
-    // filter's border), and while writing, one row's cube, its two slices and its depth.
+    // recorded rows in double (the renderer's tiles are at most kMaxTileSize pixels across, plus
+    // the filter's border), and while writing, one row's cube, its two slices and its depth.
     double working_bytes() const {
-        const double tile = 32.0 + 2.0 * filter_border();
+        const double tile = double(kMaxTileSize) + 2.0 * filter_border();
         const double row = double(width_) * grid_.bins * 3 * sizeof(float);
         const double block = std::min(double(rows_.size()), tile) * std::min(double(width_), tile) *
                              grid_.bins * 3 * sizeof(double);
