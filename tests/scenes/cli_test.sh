@@ -295,6 +295,20 @@ bad_volume)
   [ ! -e out/v5.exr ] || fail "an output was written"
   sed 's/"1e30"/"1e20"\/><float name="scale" value="1e20"/' v5.xml > v6.xml
   expect_exit 2 '^femto: error: v6\.xml:3:[0-9]+: "homogeneous": the coefficients times scale \(1e\+20\) overflow a float' -- "$femto" render v6.xml -o out/v6 -q;;
+exr_truncated)
+  # EXRs cut short after their headers, which declare 2^26 pixels (768 MiB as float): refused
+  # before the image is allocated. The reader once allocated and decoded all of it (3 GB and
+  # 10 s for 2^28 pixels) before failing; under this memory limit that ended in bad_alloc.
+  command -v oiiotool >/dev/null || { echo "SKIP [$case_name]: oiiotool not found"; exit 77; }
+  oiiotool --create 16384x4096 3 -d half --compression zip -o big.exr || fail "oiiotool --create"
+  head -c 20000 big.exr > cut.exr
+  printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="rectangle"><bsdf type="diffuse">\n<texture type="bitmap" name="reflectance"><string name="filename" value="cut.exr"/></texture></bsdf></shape>\n</scene>\n' > t.xml
+  (ulimit -v 500000; expect_exit 2 '^femto: error: t\.xml:4:[0-9]+: "bitmap": cannot read image "cut\.exr": .*Early end of file' -- "$femto" render t.xml -o out/t -q) || exit 1
+  oiiotool --create 16384x4096 3 -d half --compression zip --attrib femto:layout "streak image: rows are time bins" --attrib femto:row 0 -o streak.exr ||
+    fail "oiiotool --create (streak)"
+  head -c 20000 streak.exr > cut_streak.exr
+  (ulimit -v 500000; expect_exit 2 '^femto: error: cannot read streak image "cut_streak\.exr": .*Early end of file' -- "$femto" viz unwarp cut_streak.exr -o out/u.exr --to world -q) || exit 1
+  [ -z "$(ls -A out 2>/dev/null)" ] || fail "something was written";;
 bad_spp)
   expect_exit 2 '^femto: error: --spp: expected a whole number from 1 to 4294967295, got "0"' -- "$femto" render "$scene" --spp 0 -q
   expect_exit 2 '^femto: error: --spp: expected a whole number .*got "-3"' -- "$femto" render "$scene" --spp -3 -q

@@ -120,6 +120,26 @@ TEST(CubeLayout, ManyBinsOfATinyFilmRoundTrip) {
     EXPECT_TRUE(cube.depth.empty());
 }
 
+// A cube cut short lacks its last pixel block: refused (before its pixels are allocated, which
+// cli.exr_truncated checks for images under a memory limit), with OpenEXR's reason.
+TEST(CubeLayout, ACubeCutShortIsRefused) {
+    const int w = 3, h = 2, bins = 4096;
+    const auto dir = temp_dir("cube-cut");
+    const std::vector<float> data = numbered_cube(w, h, bins);
+    const std::string path = (dir / "c.exr").string();
+    io::write_exr_cube(path, w, h, bins, data.data(), nullptr,
+                       {{"femto:bins", std::to_string(bins)}});
+    fs::resize_file(path, fs::file_size(path) - 100);
+    try {
+        io::read_exr_cube(path);
+        FAIL() << "no error";
+    } catch (const SceneError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("cannot read transient EXR"), std::string::npos) << what;
+        EXPECT_NE(what.find("Early end of file"), std::string::npos) << what;
+    }
+}
+
 TEST(CubeLayout, TheOlderOnePartPerBinLayoutIsStillRead) {
     const int w = 3, h = 2, bins = 3;
     const auto dir = temp_dir("cube-legacy");

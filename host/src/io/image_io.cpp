@@ -31,6 +31,7 @@
 #include "femto/color.h"
 #include "femto/error.h"
 #include "femto/input_file.h"
+#include "femto/memory.h"
 #include "io/atomic_file.h"
 #include "io/display.h"
 #include "io/exr_png.h"
@@ -372,6 +373,13 @@ std::optional<std::vector<float>> read_rgb_exr(const std::string& path, int& wid
             fmt::format("cannot read image \"{}\": unsupported size {}x{}x3 (at most "
                         "{} pixels)",
                         path, w, h, kMaxImagePixels));
+    if (!file->isComplete())
+        throw SceneError(fmt::format("cannot read image \"{}\": {}", path, detail::kIncompleteExr));
+    try {
+        detail::read_last_row(*file, dw, {"R", "G", "B"});
+    } catch (const std::exception& e) {
+        throw SceneError(fmt::format("cannot read image \"{}\": {}", path, e.what()));
+    }
     std::vector<float> rgb(size_t(w) * size_t(h) * 3);
     Imf::FrameBuffer fb;
     for (size_t c = 0; c < 3; ++c)
@@ -778,6 +786,16 @@ Cube read_exr_cube(const std::string& path) {
         if (cube.width <= 0 || values > (uint64_t(1) << 34))
             throw std::runtime_error(fmt::format("its size {}x{}x{} is out of range", cube.width,
                                                  cube.height, cube.bins));
+        for (int p = 0; p < parts; ++p)
+            if (!file.partComplete(p)) throw std::runtime_error(detail::kIncompleteExr);
+        if (frames_part >= 0) {
+            Imf::InputPart part(file, frames_part);
+            detail::read_last_row(part, file.header(frames_part).dataWindow(), {"R", "G", "B"});
+        }
+        if (const std::string problem =
+                memory_shortfall(double(values) * sizeof(float), "its pixels");
+            !problem.empty())
+            throw std::runtime_error(problem);
         cube.data.assign(values, 0.f);
         if (frames_part >= 0)
             read_frames_part(file, frames_part, cube);
