@@ -3,8 +3,8 @@
 # a minimal path tracer over the same BVH with femto's pieces swapped in one at a time, and
 # femto's `path`, interleaved on the Cornell box (issue 17's yardstick), then plots them.
 #   bench/run_ceiling.sh [--rounds 7] [--threads 1] [--spp 8] [--res 256]
-# Results: bench/results/ceiling/ceiling_<threads>t.{csv,png}, ceiling_run.log. About 70 s a
-# round's worth of 7 rounds at 1 thread on the 2-core machine once built.
+# Results: bench/results/ceiling/ceiling_<threads>t.{csv,png} and _run.log. About 90 s for
+# 7 rounds at 1 thread on the 2-core machine once built.
 set -euo pipefail
 
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -17,7 +17,7 @@ for ((i = 0; i < ${#args[@]}; ++i)); do
 done
 out="$results/ceiling"
 mkdir -p "$out"
-log="$out/ceiling_run.log"
+log="$out/ceiling_${threads}t_run.log"
 bench_log_header "$log"
 "$build/bin/femto_bench_ceiling" --out "$out/ceiling_${threads}t.csv" "$@" 2>&1 | tee -a "$log"
 echo "load average after the benchmark: $(cat /proc/loadavg)" | tee -a "$log"
