@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -95,20 +96,33 @@ Transform Transform::rotate(const Vec3& axis_in, double angle_deg) {
     return Transform(m, inv);
 }
 
+// In double: squared lengths of float vectors neither overflow (an `up` of 1e30 was "parallel")
+// nor underflow (an origin 1e-30 from its target "equalled" it).
 Transform Transform::look_at(const Vec3& origin, const Vec3& target, const Vec3& up) {
-    const Vec3 diff = target - origin;
-    if (!(squared_length(diff) > 0)) throw std::domain_error("lookat origin equals target");
-    const Vec3 dir = normalize(diff);
-    Vec3 left = cross(up, dir);
-    if (!(squared_length(left) > 1e-12f * squared_length(up)) || !(squared_length(up) > 0))
-        throw std::domain_error("lookat 'up' is zero or parallel to the viewing direction");
-    left = normalize(left);
-    const Vec3 new_up = cross(dir, left);
+    using D3 = std::array<double, 3>;
+    const auto cross_d = [](const D3& a, const D3& b) -> D3 {
+        return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    };
+    const auto norm2 = [](const D3& a) { return a[0] * a[0] + a[1] * a[1] + a[2] * a[2]; };
+    const auto unit = [&](const D3& a) -> D3 {
+        const double len = std::sqrt(norm2(a));
+        return {a[0] / len, a[1] / len, a[2] / len};
+    };
+    const D3 diff{double(target.x) - origin.x, double(target.y) - origin.y,
+                  double(target.z) - origin.z};
+    if (!(norm2(diff) > 0)) throw std::domain_error("lookat origin equals target");
+    const D3 dir = unit(diff), up_d{up.x, up.y, up.z};
+    if (!(norm2(up_d) > 0)) throw std::domain_error("lookat 'up' is zero");
+    D3 left = cross_d(unit(up_d), dir);
+    if (!(norm2(left) > 1e-12))
+        throw std::domain_error("lookat 'up' is parallel to the viewing direction");
+    left = unit(left);
+    const D3 new_up = cross_d(dir, left);
     Matrix m = identity();
     for (int i = 0; i < 3; ++i) {
-        m[i][0] = left[i];
-        m[i][1] = new_up[i];
-        m[i][2] = dir[i];
+        m[i][0] = left[size_t(i)];
+        m[i][1] = new_up[size_t(i)];
+        m[i][2] = dir[size_t(i)];
         m[i][3] = origin[i];
     }
     return Transform(m);

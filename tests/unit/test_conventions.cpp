@@ -28,6 +28,23 @@ TEST(Conventions, LookatFrame) {
     expect_near(t2.vector({0, 1, 0}), {0, 1, 0});
 }
 
+// Only the directions matter: an up of 1e30 or 1e-30, or a target 1e-30 away, is as good as a
+// unit one (in float their squared lengths overflowed or vanished: "parallel", "equals").
+TEST(Conventions, LookatTakesAnyScaleOfUpAndDistance) {
+    for (const float s : {1e-30f, 1e30f, 3e38f}) {
+        const Transform t = Transform::look_at({1, 2, 3}, {1, 2, 2}, {0, s, 0});
+        expect_near(t.vector({0, 0, 1}), {0, 0, -1});
+        expect_near(t.vector({0, 1, 0}), {0, 1, 0});
+    }
+    const Transform near = Transform::look_at({0, 0, 0}, {0, 0, 1e-30f}, {0, 1, 0});
+    expect_near(near.vector({0, 0, 1}), {0, 0, 1});
+    const Transform far = Transform::look_at({0, 0, 0}, {0, 0, -1e30f}, {0, 1, 0});
+    expect_near(far.vector({0, 0, 1}), {0, 0, -1});
+    EXPECT_THROW(Transform::look_at({0, 0, 0}, {0, 0, 1}, {0, 0, 0}), std::domain_error);
+    EXPECT_THROW(Transform::look_at({0, 0, 0}, {0, 0, 1}, {0, 0, 1e30f}), std::domain_error);
+    EXPECT_THROW(Transform::look_at({1, 1, 1}, {1, 1, 1}, {0, 1, 0}), std::domain_error);
+}
+
 TEST(Conventions, RotationIsRightHandedInDegrees) {
     expect_near(Transform::rotate({0, 0, 1}, 90).vector({1, 0, 0}), {0, 1, 0});
     expect_near(Transform::rotate({1, 0, 0}, 90).vector({0, 0, 1}), {0, -1, 0});
