@@ -78,6 +78,27 @@ void SamplerDraw(benchmark::State& state, const std::string& type) {
     state.SetItemsProcessed(state.iterations() * dims);
 }
 BENCHMARK_CAPTURE(SamplerDraw, ldsampler, std::string("ldsampler"))->Arg(1)->Arg(16);
+
+// The same with 8 samples of a pixel in a row, as the renderer takes them (the ldsampler keeps
+// a pixel's slot seeds for its next samples).
+void SamplerDrawPixelMajor(benchmark::State& state) {
+    Properties props;
+    auto sampler =
+        std::static_pointer_cast<Sampler>(create_object(PluginKind::Sampler, "ldsampler", props));
+    uint32_t sample = 0;
+    for (auto _ : state) {
+        sampler->start(7, (sample >> 3) & 0xfffu, sample & 7u);
+        ++sample;
+        float sum = 0;
+        for (int d = 0; d < 16; ++d) {
+            const Vec2 u = sampler->next_2d();
+            sum += u.x + u.y;
+        }
+        benchmark::DoNotOptimize(sum);
+    }
+    state.SetItemsProcessed(state.iterations() * 16);
+}
+BENCHMARK(SamplerDrawPixelMajor);
 BENCHMARK_CAPTURE(SamplerDraw, independent, std::string("independent"))->Arg(1)->Arg(16);
 
 void SamplerDraw1d(benchmark::State& state) {

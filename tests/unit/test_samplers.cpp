@@ -153,6 +153,34 @@ TEST(SamplerDeterminism, SameTripleGivesSameNumbers) {
     }
 }
 
+// A pixel's samples one after another (as the renderer takes them; the ldsampler then reuses
+// the pixel's slot seeds), past the slots it keeps and across advance_to() skips, give what a
+// fresh sampler gives for each (pixel, sample) alone.
+TEST(SamplerDeterminism, PixelMajorOrderGivesTheNumbersOfFreshSamplers) {
+    const auto long_draw = [](Sampler& s, uint64_t pixel, uint32_t sample) {
+        s.start(11, pixel, sample);
+        std::vector<float> v;
+        for (int i = 0; i < 100; ++i) {
+            if (i == 30) s.advance_to(s.dimension() + 7);  // a gap in the slots
+            const Vec2 a = s.next_2d();
+            v.push_back(a.x);
+            v.push_back(a.y);
+            if (i % 3 == 0) v.push_back(s.next_1d());
+        }
+        return v;
+    };
+    for (const char* type : kSamplerTypes) {
+        SCOPED_TRACE(type);
+        auto s = make_sampler(type, 8);
+        for (const uint64_t pixel : {5u, 5u, 6u, 5u})
+            for (uint32_t sample = 0; sample < 8; ++sample) {
+                auto fresh = make_sampler(type, 8);
+                ASSERT_EQ(long_draw(*s, pixel, sample), long_draw(*fresh, pixel, sample))
+                    << "pixel " << pixel << ", sample " << sample;
+            }
+    }
+}
+
 TEST(SamplerDeterminism, NeighbouringPixelsDiffer) {
     for (const char* type : kSamplerTypes) {
         SCOPED_TRACE(type);
