@@ -58,15 +58,18 @@ constexpr size_t kInputs = 4096;  // a power of two: inputs cycle with a mask
 // ---- sampler draws -------------------------------------------------------------------------
 
 // One camera sample's numbers: start(), then `dims` 2D draws (a path of a few vertices takes
-// about 2 + 3 per vertex).
+// about 2 + 3 per vertex); range(1) samples of a pixel in a row (8: as the renderer takes them;
+// 1: a new pixel every sample).
 void SamplerDraw(benchmark::State& state, const std::string& type) {
     Properties props;
     auto sampler =
         std::static_pointer_cast<Sampler>(create_object(PluginKind::Sampler, type, props));
     const int dims = int(state.range(0));
+    const uint32_t in_a_row = uint32_t(state.range(1));
     uint32_t sample = 0;
     for (auto _ : state) {
-        sampler->start(7, sample & 0xfffu, sample >> 12);
+        const uint32_t run = sample / in_a_row;
+        sampler->start(7, run & 0xfffu, (run >> 12) * in_a_row + sample % in_a_row);
         ++sample;
         float sum = 0;
         for (int d = 0; d < dims; ++d) {
@@ -77,29 +80,13 @@ void SamplerDraw(benchmark::State& state, const std::string& type) {
     }
     state.SetItemsProcessed(state.iterations() * dims);
 }
-BENCHMARK_CAPTURE(SamplerDraw, ldsampler, std::string("ldsampler"))->Arg(1)->Arg(16);
-
-// The same with 8 samples of a pixel in a row, as the renderer takes them (the ldsampler keeps
-// a pixel's slot seeds for its next samples).
-void SamplerDrawPixelMajor(benchmark::State& state) {
-    Properties props;
-    auto sampler =
-        std::static_pointer_cast<Sampler>(create_object(PluginKind::Sampler, "ldsampler", props));
-    uint32_t sample = 0;
-    for (auto _ : state) {
-        sampler->start(7, (sample >> 3) & 0xfffu, sample & 7u);
-        ++sample;
-        float sum = 0;
-        for (int d = 0; d < 16; ++d) {
-            const Vec2 u = sampler->next_2d();
-            sum += u.x + u.y;
-        }
-        benchmark::DoNotOptimize(sum);
-    }
-    state.SetItemsProcessed(state.iterations() * 16);
-}
-BENCHMARK(SamplerDrawPixelMajor);
-BENCHMARK_CAPTURE(SamplerDraw, independent, std::string("independent"))->Arg(1)->Arg(16);
+BENCHMARK_CAPTURE(SamplerDraw, ldsampler, std::string("ldsampler"))
+    ->Args({1, 1})
+    ->Args({16, 1})
+    ->Args({16, 8});
+BENCHMARK_CAPTURE(SamplerDraw, independent, std::string("independent"))
+    ->Args({1, 1})
+    ->Args({16, 1});
 
 void SamplerDraw1d(benchmark::State& state) {
     Properties props;

@@ -27,7 +27,6 @@
 // each pixel's samples form a complete (0,k,2)-net in every dimension pair; other counts give
 // a subset of one (at most one point per elementary interval).
 #include <algorithm>
-#include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -121,10 +120,6 @@ public:
 
     void start(uint64_t seed, uint64_t pixel_index, uint32_t sample_index) override {
         pixel_seed_ = femto::hash_combine(femto::hash_combine(seed_, seed), pixel_index);
-        if (pixel_seed_ != cached_pixel_seed_) {
-            cached_pixel_seed_ = pixel_seed_;
-            cached_slots_ = 0;
-        }
         // hash_combine(pixel_seed_, slot) = mix64(pixel_seed_ ^ (slot + slot_offset_)).
         slot_offset_ = 0x9e3779b97f4a7c15ULL + (pixel_seed_ << 6) + (pixel_seed_ >> 2);
         reversed_index_ = reverse_bits(sample_index);
@@ -158,27 +153,11 @@ private:
         uint32_t index_seed, x_seed, y_seed;
     };
     /// Seeds of the next dimension slot: hashes of (sampler seed, render seed, pixel, slot).
-    /// They do not depend on the sample index, and the renderer takes a pixel's samples one
-    /// after another, so the first kCachedSlots are kept for the pixel's later samples (the
-    /// path tracer's time on the Cornell box fell 1.1 %: bench/README.md).
     Slot next_slot() {
-        const uint64_t slot = slot_++;
-        const uint64_t bit = slot < kCachedSlots ? uint64_t(1) << slot : 0;
-        if (cached_slots_ & bit) return cache_[slot];
-        const uint64_t h = femto::mix64(pixel_seed_ ^ (slot + slot_offset_));
+        const uint64_t h = femto::mix64(pixel_seed_ ^ (slot_++ + slot_offset_));
         const uint64_t g = femto::mix64(h ^ 0x2545f4914f6cdd1dULL);
-        const Slot seeds{low32(h), static_cast<uint32_t>(h >> 32), low32(g)};
-        if (bit) {
-            cache_[slot] = seeds;
-            cached_slots_ |= bit;
-        }
-        return seeds;
+        return {low32(h), static_cast<uint32_t>(h >> 32), low32(g)};
     }
-
-    static constexpr uint64_t kCachedSlots = 64;
-    std::array<Slot, kCachedSlots> cache_{};
-    uint64_t cached_pixel_seed_ = 0;  // whose slots cache_ holds
-    uint64_t cached_slots_ = 0;       // bit d: cache_[d] is valid
 
     uint64_t pixel_seed_ = 0;
     uint64_t slot_offset_ = 0;
