@@ -279,21 +279,10 @@ int main(int argc, char** argv) {
         std::setvbuf(stdout, nullptr, _IOLBF, 0);
         int rounds = 7, threads = 1, spp = 8, res = 256;
         std::string out = std::string(FEMTO_BENCH_SOURCE_DIR) + "/bench/results/ceiling.csv";
-        for (int i = 1; i < argc; ++i) {
-            const std::string a = argv[i];
-            if (a == "--rounds")
-                rounds = std::stoi(option_value(argc, argv, i));
-            else if (a == "--threads")
-                threads = std::stoi(option_value(argc, argv, i));
-            else if (a == "--spp")
-                spp = std::stoi(option_value(argc, argv, i));
-            else if (a == "--res")
-                res = std::stoi(option_value(argc, argv, i));
-            else if (a == "--out")
-                out = option_value(argc, argv, i);
-            else
-                throw std::invalid_argument("unknown option " + a);
-        }
+        parse_options(
+            argc, argv,
+            {{"--rounds", &rounds}, {"--threads", &threads}, {"--spp", &spp}, {"--res", &res}},
+            {{"--out", &out}});
         if (rounds < 1 || threads < 1 || spp < 1 || res < 1 || res > 4096)
             throw std::invalid_argument("rounds, threads, spp >= 1; res in [1, 4096]");
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));

@@ -12,6 +12,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -93,6 +94,25 @@ inline std::vector<std::string> split(const std::string& s, char sep) {
 inline std::string option_value(int argc, char** argv, int& i) {
     if (i + 1 >= argc) throw std::invalid_argument(std::string(argv[i]) + " needs a value");
     return argv[++i];
+}
+
+/// Reads "--name value" pairs: each name of `ints` takes a whole number, each of `strings` any
+/// text. Throws std::invalid_argument on an unknown option or a missing or malformed value.
+inline void parse_options(int argc, char** argv, const std::map<std::string, int*>& ints,
+                          const std::map<std::string, std::string*>& strings) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (const auto it = ints.find(a); it != ints.end()) {
+            const std::string v = option_value(argc, argv, i);
+            size_t used = 0;
+            *it->second = std::stoi(v, &used);
+            if (used != v.size()) throw std::invalid_argument(a + ": not a whole number: " + v);
+        } else if (const auto jt = strings.find(a); jt != strings.end()) {
+            *jt->second = option_value(argc, argv, i);
+        } else {
+            throw std::invalid_argument("unknown option " + a);
+        }
+    }
 }
 
 // -- reading a film back ----------------------------------------------------------------------

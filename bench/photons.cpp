@@ -111,17 +111,8 @@ int main(int argc, char** argv) {
         std::setvbuf(stdout, nullptr, _IOLBF, 0);
         int rounds = 7, threads = 0;
         std::string out = std::string(FEMTO_BENCH_SOURCE_DIR) + "/bench/results/photons.csv";
-        for (int i = 1; i < argc; ++i) {
-            const std::string a = argv[i];
-            if (a == "--rounds")
-                rounds = std::stoi(option_value(argc, argv, i));
-            else if (a == "--threads")
-                threads = std::stoi(option_value(argc, argv, i));
-            else if (a == "--out")
-                out = option_value(argc, argv, i);
-            else
-                throw std::invalid_argument("unknown option " + a);
-        }
+        parse_options(argc, argv, {{"--rounds", &rounds}, {"--threads", &threads}},
+                      {{"--out", &out}});
         if (rounds < 1 || threads < 0) throw std::invalid_argument("rounds >= 1, threads >= 0");
         std::unique_ptr<tbb::global_control> limit;
         if (threads > 0)
