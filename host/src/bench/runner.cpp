@@ -75,7 +75,7 @@ Cube film_shape(const Film& film) {
 Cube write_film_npy(Scene& scene, const RenderOptions& ro, const RenderStats& stats,
                     const std::string& stem) {
     const Film& film = scene.sensor().film();
-    const Cube out = film_shape(film);
+    Cube out = film_shape(film);
     fs::create_directories(fs::path(stem).parent_path());
     if (dynamic_cast<const TimeResolvedFilm*>(&film)) {
         RenderInfo info = make_render_info(scene, ro, stats);
@@ -83,6 +83,8 @@ Cube write_film_npy(Scene& scene, const RenderOptions& ro, const RenderStats& st
         film.write(stem, info);
         if (fs::exists(stem + ".npy")) return out;
     }
+    // A film that writes no .npy of its own (a streak film): its steady image, one bin.
+    out.T = 1;
     const std::vector<float> image = film.steady_image();
     io::write_npy(stem + ".npy", {out.H, out.W, 1, 3}, image.data());
     return out;
