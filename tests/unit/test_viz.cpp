@@ -282,6 +282,26 @@ TEST(Memory, ReadsAControlGroupsLimit) {
     EXPECT_FALSE(detail::parse_cgroup_limit("0\n"));
     EXPECT_EQ(detail::parse_cgroup_limit("2147483648\n"), 2147483648.0);
     EXPECT_EQ(detail::parse_cgroup_limit("9223372036854771712\n"), 9223372036854771712.0);
+    // The process's group and its ancestors, the smallest limit winning: v1 (memory
+    // controller) and v2 (unified) trees built in a temporary folder.
+    const auto root = test::temp_dir("cgroup-tree");
+    const auto put = [&](const std::string& file, const std::string& text) {
+        std::filesystem::create_directories((root / file).parent_path());
+        std::ofstream(root / file) << text;
+    };
+    put("memory/memory.limit_in_bytes", "9223372036854771712\n");
+    put("memory/a/memory.limit_in_bytes", "500\n");
+    put("memory/a/b/memory.limit_in_bytes", "1000\n");
+    EXPECT_EQ(detail::cgroup_memory_limit("4:memory:/a/b\n3:cpu:/x\n", root.string()), 500.0);
+    EXPECT_EQ(detail::cgroup_memory_limit("4:cpuacct,memory:/a\n", root.string()), 500.0);
+    EXPECT_FALSE(detail::cgroup_memory_limit("0::/a/b\n", root.string()));  // not unified
+    put("cgroup.controllers", "memory\n");
+    put("x/memory.max", "2000\n");
+    put("x/y/memory.max", "max\n");
+    EXPECT_EQ(detail::cgroup_memory_limit("0::/x/y\n", root.string()), 2000.0);
+    EXPECT_FALSE(detail::cgroup_memory_limit("0::/\n", root.string()));
+    EXPECT_FALSE(detail::cgroup_memory_limit("garbage", root.string()));
+
     const double ram = physical_memory_bytes(), usable = usable_memory_bytes();
     if (ram > 0) {
         EXPECT_GT(usable, 0.0);

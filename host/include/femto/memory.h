@@ -10,9 +10,10 @@ namespace femto {
 /// This machine's physical memory in bytes; 0 when the system does not say.
 double physical_memory_bytes();
 
-/// The memory this process may use in bytes: the physical memory, or a container's smaller
-/// limit (the control group's `memory.max`, cgroup v2, or `memory.limit_in_bytes`, v1, as
-/// mounted at /sys/fs/cgroup); 0 when neither is known.
+/// The memory this process may use in bytes: the physical memory, or a smaller limit set by
+/// its control group or one of that group's ancestors (a container, a systemd MemoryMax, a
+/// batch scheduler: cgroup v2's `memory.max` or v1's `memory.limit_in_bytes` under
+/// /sys/fs/cgroup, along the path /proc/self/cgroup names); 0 when neither is known.
 double usable_memory_bytes();
 
 /// Empty when `bytes` fit in 3/4 of usable_memory_bytes() (or it is unknown); else a message:

@@ -30,23 +30,60 @@ std::optional<double> parse_cgroup_limit(const std::string& text) {
 }  // namespace detail
 
 namespace {
-std::optional<double> cgroup_limit(const char* path) {
+std::optional<double> read_limit_file(const std::string& path) {
     std::ifstream file(path);
     if (!file) return std::nullopt;
     std::ostringstream text;
     text << file.rdbuf();
     return detail::parse_cgroup_limit(text.str());
 }
+
+// The smallest limit in FILE of folder BASE + PATH and each of its ancestors up to BASE.
+std::optional<double> smallest_up_the_tree(const std::string& base, std::string path,
+                                           const char* file) {
+    std::optional<double> smallest;
+    for (;;) {
+        if (const std::optional<double> limit = read_limit_file(base + path + "/" + file))
+            smallest = smallest ? std::min(*smallest, *limit) : *limit;
+        if (path.empty() || path == "/") return smallest;
+        path = path.substr(0, path.find_last_of('/'));
+    }
+}
 }  // namespace
 
+namespace detail {
+std::optional<double> cgroup_memory_limit(const std::string& proc_self_cgroup,
+                                          const std::string& root) {
+    std::optional<double> smallest;
+    const auto take = [&](std::optional<double> limit) {
+        if (limit) smallest = smallest ? std::min(*smallest, *limit) : *limit;
+    };
+    const bool unified = std::ifstream(root + "/cgroup.controllers").good();
+    std::istringstream lines(proc_self_cgroup);
+    for (std::string line; std::getline(lines, line);) {  // "id:controllers:path"
+        const size_t a = line.find(':'), b = line.find(':', a + 1);
+        if (a == std::string::npos || b == std::string::npos) continue;
+        const std::string controllers = line.substr(a + 1, b - a - 1), path = line.substr(b + 1);
+        if (controllers.empty() && unified) take(smallest_up_the_tree(root, path, "memory.max"));
+        std::istringstream names(controllers);
+        for (std::string name; std::getline(names, name, ',');)
+            if (name == "memory")
+                take(smallest_up_the_tree(root + "/memory", path, "memory.limit_in_bytes"));
+    }
+    return smallest;
+}
+}  // namespace detail
+
 double usable_memory_bytes() {
-    // A container's limit is what the OOM killer enforces; v1 reports "no limit" as a huge
+    // A control group's limit is what the OOM killer enforces. v1 reports "no limit" as a huge
     // count, which the minimum with the physical memory ignores.
     double bytes = physical_memory_bytes();
-    for (const char* path :
-         {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"})
-        if (const std::optional<double> limit = cgroup_limit(path))
-            bytes = bytes > 0 ? std::min(bytes, *limit) : *limit;
+    std::ifstream self("/proc/self/cgroup");
+    std::ostringstream text;
+    text << self.rdbuf();
+    if (const std::optional<double> limit =
+            detail::cgroup_memory_limit(text.str(), "/sys/fs/cgroup"))
+        bytes = bytes > 0 ? std::min(bytes, *limit) : *limit;
     return bytes;
 }
 
