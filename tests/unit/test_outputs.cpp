@@ -12,6 +12,7 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -252,6 +253,47 @@ TEST(ImageRead, ExrPixelsAreThoseOpenImageIoReads) {
 // reads EXRs through OpenEXR too). That must never refuse a file OpenImageIO reads: every
 // truncation of a small EXR, and every single-byte change to its header, that femto refuses,
 // OpenImageIO refuses as well.
+// An EXR texture cut in half is refused before its pixels are allocated, whichever way its
+// lines run (a cut decreasing-order file keeps its last row and loses its first). The file
+// declares 8192 x 4096 RGB: 384 MiB as floats; the refusal must cost far less.
+TEST(ImageRead, ACutExrIsRefusedBeforeItsPixelsAreAllocated) {
+    const auto dir = temp_dir("image-read-cut-exr");
+    const int W = 8192, H = 4096;
+    for (const Imf::LineOrder order : {Imf::INCREASING_Y, Imf::DECREASING_Y}) {
+        SCOPED_TRACE(order == Imf::INCREASING_Y ? "increasing" : "decreasing");
+        const std::string whole = (dir / "whole.exr").string(), cut = (dir / "cut.exr").string();
+        {
+            Imf::Header header(W, H);
+            header.compression() = Imf::RLE_COMPRESSION;  // quick to write
+            header.lineOrder() = order;
+            std::vector<float> row(static_cast<size_t>(W));  // every row alike: yStride 0
+            Imf::FrameBuffer fb;
+            for (const char* c : {"R", "G", "B"}) {
+                header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+                fb.insert(c, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(row.data()),
+                                        sizeof(float), 0));
+            }
+            Imf::OutputFile file(whole.c_str(), header);
+            file.setFrameBuffer(fb);
+            file.writePixels(H);
+        }
+        fs::copy_file(whole, cut, fs::copy_options::overwrite_existing);
+        fs::resize_file(cut, fs::file_size(whole) / 2);
+        rusage before{}, after{};
+        getrusage(RUSAGE_SELF, &before);
+        int w = 0, h = 0;
+        try {
+            io::read_image_rgb(cut, w, h, false);
+            FAIL() << "no error";
+        } catch (const SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find("cut.exr"), std::string::npos) << e.what();
+        }
+        getrusage(RUSAGE_SELF, &after);
+        EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 128L * 1024)  // kB
+            << "peak memory grew by " << (after.ru_maxrss - before.ru_maxrss) / 1024 << " MiB";
+    }
+}
+
 TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
     const auto dir = temp_dir("image-read-bad-exr");
     const std::string good = (dir / "good.exr").string();

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <initializer_list>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -22,27 +23,29 @@ void insert_attribute(Imf::Header& header, const std::string& key, const std::st
 /// which belong to the file's layout rather than to the render.
 Attributes read_attributes(const Imf::Header& header);
 
-// A few kilobytes cut from an EXR declaring 2^28 pixels made a reader allocate 3 GB and decode
-// for 10 s before failing. Readers therefore check, before allocating the image, that the
-// offset table names every pixel block (isComplete(); kIncompleteExr says why not) and that the
-// last block, which a truncated file lacks, reads (read_last_row()).
-inline constexpr const char* kIncompleteExr =
-    "it is incomplete: some of its pixel blocks are missing (a truncated or partly written "
-    "file)";
-
-/// Reads the last row of data window `dw` of `input` (an Imf::InputFile or Imf::InputPart)
-/// into a row of scratch, each of `channels` in turn; throws what OpenEXR throws.
+/// Throws std::runtime_error unless `input` (an Imf::InputFile or Imf::InputPart) looks whole:
+/// its offset table names every pixel block (isComplete()) and the first and last rows of its
+/// data window `dw` read, each of `channels` into a row of scratch. A cut file lacks the blocks
+/// at its end, which hold one of those rows whether its lines run down or up. Readers call it
+/// before allocating the image: a few kilobytes cut from a file declaring 2^28 pixels made
+/// one allocate 3 GB and decode for 10 s before failing.
 template <class ExrInput>
-void read_last_row(ExrInput& input, const Imath::Box2i& dw,
-                   std::initializer_list<const char*> channels) {
+void require_whole_exr(ExrInput& input, const Imath::Box2i& dw,
+                       std::initializer_list<const char*> channels) {
+    if (!input.isComplete())
+        throw std::runtime_error(
+            "it is incomplete: some of its pixel blocks are missing (a truncated or partly "
+            "written file)");
     const int64_t width = int64_t(dw.max.x) - dw.min.x + 1;
     std::vector<float> row(static_cast<size_t>(width));
-    Imf::FrameBuffer fb;
-    for (const char* c : channels)
-        fb.insert(c, Imf::Slice::Make(Imf::FLOAT, row.data(), Imath::V2i(dw.min.x, dw.max.y), width,
-                                      1, sizeof(float), sizeof(float) * size_t(width)));
-    input.setFrameBuffer(fb);
-    input.readPixels(dw.max.y, dw.max.y);
+    for (const int y : {dw.min.y, dw.max.y}) {
+        Imf::FrameBuffer fb;
+        for (const char* c : channels)
+            fb.insert(c, Imf::Slice::Make(Imf::FLOAT, row.data(), Imath::V2i(dw.min.x, y), width, 1,
+                                          sizeof(float), sizeof(float) * size_t(width)));
+        input.setFrameBuffer(fb);
+        input.readPixels(y, y);
+    }
 }
 
 /// One float channel of an image to write: pixel (x, y) at first[(y * width + x) * stride].

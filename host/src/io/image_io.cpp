@@ -373,10 +373,8 @@ std::optional<std::vector<float>> read_rgb_exr(const std::string& path, int& wid
             fmt::format("cannot read image \"{}\": unsupported size {}x{}x3 (at most "
                         "{} pixels)",
                         path, w, h, kMaxImagePixels));
-    if (!file->isComplete())
-        throw SceneError(fmt::format("cannot read image \"{}\": {}", path, detail::kIncompleteExr));
     try {
-        detail::read_last_row(*file, dw, {"R", "G", "B"});
+        detail::require_whole_exr(*file, dw, {"R", "G", "B"});
     } catch (const std::exception& e) {
         throw SceneError(fmt::format("cannot read image \"{}\": {}", path, e.what()));
     }
@@ -786,12 +784,14 @@ Cube read_exr_cube(const std::string& path) {
         if (cube.width <= 0 || values > (uint64_t(1) << 34))
             throw std::runtime_error(fmt::format("its size {}x{}x{} is out of range", cube.width,
                                                  cube.height, cube.bins));
-        for (int p = 0; p < parts; ++p)
-            if (!file.partComplete(p)) throw std::runtime_error(detail::kIncompleteExr);
-        if (frames_part >= 0) {
-            Imf::InputPart part(file, frames_part);
-            detail::read_last_row(part, file.header(frames_part).dataWindow(), {"R", "G", "B"});
-        }
+        for (int p = 0; p < parts; ++p)  // what will be read, before it is allocated
+            if (p == frames_part || p == depth_part || is_legacy_bin_part(file.header(p))) {
+                Imf::InputPart part(file, p);
+                if (p == depth_part)
+                    detail::require_whole_exr(part, file.header(p).dataWindow(), {"Z"});
+                else
+                    detail::require_whole_exr(part, file.header(p).dataWindow(), {"R", "G", "B"});
+            }
         if (const std::string problem =
                 memory_shortfall(double(values) * sizeof(float), "its pixels");
             !problem.empty())

@@ -159,11 +159,8 @@ std::optional<io::Cube> read_streak(const std::string& path) {
     for (const char* c : {"R", "G", "B"})
         if (!channels.findChannel(c))
             throw SceneError(fmt::format("streak image \"{}\" has no channels R, G and B", path));
-    if (!file->isComplete())
-        throw SceneError(
-            fmt::format("cannot read streak image \"{}\": {}", path, io::detail::kIncompleteExr));
     try {
-        io::detail::read_last_row(*file, dw, {"R", "G", "B"});
+        io::detail::require_whole_exr(*file, dw, {"R", "G", "B"});
     } catch (const std::exception& e) {
         throw SceneError(fmt::format("cannot read streak image \"{}\": {}", path, e.what()));
     }
