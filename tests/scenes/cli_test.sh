@@ -291,10 +291,16 @@ bad_volume)
   [ ! -e out/v4.exr ] || fail "an output was written"
   # A medium so dense that a free flight rounds to no move: paths could never end (this hung).
   printf '<scene version="3.0.0">\n<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>\n<medium type="homogeneous"><float name="sigma_t" value="1e30"/><float name="albedo" value="1"/></medium></sensor>\n<shape type="sphere"/><emitter type="point"/>\n</scene>\n' > v5.xml
-  expect_exit 2 '^femto: error: v5\.xml:3:[0-9]+: the medium.s extinction reaches 1e\+30 per scene unit: a mean free path of 1e-30, below the spacing of positions' -- timeout 60 "$femto" render v5.xml -o out/v5 -q
+  expect_exit 2 '^femto: error: v5\.xml:3:[0-9]+: "homogeneous": its extinction reaches 1e\+30 per scene unit, a mean free path of 1e-30: below the spacing of positions where it lies \(1\.19209e-07, up to 1 scene units from the origin\)' -- timeout 60 "$femto" render v5.xml -o out/v5 -q
   [ ! -e out/v5.exr ] || fail "an output was written"
+  # A dense medium inside a small sphere is judged where it lies, not by a vast floor far away.
+  printf '<scene version="3.0.0">\n<sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>\n<shape type="sphere"><bsdf type="null"/><medium type="homogeneous" name="interior"><float name="sigma_t" value="2000"/><float name="albedo" value="0.5"/></medium></shape>\n<shape type="rectangle"><transform name="to_world"><scale value="10000"/><translate z="-2"/></transform></shape><emitter type="point"><point name="position" x="0" y="0" z="3"/></emitter>\n</scene>\n' > v7.xml
+  timeout 60 "$femto" render v7.xml -o out/v7 -q 2> v7.txt || { cat v7.txt >&2; fail "a dense sphere beside a large floor was refused"; }
   sed 's/"1e30"/"1e20"\/><float name="scale" value="1e20"/' v5.xml > v6.xml
-  expect_exit 2 '^femto: error: v6\.xml:3:[0-9]+: "homogeneous": the coefficients times scale \(1e\+20\) overflow a float' -- "$femto" render v6.xml -o out/v6 -q;;
+  expect_exit 2 '^femto: error: v6\.xml:3:[0-9]+: "homogeneous": sigma_t times scale is 1e\+40, beyond the float range' -- "$femto" render v6.xml -o out/v6 -q
+  # A scale beyond the float range is fine on a zero coefficient (it was cast to float first).
+  sed 's/"1e30"/"0"\/><float name="scale" value="1e39"/' v5.xml > v8.xml
+  "$femto" render v8.xml -o out/v8 -q 2> v8.txt || { cat v8.txt >&2; fail "sigma_t 0 with scale 1e39 was refused"; };;
 exr_truncated)
   # EXRs cut short after their headers, which declare 2^26 pixels (768 MiB as float): refused
   # before the image is allocated. The reader once allocated and decoded all of it (3 GB and

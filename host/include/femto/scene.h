@@ -88,7 +88,7 @@ public:
 
 private:
     void place_distant_emitters();
-    void check_media_precision() const;
+    void check_media_precision();  // also sets has_media_
 
     struct Accel;
     std::unique_ptr<Accel> accel_;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <map>
 #include <mutex>
 #include <vector>
 
@@ -69,9 +70,6 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
     for (const auto& e : emitters_) emitter_list_.push_back(e.get());
     for (const auto& s : shapes_)
         if (s->sensor_ptr() == sensor_) sensor_->attach(*s);
-    has_media_ = sensor_->medium() != nullptr;
-    for (const auto& s : shapes_) has_media_ = has_media_ || detail::shape_has_media(*s);
-    for (const Emitter* e : emitter_list_) has_media_ = has_media_ || e->medium() != nullptr;
     if (!emitter_list_.empty()) {
         earliest_emission_ = emitter_list_[0]->pulse().earliest();
         for (const Emitter* e : emitter_list_)
@@ -85,31 +83,68 @@ Scene::Scene(std::shared_ptr<Integrator> integrator, std::shared_ptr<Sensor> sen
     check_media_precision();
 }
 
+namespace {
+
+// How far from the origin the box reaches along any axis: what sets the spacing of float
+// positions inside it.
+float reach_of(const Bounds3& b) {
+    if (!b.valid()) return 0.f;
+    float r = 0.f;
+    for (int i = 0; i < 3; ++i) r = std::max({r, std::abs(b.min[i]), std::abs(b.max[i])});
+    return r;
+}
+
+// The world box of a shape that is not an instance.
+Bounds3 bounds_of(const Shape& shape) {
+    Bounds3 b;
+    if (shape.is_cylinder()) return detail::cylinder_box(shape);
+    if (shape.is_sphere()) {
+        b.expand(shape.sphere_center() - Vec3(shape.sphere_radius()));
+        b.expand(shape.sphere_center() + Vec3(shape.sphere_radius()));
+        return b;
+    }
+    for (const Vec3& p : shape.mesh().positions) b.expand(p);
+    return b;
+}
+
+}  // namespace
+
 // A path in a medium moves by free flights of about 1 / sigma_t. When that is below the spacing
-// of float positions where the scene lies, a flight rounds to no move at all, time stops
+// of float positions where the medium lies, a flight rounds to no move at all, time stops
 // advancing with it, and a path never ends (a medium of sigma_t 1e30 hung the render). Such a
-// medium is refused at load; denser than this but still resolvable is merely slow.
-void Scene::check_media_precision() const {
-    std::vector<const Medium*> media;
-    if (sensor_->medium()) media.push_back(sensor_->medium());
-    for (const auto& s : shapes_)
-        for (const Medium* m : detail::shape_media(*s)) media.push_back(m);
-    for (const Emitter* e : emitter_list_)
-        if (e->medium()) media.push_back(e->medium());
-    const float reach = std::max({std::abs(sphere_.center.x), std::abs(sphere_.center.y),
-                                  std::abs(sphere_.center.z)}) +
-                        sphere_.radius;
-    const float spacing = std::nextafter(reach, kInfinity) - reach;
-    for (const Medium* m : media) {
-        const float free_path = 1.f / m->majorant();  // inf for a vacuum-like medium
+// medium is refused at load; denser than this but still resolvable is merely slow. A medium
+// inside a shape lies within the shape's box; one outside shapes, around the sensor or an
+// emitter, anywhere in the scene.
+void Scene::check_media_precision() {
+    Bounds3 scene_box = bounds_;
+    scene_box.expand(sensor_->to_world().point(Vec3(0.f)));
+    const float scene_reach = reach_of(scene_box);
+    std::map<const Medium*, float> reach;  // the farthest any of its places reaches
+    const auto place = [&](const Medium* m, float r) {
+        if (m) reach[m] = std::max(reach[m], r);
+    };
+    place(sensor_->medium(), scene_reach);
+    for (const Emitter* e : emitter_list_) place(e->medium(), scene_reach);
+    for (const auto& s : shapes_) {
+        if (dynamic_cast<const detail::ShapeInstance*>(s.get())) {
+            for (const Medium* m : detail::shape_media(*s)) place(m, scene_reach);
+            continue;
+        }
+        place(s->exterior(), scene_reach);
+        place(s->interior(), reach_of(bounds_of(*s)));
+    }
+    has_media_ = !reach.empty();
+    for (const auto& [m, r] : reach) {
+        const float spacing = std::nextafter(r, kInfinity) - r;
+        const float free_path = 1.f / m->majorant();  // inf for a medium of zero density
         if (free_path >= spacing) continue;
         throw SceneError(
             m->location(),
-            fmt::format("the medium's extinction reaches {:g} per scene unit: a mean free path "
-                        "of {:g}, below the spacing of positions ({:g}) in a scene reaching "
-                        "{:g} units from the origin, so paths in it could not move. Lower "
+            fmt::format("\"{}\": its extinction reaches {:g} per scene unit, a mean free path of "
+                        "{:g}: below the spacing of positions where it lies ({:g}, up to {:g} "
+                        "scene units from the origin), so paths in it could not move. Lower "
                         "sigma_t, sigma_s + sigma_a or scale.",
-                        m->majorant(), free_path, spacing, reach));
+                        m->type_name(), m->majorant(), free_path, spacing, r));
     }
 }
 

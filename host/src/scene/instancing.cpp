@@ -103,14 +103,6 @@ const PluginDescriptor* builtin_shape(const std::string& type) {
     return nullptr;
 }
 
-bool shape_has_media(const Shape& shape) {
-    if (shape.has_media()) return true;
-    if (const auto* inst = dynamic_cast<const ShapeInstance*>(&shape))
-        for (const auto& s : inst->group().shapes())
-            if (s->has_media()) return true;
-    return false;
-}
-
 std::vector<const Medium*> shape_media(const Shape& shape) {
     std::vector<const Medium*> media;
     const auto add = [&](const Shape& s) {

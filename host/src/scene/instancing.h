@@ -39,8 +39,6 @@ private:
 /// The descriptor of a built-in shape type (`shapegroup`, `instance`), or null.
 const PluginDescriptor* builtin_shape(const std::string& type);
 
-/// True when the shape, or any shape an instance places, bounds a medium.
-bool shape_has_media(const Shape& shape);
 /// The media the shape, or any shape an instance places, bounds (interior and exterior; may
 /// repeat one).
 std::vector<const Medium*> shape_media(const Shape& shape);

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 
 #include "femto/medium.h"
 #include "femto/plugin.h"
@@ -30,25 +31,30 @@ public:
         const double scale = props.get_float("scale", 1.0);
         if (!(scale >= 0.0) || !std::isfinite(scale))
             props.fail("scale", "scale must be finite and >= 0");
+        // The products in double first: a scale beyond the float range (1e39 passes isfinite)
+        // would make float(scale) undefined, and 0 * inf NaN.
+        const auto scaled = [&](const Color& c, const char* name) {
+            const double largest = double(std::max(c.r, std::max(c.g, c.b))) * scale;
+            if (!(largest <= double(std::numeric_limits<float>::max())))
+                props.fail(
+                    props.has("scale") ? "scale" : name,
+                    fmt::format("{} times scale is {:g}, beyond the float range", name, largest));
+            return Color(float(c.r * scale), float(c.g * scale), float(c.b * scale));
+        };
         if (absorbing) {
             const Color sa = checked(props, "sigma_a", Color(0.f));
             const Color ss = checked(props, "sigma_s", Color(0.f));
-            sigma_s_ = ss * float(scale);
-            sigma_t_ = (sa + ss) * float(scale);
+            sigma_s_ = scaled(ss, "sigma_s");
+            sigma_t_ = scaled(sa + ss, "sigma_a + sigma_s");
         } else {
             const Color st = checked(props, "sigma_t", Color(1.f));
             const Color albedo = constant(props, "albedo", Color(0.75f));
             for (int c = 0; c < 3; ++c)
                 if (!(albedo[c] >= 0.f && albedo[c] <= 1.f))
                     props.fail("albedo", "every channel of albedo must lie in [0, 1]");
-            sigma_t_ = st * float(scale);
+            sigma_t_ = scaled(st, "sigma_t");
             sigma_s_ = sigma_t_ * albedo;
         }
-        if (!sigma_t_.is_finite())
-            props.fail(props.has("scale") ? "scale"
-                       : absorbing        ? "sigma_s"
-                                          : "sigma_t",
-                       fmt::format("the coefficients times scale ({:g}) overflow a float", scale));
         majorant_ = std::max(sigma_t_.r, std::max(sigma_t_.g, sigma_t_.b));
         grey_ = sigma_t_.r == sigma_t_.g && sigma_t_.g == sigma_t_.b;
     }
