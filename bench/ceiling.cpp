@@ -35,6 +35,7 @@
 #include "bench/raw_rays.h"
 #include "common.h"
 #include "femto/bsdf.h"
+#include "femto/integrator.h"
 #include "femto/random.h"
 #include "femto/sampler.h"
 #include "femto/shape.h"
@@ -62,7 +63,7 @@ struct Pieces {
 class Numbers {
 public:
     Numbers(femto::Sampler* plugin, uint64_t seed, uint64_t pixel, uint32_t sample)
-        : plugin_(plugin), rng_(seed, pixel * 4096 + sample) {
+        : plugin_(plugin), rng_(femto::hash_combine(seed, sample), pixel) {
         if (plugin_) plugin_->start(seed, pixel, sample);
     }
     float next_1d() { return plugin_ ? plugin_->next_1d() : rng_.next_float(); }
@@ -278,7 +279,8 @@ int main(int argc, char** argv) {
     try {
         std::setvbuf(stdout, nullptr, _IOLBF, 0);
         int rounds = 7, threads = 1, spp = 8, res = 256;
-        std::string out = std::string(FEMTO_BENCH_SOURCE_DIR) + "/bench/results/ceiling.csv";
+        std::string out =
+            std::string(FEMTO_BENCH_SOURCE_DIR) + "/bench/results/ceiling/ceiling.csv";
         parse_options(
             argc, argv,
             {{"--rounds", &rounds}, {"--threads", &threads}, {"--spp", &spp}, {"--res", &res}},
@@ -295,7 +297,11 @@ int main(int argc, char** argv) {
             std::string(FEMTO_BENCH_SOURCE_DIR) + "/bench/experiments/scenes/cornell-films.xml";
         auto scene = femto::load_scene(file, options);
         const femto::bench::RawRays raw(*scene, size_t(1) << 20, 1);
-        const MinimalPathTracer minimal(*scene, 8);  // cornell-films.xml's max_depth
+        const auto* path = dynamic_cast<const femto::MonteCarloIntegrator*>(&scene->integrator());
+        if (!path || path->max_depth() < 1 || path->rr_depth() != 0)
+            throw std::runtime_error(
+                "the scene's path integrator needs a max_depth and no roulette");
+        const MinimalPathTracer minimal(*scene, int(path->max_depth()));
         const std::vector<Pieces> ladder = {{"minimal"},
                                             {"minimal + sampler", true},
                                             {"minimal + hit", false, true},
