@@ -294,6 +294,45 @@ TEST(ImageRead, ACutExrIsRefusedBeforeItsPixelsAreAllocated) {
     }
 }
 
+// A text attribute declaring more bytes than the file holds is refused before OpenEXR reads
+// it (OpenEXR 3.1 allocates the declared size first), in an image and in a cube.
+TEST(ImageRead, AnAttributeLargerThanTheFileIsRefused) {
+    const auto dir = temp_dir("image-read-huge-attribute");
+    const float pixel[3] = {1, 2, 3};
+    const std::string image = (dir / "image.exr").string(), cube = (dir / "cube.exr").string();
+    io::write_exr_rgb(image, 1, 1, pixel, {{"femto:note", "abc"}});
+    const std::vector<float> values(3 * 2 * 2 * 3, 0.5f);
+    io::write_exr_cube(cube, 3, 2, 2, values.data(), nullptr,
+                       {{"femto:bins", "2"}, {"femto:note", "abc"}});
+    for (const std::string& path : {image, cube}) {
+        SCOPED_TRACE(path);
+        std::string bytes;
+        {
+            std::ifstream in(path, std::ios::binary);
+            bytes.assign(std::istreambuf_iterator<char>(in), {});
+        }
+        const std::string key = std::string("femto:note") + '\0' + "string" + '\0';
+        const size_t at = bytes.find(key);
+        ASSERT_NE(at, std::string::npos);
+        ASSERT_EQ(bytes.substr(at + key.size(), 4), std::string("\3\0\0\0", 4));
+        bytes.replace(at + key.size(), 4, "\xff\xff\xff\x7f");  // 2^31 - 1 bytes
+        std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+        try {
+            int w = 0, h = 0;
+            if (path == image)
+                io::read_image_rgb(path, w, h, false);
+            else
+                io::read_exr_cube(path);
+            FAIL() << "no error";
+        } catch (const SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find("attribute \"femto:note\" declares 2147483647 "
+                                                 "bytes"),
+                      std::string::npos)
+                << e.what();
+        }
+    }
+}
+
 TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
     const auto dir = temp_dir("image-read-bad-exr");
     const std::string good = (dir / "good.exr").string();

@@ -24,6 +24,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -341,6 +342,94 @@ private:
     int saved_ = -1;
 };
 
+}  // namespace
+
+namespace detail {
+
+namespace {
+
+// The sizes OpenEXR 3.1 reads attributes of fixed-size types by, whatever size is declared.
+int64_t fixed_attribute_size(const std::string& type) {
+    static const std::map<std::string, int64_t> sizes = {{"box2i", 16},
+                                                         {"box2f", 16},
+                                                         {"chromaticities", 32},
+                                                         {"compression", 1},
+                                                         {"deepImageState", 1},
+                                                         {"double", 8},
+                                                         {"envmap", 1},
+                                                         {"float", 4},
+                                                         {"int", 4},
+                                                         {"keycode", 28},
+                                                         {"lineOrder", 1},
+                                                         {"m33f", 36},
+                                                         {"m33d", 72},
+                                                         {"m44f", 64},
+                                                         {"m44d", 128},
+                                                         {"rational", 8},
+                                                         {"tiledesc", 9},
+                                                         {"timecode", 8},
+                                                         {"v2i", 8},
+                                                         {"v2f", 8},
+                                                         {"v2d", 16},
+                                                         {"v3i", 12},
+                                                         {"v3f", 12},
+                                                         {"v3d", 24}};
+    const auto it = sizes.find(type);
+    return it == sizes.end() ? -1 : it->second;
+}
+
+// Reads a null-terminated name of at most 255 characters.
+bool read_exr_name(std::istream& in, std::string& s) {
+    s.clear();
+    for (char c; in.get(c);) {
+        if (c == '\0') return true;
+        if (s.size() == 255) return false;
+        s.push_back(c);
+    }
+    return false;
+}
+
+}  // namespace
+
+std::string exr_header_problem(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    const std::streamoff file_size = in.tellg();
+    unsigned char version[8] = {};
+    if (!in || !in.seekg(0).read(reinterpret_cast<char*>(version), 8)) return {};
+    const bool multipart = (version[5] & 0x10) != 0;  // bit 12 of the version field
+    for (;;) {  // headers: one, or (multi-part) several and then an empty one
+        bool empty = true;
+        for (std::string name, type;;) {
+            if (!read_exr_name(in, name)) return {};
+            if (name.empty()) break;
+            empty = false;
+            unsigned char b[4];
+            if (!read_exr_name(in, type) || !in.read(reinterpret_cast<char*>(b), 4)) return {};
+            const int64_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 |
+                                         uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+            if (type == "chlist") {  // channels (a name and 16 bytes) up to an empty name
+                for (std::string channel; read_exr_name(in, channel) && !channel.empty();)
+                    in.seekg(16, std::ios::cur);
+                if (!in) return {};
+                continue;
+            }
+            const int64_t fixed = fixed_attribute_size(type);
+            const std::streamoff left = file_size - in.tellg();
+            if (fixed < 0 && (size < 0 || size > left))
+                return fmt::format(
+                    "its header attribute \"{}\" declares {} bytes, and the file "
+                    "holds {} more",
+                    name, size, left);
+            in.seekg(fixed < 0 ? size : fixed, std::ios::cur);
+        }
+        if (!multipart || empty) return {};
+    }
+}
+
+}  // namespace detail
+
+namespace {
+
 // An EXR file with R, G and B channels of half or float values, read through OpenEXR as
 // OpenImageIO would read it (its data window, channels by name), so that an EXR texture or
 // environment map does not load OpenImageIO (~0.4 s). nullopt for any other file (not an EXR,
@@ -352,6 +441,8 @@ std::optional<std::vector<float>> read_rgb_exr(const std::string& path, int& wid
     if (!std::ifstream(path, std::ios::binary).read(magic, 4) ||
         std::string(magic, 4) != "\x76\x2f\x31\x01")
         return std::nullopt;
+    if (const std::string problem = detail::exr_header_problem(path); !problem.empty())
+        throw SceneError(fmt::format("cannot read image \"{}\": {}", path, problem));
     std::unique_ptr<Imf::InputFile> file;
     try {
         file = std::make_unique<Imf::InputFile>(path.c_str());
@@ -750,6 +841,8 @@ Cube read_exr_cube(const std::string& path) {
         throw SceneError(fmt::format("cannot read transient EXR \"{}\": {}", path, problem));
     Cube cube;
     try {
+        if (const std::string problem = detail::exr_header_problem(path); !problem.empty())
+            throw std::runtime_error(problem);
         Imf::MultiPartInputFile file(path.c_str());
         const int parts = file.parts();
         int frames_part = -1, depth_part = -1, legacy_bins = 0;

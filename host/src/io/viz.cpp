@@ -139,6 +139,7 @@ bool starts_with(const std::string& s, const char* prefix) { return s.rfind(pref
 // not mark it as one (a cube, a steady image: read_exr_cube then names the problem), or is not
 // a single-part EXR that OpenEXR opens (read_exr_cube reports that too).
 std::optional<io::Cube> read_streak(const std::string& path) {
+    if (!io::detail::exr_header_problem(path).empty()) return std::nullopt;  // read_exr_cube says
     std::unique_ptr<Imf::InputFile> file;
     try {
         file = std::make_unique<Imf::InputFile>(path.c_str());
