@@ -131,7 +131,7 @@ void Scene::check_media_precision() {
             continue;
         }
         place(s->exterior(), scene_reach);
-        place(s->interior(), reach_of(bounds_of(*s)));
+        if (s->interior()) place(s->interior(), reach_of(bounds_of(*s)));  // (a mesh's walk)
     }
     has_media_ = !reach.empty();
     for (const auto& [m, r] : reach) {
