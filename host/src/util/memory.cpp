@@ -30,12 +30,16 @@ std::optional<double> parse_cgroup_limit(const std::string& text) {
 }  // namespace detail
 
 namespace {
-std::optional<double> read_limit_file(const std::string& path) {
+// A file's whole text; empty when it cannot be read.
+std::string read_text(const std::string& path) {
     std::ifstream file(path);
-    if (!file) return std::nullopt;
     std::ostringstream text;
-    text << file.rdbuf();
-    return detail::parse_cgroup_limit(text.str());
+    if (file) text << file.rdbuf();
+    return text.str();
+}
+
+void keep_smallest(std::optional<double>& smallest, std::optional<double> limit) {
+    if (limit) smallest = smallest ? std::min(*smallest, *limit) : *limit;
 }
 
 // The smallest limit in FILE of folder BASE + PATH and each of its ancestors up to BASE.
@@ -43,8 +47,7 @@ std::optional<double> smallest_up_the_tree(const std::string& base, std::string 
                                            const char* file) {
     std::optional<double> smallest;
     for (;;) {
-        if (const std::optional<double> limit = read_limit_file(base + path + "/" + file))
-            smallest = smallest ? std::min(*smallest, *limit) : *limit;
+        keep_smallest(smallest, detail::parse_cgroup_limit(read_text(base + path + "/" + file)));
         if (path.empty() || path == "/") return smallest;
         path = path.substr(0, path.find_last_of('/'));
     }
@@ -55,20 +58,19 @@ namespace detail {
 std::optional<double> cgroup_memory_limit(const std::string& proc_self_cgroup,
                                           const std::string& root) {
     std::optional<double> smallest;
-    const auto take = [&](std::optional<double> limit) {
-        if (limit) smallest = smallest ? std::min(*smallest, *limit) : *limit;
-    };
     const bool unified = std::ifstream(root + "/cgroup.controllers").good();
     std::istringstream lines(proc_self_cgroup);
     for (std::string line; std::getline(lines, line);) {  // "id:controllers:path"
         const size_t a = line.find(':'), b = line.find(':', a + 1);
         if (a == std::string::npos || b == std::string::npos) continue;
         const std::string controllers = line.substr(a + 1, b - a - 1), path = line.substr(b + 1);
-        if (controllers.empty() && unified) take(smallest_up_the_tree(root, path, "memory.max"));
+        if (controllers.empty() && unified)
+            keep_smallest(smallest, smallest_up_the_tree(root, path, "memory.max"));
         std::istringstream names(controllers);
         for (std::string name; std::getline(names, name, ',');)
             if (name == "memory")
-                take(smallest_up_the_tree(root + "/memory", path, "memory.limit_in_bytes"));
+                keep_smallest(smallest, smallest_up_the_tree(root + "/memory", path,
+                                                             "memory.limit_in_bytes"));
     }
     return smallest;
 }
@@ -77,14 +79,10 @@ std::optional<double> cgroup_memory_limit(const std::string& proc_self_cgroup,
 double usable_memory_bytes() {
     // A control group's limit is what the OOM killer enforces. v1 reports "no limit" as a huge
     // count, which the minimum with the physical memory ignores.
-    double bytes = physical_memory_bytes();
-    std::ifstream self("/proc/self/cgroup");
-    std::ostringstream text;
-    text << self.rdbuf();
-    if (const std::optional<double> limit =
-            detail::cgroup_memory_limit(text.str(), "/sys/fs/cgroup"))
-        bytes = bytes > 0 ? std::min(bytes, *limit) : *limit;
-    return bytes;
+    std::optional<double> bytes =
+        detail::cgroup_memory_limit(read_text("/proc/self/cgroup"), "/sys/fs/cgroup");
+    if (const double ram = physical_memory_bytes(); ram > 0) keep_smallest(bytes, ram);
+    return bytes.value_or(0.0);
 }
 
 std::string memory_shortfall(double bytes, const std::string& what) {
@@ -92,8 +90,9 @@ std::string memory_shortfall(double bytes, const std::string& what) {
     const double ram = physical_memory_bytes(), usable = usable_memory_bytes();
     if (!(usable > 0) || !(bytes > 0.75 * usable)) return {};
     const double gib = double(1 << 30);
-    const std::string whose =
-        usable < ram ? "this process's memory limit (control group)" : "this machine's memory";
+    const std::string whose = ram > 0 && usable >= ram
+                                  ? "this machine's memory"
+                                  : "this process's memory limit (control group)";
     return fmt::format("{} would need {:.1f} GiB, more than 3/4 of {}, {:.1f} GiB", what,
                        bytes / gib, whose, usable / gib);
 }
