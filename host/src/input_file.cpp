@@ -22,7 +22,11 @@ std::string open_error(int error) {
 int open_regular_file(const std::string& path, uint64_t& size, std::string& problem) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
-        problem = open_error(errno);
+        const int error = errno;
+        struct stat link {};
+        problem = error == ENOENT && ::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode)
+                      ? "it is a symbolic link to a file that does not exist"
+                      : open_error(error);
         return -1;
     }
     struct stat st {};

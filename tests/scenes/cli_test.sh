@@ -192,7 +192,14 @@ missing_scene)
   expect_exit 2 'does not exist' -- "$femto" render nothere.xml -q;;
 missing_mesh)
   printf '<scene version="3.0.0">\n<sensor type="perspective"/>\n<shape type="obj">\n<string name="filename" value="gone.obj"/>\n</shape>\n</scene>\n' > m.xml
-  expect_exit 2 'm\.xml:4:1: .*gone\.obj' -- "$femto" render m.xml -o out/m -q;;
+  expect_exit 2 'm\.xml:4:1: .*gone\.obj' -- "$femto" render m.xml -o out/m -q
+  # A link that cannot be followed is not "not found": the message says why it cannot be read.
+  ln -s loop.obj loop.obj
+  ln -s nowhere.obj dangling.obj
+  sed 's/gone\.obj/loop.obj/' m.xml > loop.xml
+  expect_exit 2 'loop\.xml:4:1: cannot open "loop\.obj": Too many levels of symbolic links' -- "$femto" render loop.xml -o out/m -q
+  sed 's/gone\.obj/dangling.obj/' m.xml > dangling.xml
+  expect_exit 2 'dangling\.xml:4:1: cannot open "dangling\.obj": it is a symbolic link to a file that does not exist' -- "$femto" render dangling.xml -o out/m -q;;
 unwritable_output)
   touch afile
   expect_exit 2 'cannot create the output folder' -- "$femto" render "$scene" -o afile/sub/x -q

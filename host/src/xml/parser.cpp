@@ -391,6 +391,16 @@ XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::
     return scene;
 }
 
+// Whether `p` names a directory entry. An entry that cannot be followed (a symbolic link in a
+// loop or to nowhere, a folder on the way that cannot be read) counts as found, so that opening
+// it reports why, instead of "not found".
+bool entry_exists(const fs::path& p) {
+    std::error_code ec;
+    const fs::file_status st = fs::symlink_status(p, ec);
+    if (ec) return ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory;
+    return st.type() != fs::file_type::not_found;
+}
+
 }  // namespace
 
 FileSearch find_file(const XmlNode& node, const std::string& name,
@@ -399,8 +409,7 @@ FileSearch find_file(const XmlNode& node, const std::string& name,
     const fs::path p(name);
     if (p.is_absolute()) {
         out.path = name;
-        std::error_code ec;
-        out.found = fs::exists(p, ec);
+        out.found = entry_exists(p);
         return out;
     }
     std::vector<std::string> dirs = search_dirs;
@@ -410,8 +419,7 @@ FileSearch find_file(const XmlNode& node, const std::string& name,
     for (const auto& dir : dirs) {
         const fs::path candidate = (fs::path(dir) / p).lexically_normal();
         out.searched.push_back(dir);
-        std::error_code ec;
-        if (fs::exists(candidate, ec)) {
+        if (entry_exists(candidate)) {
             out.path = candidate.string();
             out.found = true;
             return out;
