@@ -481,115 +481,97 @@ uint64_t trace_light_paths(const Scene& scene, uint64_t seed, uint32_t s0, uint6
     return taken;
 }
 
-}  // namespace
+// How a render's samples split into passes, and the temporal filter's pilot.
+struct PassPlan {
+    uint32_t spp = 0;             // samples per pixel of the whole image
+    uint32_t pilot_spp = 0;       // the temporal filter's pilot (0: none)
+    bool pilot_in_image = false;  // the pilot is the image's first samples
+    uint32_t first_spp = 0;       // samples before the passes (the pilot, when in the image)
+    uint32_t pass_spp = 1;
+    uint32_t passes = 0;
 
-RenderStats render(Scene& scene, const RenderOptions& options) {
-    const Sensor& sensor = scene.sensor();
-    Film& film = sensor.film();
-    const Sampler& prototype = sensor.sampler();
-    const Integrator& integrator = scene.integrator();
-    const uint32_t spp = options.spp ? options.spp : prototype.sample_count();
-    if (spp == 0) throw SceneError("the number of samples per pixel must be positive");
-    if (options.threads < 0) throw SceneError("the thread count must be positive (0 = all cores)");
-
-    std::unique_ptr<tbb::global_control> limit;
-    if (options.threads > 0)
-        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                      size_t(options.threads));
-    enable_flush_to_zero();
-    scene.integrator().preprocess(scene);
-    const bool from_lights = integrator.source() == SampleSource::Light;
-    const bool splatting = from_lights || integrator.splats();
-    if (splatting) film.prepare_splats(from_lights);
-    if (const std::vector<std::string> aovs = integrator.aov_names(); !aovs.empty()) {
-        if (splatting)
-            throw SceneError(integrator.location(),
-                             integrator.type_name() +
-                                 " declares AOV channels but splats: AOVs are per camera sample");
-        film.prepare_aovs(aovs, integrator);
+    // Samples [s0, s1) of every pixel that pass `pass` takes.
+    std::pair<uint32_t, uint32_t> range(uint32_t pass) const {
+        const uint32_t s0 = uint32_t(first_spp + uint64_t(pass) * pass_spp);
+        return {s0, uint32_t(std::min<uint64_t>(spp, uint64_t(s0) + pass_spp))};
     }
+};
 
-    const int W = film.width(), H = film.height();
-    const int tile = tile_size_for(film);
-    const auto by_colour = tiles_by_colour(W, H, tile);
-    if (film.rfilter().radius() > kTileSize / 2)
-        throw SceneError(
-            film.rfilter().location(),
-            fmt::format("the reconstruction filter's radius ({} px) is larger than femto "
-                        "supports ({} px)",
-                        film.rfilter().radius(), kTileSize / 2));
-
-    // Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
-    // At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp; camera
-    // integrators that splat keep a pass's splats in memory until its end, so theirs take at
-    // most 65,536 (BDPT's splats of a pass: ~10 MB on the Cornell box, which a larger pass
-    // would merge from beyond the cache: 256x256 at 4x this ran 7-10 % slower), and on films
-    // of more pixels than that, one sample per pixel, merged in groups of tiles. A
-    // distributed render runs pass p in process p % ranks, with about 16 passes per process.
-    // A pass gives each pixel at least kMinPassSpp samples where every process still gets a
-    // pass: a time-resolved film's merge updates a cache line of its cube per (pixel, bin) it
-    // received, and a pixel's samples in one pass share them (the Cornell box: 2.09 lines per
-    // sample at 2 spp per pass, 1.63 at 8; bench/README.md).
-    const uint64_t pixels = uint64_t(W) * uint64_t(H);
-    const uint32_t ranks = options.group ? uint32_t(options.group->size()) : 1;
-    const uint32_t rank = options.group ? uint32_t(options.group->rank()) : 0;
-    // A temporal filter's pilot: the image's first samples when the film can keep them (not
-    // for integrators that splat or fix their samples per pass), else a pass of its own.
-    // A tile keeps its pilot samples (40 bytes and 32 per contribution: ~230 bytes at 6
-    // contributions) until its pilot is done: at most kMaxKeptPilotSamples (a 32x32 tile of
-    // 64 spp, the kernel's default; ~15 MiB).
-    const uint32_t pilot_spp = film.pilot_samples(), pilot_of_image = std::min(pilot_spp, spp);
+// Passes: small enough for Ctrl-C and progressive films, large enough to amortise merges.
+// At most ~4M camera samples per pass keeps Ctrl-C responsive at any spp; camera
+// integrators that splat keep a pass's splats in memory until its end, so theirs take at
+// most 65,536 (BDPT's splats of a pass: ~10 MB on the Cornell box, which a larger pass
+// would merge from beyond the cache: 256x256 at 4x this ran 7-10 % slower), and on films
+// of more pixels than that, one sample per pixel, merged in groups of tiles. A
+// distributed render runs pass p in process p % ranks, with about 16 passes per process.
+// A pass gives each pixel at least kMinPassSpp samples where every process still gets a
+// pass: a time-resolved film's merge updates a cache line of its cube per (pixel, bin) it
+// received, and a pixel's samples in one pass share them (the Cornell box: 2.09 lines per
+// sample at 2 spp per pass, 1.63 at 8; bench/README.md).
+// A temporal filter's pilot: the image's first samples when the film can keep them (not
+// for integrators that splat or fix their samples per pass), else a pass of its own.
+// A tile keeps its pilot samples (40 bytes and 32 per contribution: ~230 bytes at 6
+// contributions) until its pilot is done: at most kMaxKeptPilotSamples (a 32x32 tile of
+// 64 spp, the kernel's default; ~15 MiB).
+PassPlan plan_passes(const Film& film, const Integrator& integrator, uint32_t spp, int tile,
+                     uint32_t ranks, bool splatting, bool from_lights) {
+    PassPlan plan;
+    plan.spp = spp;
+    plan.pilot_spp = film.pilot_samples();
+    const uint32_t pilot_of_image = std::min(plan.pilot_spp, spp);
     const bool pilot_fits =
         uint64_t(tile) * uint64_t(tile) * pilot_of_image <= kMaxKeptPilotSamples;
-    const bool pilot_can_be_image =
-        pilot_spp > 0 && !splatting && integrator.samples_per_pass() == 0 && film.pilot_in_image();
-    const bool pilot_in_image = pilot_can_be_image && pilot_fits;
+    const bool pilot_can_be_image = plan.pilot_spp > 0 && !splatting &&
+                                    integrator.samples_per_pass() == 0 && film.pilot_in_image();
+    plan.pilot_in_image = pilot_can_be_image && pilot_fits;
     if (pilot_can_be_image && !pilot_fits)
         log_note(SourceLocation{},
                  fmt::format("the temporal filter's pilot of {} spp is too large to keep in the "
                              "image ({}x{} pixel tiles; at most {} samples per tile): it runs as "
                              "a separate pass",
                              pilot_of_image, tile, tile, kMaxKeptPilotSamples));
-    const uint32_t first_spp = pilot_in_image ? pilot_of_image : 0;
+    plan.first_spp = plan.pilot_in_image ? pilot_of_image : 0;
+    const uint64_t pixels = uint64_t(film.width()) * uint64_t(film.height());
     const uint64_t max_pass_samples = uint64_t(1) << (splatting && !from_lights ? 16 : 22);
-    const uint64_t passes_wanted = uint64_t(16) * ranks, image_spp = spp - first_spp;
+    const uint64_t passes_wanted = uint64_t(16) * ranks, image_spp = spp - plan.first_spp;
     const uint64_t least_spp = std::min<uint64_t>(kMinPassSpp, image_spp / ranks);
-    const uint32_t pass_spp =
+    plan.pass_spp =
         integrator.samples_per_pass() > 0
             ? integrator.samples_per_pass()
             : uint32_t(std::max<uint64_t>(
                   1, std::min<uint64_t>(
                          std::max((image_spp + passes_wanted - 1) / passes_wanted, least_spp),
                          max_pass_samples / pixels)));
-    const uint32_t passes = uint32_t((image_spp + pass_spp - 1) / pass_spp);
-    auto pass_range = [&](uint32_t pass) {
-        const uint32_t s0 = uint32_t(first_spp + uint64_t(pass) * pass_spp);
-        return std::pair<uint32_t, uint32_t>(
-            s0, uint32_t(std::min<uint64_t>(spp, uint64_t(s0) + pass_spp)));
-    };
-    // In a distributed render, a stop request ends the round of passes (every process
-    // finishes its pass, so that the image holds whole passes).
-    const std::atomic<bool>* pass_stop = options.group ? nullptr : options.stop;
-    const PixelCounts counts = pixel_counts(scene, spp, splatting);
-    // Camera rays need their differentials only for materials that read the footprint.
-    const bool differentials = any_material(scene, &Bsdf::uses_footprint);
-    // What this process's passes take, all rows.
-    uint64_t my_samples = 0;
-    for (uint32_t pass = rank; pass < passes; pass += ranks) {
-        const auto [s0, s1] = pass_range(pass);
-        my_samples += counts.count.empty() ? pixels * (s1 - s0) : counts.taken(s0, s1);
-    }
-    const uint64_t pilot_samples =
-        pilot_in_image ? (counts.count.empty() ? pixels * first_spp : counts.taken(0, first_spp))
-                       : pixels * pilot_spp;
-    Progress progress(options.progress, my_samples + pilot_samples, options.progress_lines);
-    tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers(
-        [&] { return prototype.clone(); });
-    tbb::enumerable_thread_specific<ContributionList> lists;
-    SplatMerger merger(W, H, tile);
+    plan.passes = uint32_t((image_spp + plan.pass_spp - 1) / plan.pass_spp);
+    return plan;
+}
 
-    // Camera samples [s0, s1) of every pixel, the tiles in TileSchedule's order; returns the
-    // share of the pass's samples taken (1 unless stopped).
+// Runs a render's passes over the film: camera passes tile by tile, or light passes in
+// chunks of light paths, with their splats merged in a fixed order.
+class PassRunner {
+public:
+    PassRunner(const Scene& scene, const PixelCounts& counts, bool differentials, bool splatting,
+               bool from_lights, const std::atomic<bool>* pass_stop, Progress& progress, int tile)
+        : scene_(scene),
+          film_(scene.sensor().film()),
+          counts_(counts),
+          differentials_(differentials),
+          splatting_(splatting),
+          from_lights_(from_lights),
+          pass_stop_(pass_stop),
+          progress_(progress),
+          samplers_([&scene] { return scene.sensor().sampler().clone(); }),
+          merger_(film_.width(), film_.height(), tile),
+          schedule_(tiles_by_colour(film_.width(), film_.height(), tile), film_.width(),
+                    film_.height(), tile, film_.filter_border()),
+          chunk_splats_(from_lights ? kWaveChunks : 0) {}
+
+    // Samples [s0, s1) of every pixel; returns the share of them taken (1 unless stopped).
+    double run(uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
+        return from_lights_ ? light_pass(seed, s0, s1, pilot) : camera_pass(seed, s0, s1, pilot);
+    }
+
+private:
     // An integrator that splats: each tile keeps its splats until the last tile of its group is
     // done, and they merge then, in tile order; a group is a run of consecutive tiles of at
     // most kSplatGroupSamples camera samples (or one tile), the whole pass unless the film
@@ -601,56 +583,53 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     // normalised by each pixel's own camera samples, so a pass that some tiles had finished
     // and others not would leave tile-sized steps in the image's brightness. A stop takes
     // effect at the pass's end.
-    constexpr uint64_t kSplatGroupSamples = uint64_t(1) << 16;
-    std::vector<SplatList> group_splats;
-    TileSchedule schedule(by_colour, W, H, tile, film.filter_border());
-    auto run_camera_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
+    double camera_pass(uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
         std::atomic<uint64_t> taken{0};
+        const int W = film_.width();
         uint64_t expected = 0;  // in the film's active rows
-        for (const Tile& t : schedule.tiles()) expected += counts.in(t, W, s0, s1, &film);
-        const std::atomic<bool>* stop = splatting && !pilot ? nullptr : pass_stop;
+        for (const Tile& t : schedule_.tiles()) expected += counts_.in(t, W, s0, s1, &film_);
+        const std::atomic<bool>* stop = splatting_ && !pilot ? nullptr : pass_stop_;
         auto render_one = [&](const Tile& t, SplatList* splats) {
             enable_flush_to_zero();
-            RenderedTile r = render_tile(scene, t, seed, s0, s1, counts, differentials,
-                                         *samplers.local(), lists.local(), splats, stop);
+            RenderedTile r = render_tile(scene_, t, seed, s0, s1, counts_, differentials_,
+                                         *samplers_.local(), lists_.local(), splats, stop);
             taken += r.taken;
-            progress.advance(counts.in(t, W, s0, s1, nullptr));
+            progress_.advance(counts_.in(t, W, s0, s1, nullptr));
             return std::move(r.block);
         };
-        const std::vector<Tile>& tiles = schedule.tiles();
-        if (!splatting) {
-            schedule.run(film, [&](const Tile& t) { return render_one(t, nullptr); });
+        const std::vector<Tile>& tiles = schedule_.tiles();
+        if (!splatting_) {
+            schedule_.run(film_, [&](const Tile& t) { return render_one(t, nullptr); });
         } else {
             for (size_t begin = 0, end; begin < tiles.size(); begin = end) {
-                uint64_t samples = counts.in(tiles[begin], W, s0, s1, nullptr);
+                uint64_t samples = counts_.in(tiles[begin], W, s0, s1, nullptr);
                 for (end = begin + 1; end < tiles.size(); ++end) {
-                    const uint64_t more = counts.in(tiles[end], W, s0, s1, nullptr);
+                    const uint64_t more = counts_.in(tiles[end], W, s0, s1, nullptr);
                     if (samples + more > kSplatGroupSamples) break;
                     samples += more;
                 }
-                if (group_splats.size() < end - begin) group_splats.resize(end - begin);
-                schedule.run(
-                    film,
+                if (group_splats_.size() < end - begin) group_splats_.resize(end - begin);
+                schedule_.run(
+                    film_,
                     [&](const Tile& t) {
-                        SplatList& splats = group_splats[size_t(&t - tiles.data()) - begin];
+                        SplatList& splats = group_splats_[size_t(&t - tiles.data()) - begin];
                         splats.clear();
                         return render_one(t, &splats);
                     },
                     begin, end);
                 std::vector<const SplatList*> in_order;
-                for (size_t i = 0; i < end - begin; ++i) in_order.push_back(&group_splats[i]);
-                merger.merge(film, in_order);
+                for (size_t i = 0; i < end - begin; ++i) in_order.push_back(&group_splats_[i]);
+                merger_.merge(film_, in_order);
             }
         }
         // (A pass in which no pixel has samples left, adaptive sampling's, is complete.)
         return expected == 0 ? 1.0 : double(taken.load()) / double(expected);
-    };
+    }
 
     // Light paths of samples [s0, s1): pixels x (s1 - s0) of them, in waves of fixed chunks
     // whose splats merge in chunk order after each wave (so memory holds one wave's splats).
-    constexpr uint64_t kChunk = 4096, kWaveChunks = 64;
-    std::vector<SplatList> chunk_splats(from_lights ? kWaveChunks : 0);
-    auto run_light_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
+    double light_pass(uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
+        const uint64_t pixels = uint64_t(film_.width()) * uint64_t(film_.height());
         const uint64_t total = pixels * (s1 - s0);
         std::atomic<uint64_t> taken{0};
         for (uint64_t first = 0; first < total; first += kChunk * kWaveChunks) {
@@ -658,69 +637,104 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
             tbb::parallel_for(uint64_t(0), chunks, [&](uint64_t c) {
                 enable_flush_to_zero();
                 const uint64_t a = first + c * kChunk, b = std::min(total, a + kChunk);
-                chunk_splats[c].clear();
-                taken += trace_light_paths(scene, seed, s0, pixels, a, b, *samplers.local(),
-                                           chunk_splats[c], pass_stop);
-                progress.advance(b - a);
+                chunk_splats_[c].clear();
+                taken += trace_light_paths(scene_, seed, s0, pixels, a, b, *samplers_.local(),
+                                           chunk_splats_[c], pass_stop_);
+                progress_.advance(b - a);
             });
             std::vector<const SplatList*> in_order;
-            for (uint64_t c = 0; c < chunks; ++c) in_order.push_back(&chunk_splats[c]);
-            merger.merge(film, in_order);
-            if (pass_stop && pass_stop->load()) break;
+            for (uint64_t c = 0; c < chunks; ++c) in_order.push_back(&chunk_splats_[c]);
+            merger_.merge(film_, in_order);
+            if (pass_stop_ && pass_stop_->load()) break;
         }
         // Normalise the pass's splats as as many camera samples per pixel would be (a pilot
         // pass only collects arrival times).
-        if (!pilot) film.add_splat_weight(double(taken.load()) / double(pixels));
+        if (!pilot) film_.add_splat_weight(double(taken.load()) / double(pixels));
         return double(taken.load()) / double(std::max<uint64_t>(1, total));
-    };
-    auto run_pass = [&](uint64_t seed, uint32_t s0, uint32_t s1, bool pilot) {
-        return from_lights ? run_light_pass(seed, s0, s1, pilot)
-                           : run_camera_pass(seed, s0, s1, pilot);
-    };
+    }
 
-    const uint64_t rays_before = scene.rays_traced();
-    const auto start = Clock::now();
-    RenderStats stats;
-    stats.spp_requested = spp;
-    auto stopped = [&] { return options.stop && options.stop->load(); };
-    if (pilot_in_image) {
-        // The image's samples [0, first_spp), which every process traces (each needs the
-        // bandwidths) and only rank 0 keeps in its image.
+    static constexpr uint64_t kSplatGroupSamples = uint64_t(1) << 16;
+    static constexpr uint64_t kChunk = 4096, kWaveChunks = 64;
+
+    const Scene& scene_;
+    Film& film_;
+    const PixelCounts& counts_;
+    const bool differentials_, splatting_, from_lights_;
+    const std::atomic<bool>* pass_stop_;
+    Progress& progress_;
+    tbb::enumerable_thread_specific<std::unique_ptr<Sampler>> samplers_;
+    tbb::enumerable_thread_specific<ContributionList> lists_;
+    SplatMerger merger_;
+    TileSchedule schedule_;
+    std::vector<SplatList> group_splats_;
+    std::vector<SplatList> chunk_splats_;
+};
+
+// Prepares the film for the integrator (splats, AOV channels) and checks what the renderer
+// supports. Returns whether the integrator splats.
+bool prepare_film(Film& film, const Integrator& integrator) {
+    const bool from_lights = integrator.source() == SampleSource::Light;
+    const bool splatting = from_lights || integrator.splats();
+    if (splatting) film.prepare_splats(from_lights);
+    if (const std::vector<std::string> aovs = integrator.aov_names(); !aovs.empty()) {
+        if (splatting)
+            throw SceneError(integrator.location(),
+                             integrator.type_name() +
+                                 " declares AOV channels but splats: AOVs are per camera sample");
+        film.prepare_aovs(aovs, integrator);
+    }
+    if (film.rfilter().radius() > kTileSize / 2)
+        throw SceneError(
+            film.rfilter().location(),
+            fmt::format("the reconstruction filter's radius ({} px) is larger than femto "
+                        "supports ({} px)",
+                        film.rfilter().radius(), kTileSize / 2));
+    return splatting;
+}
+
+// The camera samples the process's passes take (and its pilot's), for the progress bar.
+uint64_t samples_to_take(const PassPlan& plan, const PixelCounts& counts, uint64_t pixels,
+                         uint32_t rank, uint32_t ranks) {
+    uint64_t samples = 0;
+    for (uint32_t pass = rank; pass < plan.passes; pass += ranks) {
+        const auto [s0, s1] = plan.range(pass);
+        samples += counts.count.empty() ? pixels * (s1 - s0) : counts.taken(s0, s1);
+    }
+    if (!plan.pilot_in_image) return samples + pixels * plan.pilot_spp;
+    return samples +
+           (counts.count.empty() ? pixels * plan.first_spp : counts.taken(0, plan.first_spp));
+}
+
+// The temporal filter's pilot, before the passes: the image's first samples [0, first_spp),
+// which every process traces (each needs the bandwidths) and only rank 0 keeps in its image,
+// or a pass of its own whose random streams are independent of the image's (another seed).
+void run_pilot(Scene& scene, const RenderOptions& options, const PassPlan& plan, PassRunner& runner,
+               uint32_t rank, RenderStats& stats, Clock::time_point start) {
+    Film& film = scene.sensor().film();
+    if (plan.pilot_in_image) {
         film.begin_pilot(true, rank == 0);
         scene.refresh_time_window();
-        scene.integrator().begin_pass(scene, PassInfo{0, options.seed, 0, first_spp, rank != 0});
-        const double share = run_pass(options.seed, 0, first_spp, false);
+        scene.integrator().begin_pass(scene,
+                                      PassInfo{0, options.seed, 0, plan.first_spp, rank != 0});
+        const double share = runner.run(options.seed, 0, plan.first_spp, false);
         film.end_pilot();
-        stats.spp_done = share >= 1 ? first_spp : uint32_t(double(first_spp) * share);
-        stats.pilot_image_spp = first_spp;
-    } else if (pilot_spp > 0) {
-        // The pilot's random streams are independent of the image's (another seed).
+        stats.spp_done = share >= 1 ? plan.first_spp : uint32_t(double(plan.first_spp) * share);
+        stats.pilot_image_spp = plan.first_spp;
+    } else if (plan.pilot_spp > 0) {
         const uint64_t pilot_seed = options.seed ^ 0x9E3779B97F4A7C15ull;
         film.begin_pilot(false, false);
         scene.refresh_time_window();
-        scene.integrator().begin_pass(scene, PassInfo{0, pilot_seed, 0, pilot_spp, true});
-        run_pass(pilot_seed, 0, pilot_spp, true);
+        scene.integrator().begin_pass(scene, PassInfo{0, pilot_seed, 0, plan.pilot_spp, true});
+        runner.run(pilot_seed, 0, plan.pilot_spp, true);
         film.end_pilot();  // a stopped pilot still leaves the film a usable (rougher) estimate
         stats.pilot_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     }
-    for (uint32_t round = 0; uint64_t(round) * ranks < passes; ++round) {
-        const uint32_t pass = round * ranks + rank;
-        if (pass < passes && !(pass_stop && stopped())) {
-            const auto [s0, s1] = pass_range(pass);
-            film.start_pass(pass);
-            scene.refresh_time_window();
-            scene.integrator().begin_pass(scene, PassInfo{pass, options.seed, s0, s1, false});
-            const double share = run_pass(options.seed, s0, s1, false);
-            // Stopped within the pass, some pixels have s1 samples and others s0: the mean.
-            stats.spp_done = share >= 1 ? s1 : s0 + uint32_t(double(s1 - s0) * share);
-        }
-        const uint64_t passes_done = std::min<uint64_t>(passes, uint64_t(round + 1) * ranks);
-        if (options.group) stats.spp_done = pass_range(uint32_t(passes_done - 1)).second;
-        progress.round_done(passes_done, passes);
-        if (options.group ? options.group->any(stopped()) : stopped()) break;
-    }
-    stats.interrupted = stats.spp_done < spp;  // only a stop request ends the loop early
-    progress.finish();
+}
+
+// What the render did, once its passes are over.
+void finish_stats(const Scene& scene, const PixelCounts& counts, uint64_t pixels,
+                  uint64_t rays_before, Clock::time_point start, RenderStats& stats) {
+    stats.interrupted = stats.spp_done < stats.spp_requested;  // only a stop ends it early
     stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.rays = scene.rays_traced() - rays_before;
     stats.camera_samples = pixels * stats.spp_done;
@@ -729,12 +743,71 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
         for (const uint32_t n : counts.count) stats.camera_samples += std::min(n, stats.spp_done);
         stats.adaptive = true;
     }
-    stats.rejected = film.rejected();
+    stats.rejected = scene.sensor().film().rejected();
     if (const RejectedContributions& r = stats.rejected; r.total() > 0)
         log_warning(
             fmt::format("the film refused {} contributions ({} NaN, {} infinite, {} "
                         "negative) and dropped the samples that carried them",
                         r.total(), r.nan, r.infinite, r.negative));
+}
+
+}  // namespace
+
+RenderStats render(Scene& scene, const RenderOptions& options) {
+    Film& film = scene.sensor().film();
+    const Integrator& integrator = scene.integrator();
+    const uint32_t spp = options.spp ? options.spp : scene.sensor().sampler().sample_count();
+    if (spp == 0) throw SceneError("the number of samples per pixel must be positive");
+    if (options.threads < 0) throw SceneError("the thread count must be positive (0 = all cores)");
+
+    std::unique_ptr<tbb::global_control> limit;
+    if (options.threads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      size_t(options.threads));
+    enable_flush_to_zero();
+    scene.integrator().preprocess(scene);
+    const bool from_lights = integrator.source() == SampleSource::Light;
+    const bool splatting = prepare_film(film, integrator);
+    const int tile = tile_size_for(film);
+    const uint64_t pixels = uint64_t(film.width()) * uint64_t(film.height());
+    const uint32_t ranks = options.group ? uint32_t(options.group->size()) : 1;
+    const uint32_t rank = options.group ? uint32_t(options.group->rank()) : 0;
+    const PassPlan plan = plan_passes(film, integrator, spp, tile, ranks, splatting, from_lights);
+    // In a distributed render, a stop request ends the round of passes (every process
+    // finishes its pass, so that the image holds whole passes).
+    const std::atomic<bool>* pass_stop = options.group ? nullptr : options.stop;
+    const PixelCounts counts = pixel_counts(scene, spp, splatting);
+    // Camera rays need their differentials only for materials that read the footprint.
+    const bool differentials = any_material(scene, &Bsdf::uses_footprint);
+    Progress progress(options.progress, samples_to_take(plan, counts, pixels, rank, ranks),
+                      options.progress_lines);
+    PassRunner runner(scene, counts, differentials, splatting, from_lights, pass_stop, progress,
+                      tile);
+
+    const uint64_t rays_before = scene.rays_traced();
+    const auto start = Clock::now();
+    RenderStats stats;
+    stats.spp_requested = spp;
+    auto stopped = [&] { return options.stop && options.stop->load(); };
+    run_pilot(scene, options, plan, runner, rank, stats, start);
+    for (uint32_t round = 0; uint64_t(round) * ranks < plan.passes; ++round) {
+        const uint32_t pass = round * ranks + rank;
+        if (pass < plan.passes && !(pass_stop && stopped())) {
+            const auto [s0, s1] = plan.range(pass);
+            film.start_pass(pass);
+            scene.refresh_time_window();
+            scene.integrator().begin_pass(scene, PassInfo{pass, options.seed, s0, s1, false});
+            const double share = runner.run(options.seed, s0, s1, false);
+            // Stopped within the pass, some pixels have s1 samples and others s0: the mean.
+            stats.spp_done = share >= 1 ? s1 : s0 + uint32_t(double(s1 - s0) * share);
+        }
+        const uint64_t passes_done = std::min<uint64_t>(plan.passes, uint64_t(round + 1) * ranks);
+        if (options.group) stats.spp_done = plan.range(uint32_t(passes_done - 1)).second;
+        progress.round_done(passes_done, plan.passes);
+        if (options.group ? options.group->any(stopped()) : stopped()) break;
+    }
+    progress.finish();
+    finish_stats(scene, counts, pixels, rays_before, start, stats);
     return stats;
 }
 
