@@ -19,6 +19,7 @@
 #include <limits>
 #include <thread>
 
+#include "femto/accumulator.h"
 #include "femto/film.h"
 #include "femto/image_io.h"
 #include "femto/memory.h"
@@ -144,6 +145,11 @@ public:
         return std::make_unique<StreakBlock>(*this, x0, y0, w, h);
     }
 
+    void start_pass(uint32_t pass) override {
+        pass_ = pass;
+        ++passes_started_;
+    }
+
     void merge(const FilmBlock& b) override {
         if (merge_pilot(b)) return;
         const auto& block = static_cast<const StreakBlock&>(b);
@@ -161,7 +167,13 @@ public:
                 sums_[dst] += in_sums;
                 const double* in = &block.data_[src * T3];
                 float* out = &data_[dst * T3];
-                for (size_t i = 0; i < T3; ++i) out[i] += float(in[i]);
+                if (passes_started_ <= kNearestRoundedPasses) {
+                    for (size_t i = 0; i < T3; ++i) out[i] += float(in[i]);
+                } else {
+                    for (size_t i = 0; i < T3; ++i)
+                        if (in[i] != 0.0)
+                            add_without_drift(out[i], in[i], hash_combine(pass_, dst * T3 + i));
+                }
             }
         }
     }
@@ -236,8 +248,11 @@ public:
     std::vector<int> rows_;         // sorted
     std::vector<int> slot_of_row_;  // per image row: index into rows_, or -1
     std::vector<char> active_;      // per image row: samples there reach a recorded row
-    std::vector<float> data_;       // [rows_][width][bins][3]
-    std::vector<PixelSums> sums_;   // [rows_][width]
+    // As the transient film: passes after the 64th add by add_without_drift().
+    static constexpr uint32_t kNearestRoundedPasses = 64;
+    uint32_t pass_ = 0, passes_started_ = 0;
+    std::vector<float> data_;      // [rows_][width][bins][3]
+    std::vector<PixelSums> sums_;  // [rows_][width]
 };
 
 StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h)
