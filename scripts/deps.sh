@@ -10,6 +10,7 @@ PACKAGES=(
   clang libclang-rt-14-dev
   libopenmpi-dev openmpi-bin
   python3 python3-numpy python3-scipy python3-matplotlib python3-skimage
+  ffmpeg  # optional for users (`femto viz frames --mp4`); here so that cli.viz_mp4 runs
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
