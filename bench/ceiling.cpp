@@ -272,10 +272,99 @@ struct Measure {
     double rays_per_second = 0, rays_per_sample = 0, over_raw = 0;
 };
 
+using namespace femto_bench;  // median(), now_utc(), cpu_model(), read_loadavg()
+
+// Rounds of Embree's raw incoherent rays, the minimal tracer's ladder and femto's `path`,
+// interleaved, each round's rates over that round's raw rate.
+std::vector<Measure> measure_rounds(femto::Scene& scene, const femto::bench::RawRays& raw,
+                                    const MinimalPathTracer& minimal, int rounds, int threads,
+                                    int res, int spp) {
+    const std::vector<Pieces> ladder = {{"minimal"},
+                                        {"minimal + sampler", true},
+                                        {"minimal + hit", false, true},
+                                        {"minimal + hit + light", false, true, true},
+                                        {"minimal + hit + bsdf", false, true, false, true},
+                                        {"minimal + all four", true, true, true, true}};
+    std::vector<Measure> measures;
+    for (int r = 0; r < rounds; ++r) {
+        const auto rate = raw.trace(femto::bench::RawRays::Kind::incoherent, threads, 1.0);
+        const double raw_rate = double(rate.rays) / rate.seconds;
+        measures.push_back({"raw incoherent", raw_rate, 0, 1.0});
+        for (const Pieces& pieces : ladder) {
+            const auto m = minimal.render(res, res, spp, uint64_t(r) + 1, pieces);
+            const double rps = double(m.rays) / m.seconds;
+            measures.push_back(
+                {pieces.name, rps, double(m.rays) / double(m.samples), rps / raw_rate});
+        }
+        femto::RenderOptions ro;
+        ro.threads = threads;
+        ro.seed = uint64_t(r) + 1;
+        const femto::RenderStats st = femto::render(scene, ro);
+        const double rps = double(st.rays) / st.seconds;
+        measures.push_back(
+            {"femto path", rps, double(st.rays) / double(st.camera_samples), rps / raw_rate});
+        fmt::print("round {} of {} done\n", r + 1, rounds);
+    }
+    return measures;
+}
+
+// Each variant's medians over the rounds, in the order the variants first appear.
+void print_medians(const std::vector<Measure>& measures) {
+    std::vector<std::string> variants;
+    for (const Measure& m : measures)
+        if (std::find(variants.begin(), variants.end(), m.variant) == variants.end())
+            variants.push_back(m.variant);
+    fmt::print("{:<24} {:>10} {:>12} {:>10}\n", "variant", "Mrays/s", "rays/sample", "over raw");
+    for (const std::string& v : variants) {
+        std::vector<double> rps, per_sample, over;
+        for (const Measure& m : measures)
+            if (m.variant == v) {
+                rps.push_back(m.rays_per_second);
+                per_sample.push_back(m.rays_per_sample);
+                over.push_back(m.over_raw);
+            }
+        fmt::print("{:<24} {:>10.2f} {:>12.3f} {:>10.3f}\n", v, median(rps) * 1e-6,
+                   median(per_sample), median(over));
+    }
+}
+
+// The minimal tracer must trace femto's paths (same camera rays, depths and shadow rays), or
+// its rate is not comparable: rays per camera sample agree within 3 % (about four standard
+// errors at 32x32 and 4 spp, the smoke test's size).
+void require_same_paths(const std::vector<Measure>& measures) {
+    std::vector<double> minimal_per_sample, femto_per_sample;
+    for (const Measure& m : measures) {
+        if (m.variant == "minimal") minimal_per_sample.push_back(m.rays_per_sample);
+        if (m.variant == "femto path") femto_per_sample.push_back(m.rays_per_sample);
+    }
+    const double a = median(minimal_per_sample), b = median(femto_per_sample);
+    if (!(std::abs(a - b) <= 0.03 * b))
+        throw std::runtime_error(fmt::format(
+            "the minimal tracer traced {:.3f} rays a camera sample and femto {:.3f}: they do "
+            "not trace the same paths",
+            a, b));
+}
+
+void write_csv(const std::string& out, const std::vector<Measure>& measures, int rounds,
+               int threads, int res, int spp) {
+    std::ofstream csv(out);
+    if (!csv) throw std::runtime_error("cannot write " + out);
+    csv << "# femto_bench_ceiling, " << now_utc() << ", " << cpu_model() << ", load "
+        << read_loadavg() << ", threads " << threads << ", " << res << "x" << res << ", " << spp
+        << " spp, build " << FEMTO_BENCH_BUILD << "\n";
+    csv << "round,variant,rays_per_s,rays_per_sample,over_raw\n";
+    const size_t per_round = measures.size() / size_t(rounds);
+    for (size_t i = 0; i < measures.size(); ++i) {
+        const Measure& m = measures[i];
+        csv << fmt::format("{},{},{:.0f},{:.3f},{:.4f}\n", i / per_round + 1, m.variant,
+                           m.rays_per_second, m.rays_per_sample, m.over_raw);
+    }
+    if (!csv.flush()) throw std::runtime_error("cannot write " + out);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    using namespace femto_bench;
     try {
         std::setvbuf(stdout, nullptr, _IOLBF, 0);
         int rounds = 7, threads = 1, spp = 8, res = 256;
@@ -302,78 +391,13 @@ int main(int argc, char** argv) {
             throw std::runtime_error(
                 "the scene's path integrator needs a max_depth and no roulette");
         const MinimalPathTracer minimal(*scene, int(path->max_depth()));
-        const std::vector<Pieces> ladder = {{"minimal"},
-                                            {"minimal + sampler", true},
-                                            {"minimal + hit", false, true},
-                                            {"minimal + hit + light", false, true, true},
-                                            {"minimal + hit + bsdf", false, true, false, true},
-                                            {"minimal + all four", true, true, true, true}};
-        std::vector<Measure> measures;
-        for (int r = 0; r < rounds; ++r) {
-            const auto rate = raw.trace(femto::bench::RawRays::Kind::incoherent, threads, 1.0);
-            const double raw_rate = double(rate.rays) / rate.seconds;
-            measures.push_back({"raw incoherent", raw_rate, 0, 1.0});
-            for (const Pieces& pieces : ladder) {
-                const auto m = minimal.render(res, res, spp, uint64_t(r) + 1, pieces);
-                const double rps = double(m.rays) / m.seconds;
-                measures.push_back(
-                    {pieces.name, rps, double(m.rays) / double(m.samples), rps / raw_rate});
-            }
-            femto::RenderOptions ro;
-            ro.threads = threads;
-            ro.seed = uint64_t(r) + 1;
-            const femto::RenderStats st = femto::render(*scene, ro);
-            const double rps = double(st.rays) / st.seconds;
-            measures.push_back(
-                {"femto path", rps, double(st.rays) / double(st.camera_samples), rps / raw_rate});
-            fmt::print("round {} of {} done\n", r + 1, rounds);
-        }
-        std::vector<std::string> variants;
-        for (const Measure& m : measures)
-            if (std::find(variants.begin(), variants.end(), m.variant) == variants.end())
-                variants.push_back(m.variant);
+        const std::vector<Measure> measures =
+            measure_rounds(*scene, raw, minimal, rounds, threads, res, spp);
         fmt::print("medians over {} rounds, {} thread(s), {}x{}, {} spp:\n", rounds, threads, res,
                    res, spp);
-        fmt::print("{:<24} {:>10} {:>12} {:>10}\n", "variant", "Mrays/s", "rays/sample",
-                   "over raw");
-        for (const std::string& v : variants) {
-            std::vector<double> rps, per_sample, over;
-            for (const Measure& m : measures)
-                if (m.variant == v) {
-                    rps.push_back(m.rays_per_second);
-                    per_sample.push_back(m.rays_per_sample);
-                    over.push_back(m.over_raw);
-                }
-            fmt::print("{:<24} {:>10.2f} {:>12.3f} {:>10.3f}\n", v, median(rps) * 1e-6,
-                       median(per_sample), median(over));
-        }
-        // The minimal tracer must trace femto's paths (same camera rays, depths and shadow rays),
-        // or its rate is not comparable: rays per camera sample agree within 3 % (about four
-        // standard errors at 32x32 and 4 spp, the smoke test's size).
-        std::vector<double> minimal_per_sample, femto_per_sample;
-        for (const Measure& m : measures) {
-            if (m.variant == "minimal") minimal_per_sample.push_back(m.rays_per_sample);
-            if (m.variant == "femto path") femto_per_sample.push_back(m.rays_per_sample);
-        }
-        const double a = median(minimal_per_sample), b = median(femto_per_sample);
-        if (!(std::abs(a - b) <= 0.03 * b))
-            throw std::runtime_error(fmt::format(
-                "the minimal tracer traced {:.3f} rays a camera sample and femto {:.3f}: they do "
-                "not trace the same paths",
-                a, b));
-        std::ofstream csv(out);
-        if (!csv) throw std::runtime_error("cannot write " + out);
-        csv << "# femto_bench_ceiling, " << now_utc() << ", " << cpu_model() << ", load "
-            << read_loadavg() << ", threads " << threads << ", " << res << "x" << res << ", " << spp
-            << " spp, build " << FEMTO_BENCH_BUILD << "\n";
-        csv << "round,variant,rays_per_s,rays_per_sample,over_raw\n";
-        const size_t per_round = measures.size() / size_t(rounds);
-        for (size_t i = 0; i < measures.size(); ++i) {
-            const Measure& m = measures[i];
-            csv << fmt::format("{},{},{:.0f},{:.3f},{:.4f}\n", i / per_round + 1, m.variant,
-                               m.rays_per_second, m.rays_per_sample, m.over_raw);
-        }
-        if (!csv.flush()) throw std::runtime_error("cannot write " + out);
+        print_medians(measures);
+        require_same_paths(measures);
+        write_csv(out, measures, rounds, threads, res, spp);
         fmt::print("wrote {}\n", out);
         return 0;
     } catch (const std::exception& e) {
