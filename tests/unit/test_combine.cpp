@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "femto/accumulator.h"
 #include "render/combine.h"
 
 namespace femto {
@@ -93,6 +94,31 @@ TEST(CombineAccumulators, CountsStayExactBeyondDoublePrecision) {
     procs[0].count = (uint64_t(1) << 53) + 1, procs[1].count = 1;
     combine(procs, 4096);
     EXPECT_EQ(procs[0].count, (uint64_t(1) << 53) + 2);
+}
+
+// add_without_drift(): adding 1 to a float total of 2^24 (a unit in the last place is 2 there)
+// is a tie that rounding to nearest (to even) loses every time. Stochastically rounded, 10^4
+// additions arrive on average: each rounds by -1 or +1 with equal chance, so the total ends
+// within 5 standard deviations (5 sqrt(10^4) = 500) of 2^24 + 10^4. The same keys give the
+// same bits; a value the float holds exactly is added exactly.
+TEST(AddWithoutDrift, AddendsBelowHalfAUnitArriveOnAverage) {
+    constexpr int kAdds = 10000;
+    const float start = std::ldexp(1.f, 24);
+    float nearest = start, total = start, again = start;
+    for (int i = 0; i < kAdds; ++i) {
+        nearest += 1.f;
+        add_without_drift(total, 1.0, uint64_t(i));
+        add_without_drift(again, 1.0, uint64_t(i));
+    }
+    EXPECT_EQ(nearest, start);
+    EXPECT_NEAR(double(total), double(start) + kAdds, 500.0);
+    EXPECT_EQ(total, again);
+    float exact = 0.25f;
+    add_without_drift(exact, 0.5, 7);
+    EXPECT_EQ(exact, 0.75f);
+    float zero = 0.f;
+    add_without_drift(zero, 1e-50, 7);  // below the smallest float: 0 or the smallest denormal
+    EXPECT_TRUE(zero == 0.f || zero == std::numeric_limits<float>::denorm_min());
 }
 
 }  // namespace

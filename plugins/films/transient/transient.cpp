@@ -371,6 +371,7 @@ public:
                 for (int c = 0; c < 3; ++c) cube_[at * 3 + c] += float(st.entries[e].rgb[c]);
                 if (variance_enabled_)
                     for (int c = 0; c < 3; ++c) sq_[at * 3 + c] += float(st.sq[e * 3 + c]);
+                if (count_enabled_) count_[at] += st.count[e];
             } else {
                 for (size_t c = 0; c < 3; ++c) {
                     const uint64_t key = hash_combine(pass_, at * 3 + c);
@@ -378,8 +379,11 @@ public:
                     if (variance_enabled_)
                         add_without_drift(sq_[at * 3 + c], st.sq[e * 3 + c], ~key);
                 }
+                // Whole counts are exact in float up to 2^24 contributions; beyond, they too
+                // would stop growing.
+                if (count_enabled_)
+                    add_without_drift(count_[at], st.count[e], ~hash_combine(pass_, at));
             }
-            if (count_enabled_) count_[at] += st.count[e];
         }
         st.clear();
         for (size_t local = 0; local < block_pixels; ++local) {
