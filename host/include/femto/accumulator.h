@@ -86,4 +86,30 @@ inline void add_without_drift(float& total, double value, uint64_t key) {
     total = u < p ? other : nearest;
 }
 
+/// How a film adds each pass's totals into its float arrays: rounded to nearest for its first
+/// kNearestPasses passes (at most 64 roundings, about 4e-6 of a total, and renders of that many
+/// passes keep their bits), by add_without_drift() after, keyed by the pass and the element.
+/// Only progressive integrators (one camera sample a pass) make more passes. A film keeps one,
+/// calls start() from Film::start_pass() and add() in merge().
+class PassTotals {
+public:
+    static constexpr uint32_t kNearestPasses = 64;
+
+    void start(uint32_t pass) {
+        pass_ = pass;
+        ++started_;
+    }
+    /// Adds `value` to `total`, element `element` of its array; `salt` tells apart arrays
+    /// whose elements share indices.
+    void add(float& total, double value, uint64_t element, uint64_t salt = 0) const {
+        if (started_ <= kNearestPasses)
+            total += float(value);
+        else
+            add_without_drift(total, value, hash_combine(pass_, element) ^ salt);
+    }
+
+private:
+    uint32_t pass_ = 0, started_ = 0;
+};
+
 }  // namespace femto

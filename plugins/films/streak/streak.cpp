@@ -145,10 +145,7 @@ public:
         return std::make_unique<StreakBlock>(*this, x0, y0, w, h);
     }
 
-    void start_pass(uint32_t pass) override {
-        pass_ = pass;
-        ++passes_started_;
-    }
+    void start_pass(uint32_t pass) override { totals_.start(pass); }
 
     void merge(const FilmBlock& b) override {
         if (merge_pilot(b)) return;
@@ -167,13 +164,7 @@ public:
                 sums_[dst] += in_sums;
                 const double* in = &block.data_[src * T3];
                 float* out = &data_[dst * T3];
-                if (passes_started_ <= kNearestRoundedPasses) {
-                    for (size_t i = 0; i < T3; ++i) out[i] += float(in[i]);
-                } else {
-                    for (size_t i = 0; i < T3; ++i)
-                        if (in[i] != 0.0)
-                            add_without_drift(out[i], in[i], hash_combine(pass_, dst * T3 + i));
-                }
+                for (size_t i = 0; i < T3; ++i) totals_.add(out[i], in[i], dst * T3 + i);
             }
         }
     }
@@ -248,11 +239,9 @@ public:
     std::vector<int> rows_;         // sorted
     std::vector<int> slot_of_row_;  // per image row: index into rows_, or -1
     std::vector<char> active_;      // per image row: samples there reach a recorded row
-    // As the transient film: passes after the 64th add by add_without_drift().
-    static constexpr uint32_t kNearestRoundedPasses = 64;
-    uint32_t pass_ = 0, passes_started_ = 0;
-    std::vector<float> data_;      // [rows_][width][bins][3]
-    std::vector<PixelSums> sums_;  // [rows_][width]
+    PassTotals totals_;             // how passes add into data_
+    std::vector<float> data_;       // [rows_][width][bins][3]
+    std::vector<PixelSums> sums_;   // [rows_][width]
 };
 
 StreakBlock::StreakBlock(const StreakFilm& film, int x0, int y0, int w, int h)

@@ -9,7 +9,7 @@
 // filter border) received in a pass.
 // Sums are accumulated per sample, then per pass in a block, then into the cube, so a single
 // small contribution is never added directly to a large running total; passes beyond the
-// 64th add into it by stochastic rounding (add_without_drift()), which does not drift.
+// 64th add into it by stochastic rounding (PassTotals), which does not drift.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -339,10 +339,7 @@ public:
         pool_.push_back(std::move(st));  // within the capacity acquire_storage() reserved
     }
 
-    void start_pass(uint32_t pass) override {
-        pass_ = pass;
-        ++passes_started_;
-    }
+    void start_pass(uint32_t pass) override { totals_.start(pass); }
 
     void merge(const FilmBlock& b) override {
         if (merge_pilot(b)) return;
@@ -367,23 +364,12 @@ public:
                     __builtin_prefetch(&cube_[at * 3], 1);
             const size_t at = film_entry(e);
             if (at == SIZE_MAX) continue;
-            if (passes_started_ <= kNearestRoundedPasses) {
-                for (int c = 0; c < 3; ++c) cube_[at * 3 + c] += float(st.entries[e].rgb[c]);
-                if (variance_enabled_)
-                    for (int c = 0; c < 3; ++c) sq_[at * 3 + c] += float(st.sq[e * 3 + c]);
-                if (count_enabled_) count_[at] += st.count[e];
-            } else {
-                for (size_t c = 0; c < 3; ++c) {
-                    const uint64_t key = hash_combine(pass_, at * 3 + c);
-                    add_without_drift(cube_[at * 3 + c], st.entries[e].rgb[c], key);
-                    if (variance_enabled_)
-                        add_without_drift(sq_[at * 3 + c], st.sq[e * 3 + c], ~key);
-                }
-                // Whole counts are exact in float up to 2^24 contributions; beyond, they too
-                // would stop growing.
-                if (count_enabled_)
-                    add_without_drift(count_[at], st.count[e], ~hash_combine(pass_, at));
-            }
+            for (size_t c = 0; c < 3; ++c)
+                totals_.add(cube_[at * 3 + c], st.entries[e].rgb[c], at * 3 + c);
+            if (variance_enabled_)
+                for (size_t c = 0; c < 3; ++c)
+                    totals_.add(sq_[at * 3 + c], st.sq[e * 3 + c], at * 3 + c, ~uint64_t(0));
+            if (count_enabled_) totals_.add(count_[at], st.count[e], at, ~uint64_t(0));
         }
         st.clear();
         for (size_t local = 0; local < block_pixels; ++local) {
@@ -488,11 +474,7 @@ public:
     io::ExrCubeOptions exr_;
     SourceLocation aovs_location_;
     bool count_enabled_ = false, variance_enabled_ = false;
-    // Passes add into the float cube rounded to nearest while that cannot drift measurably
-    // (at most 64 roundings: 4e-6 of a voxel), and by add_without_drift() after: only
-    // progressive integrators (one camera sample a pass) make more passes than this.
-    static constexpr uint32_t kNearestRoundedPasses = 64;
-    uint32_t pass_ = 0, passes_started_ = 0;
+    PassTotals totals_;  // how passes add into the float arrays below
     std::vector<float> cube_, count_, sq_;
     mutable std::mutex pool_mutex_;
     mutable std::vector<std::unique_ptr<BlockStorage>> pool_;
