@@ -534,6 +534,9 @@ viz_outputs)
 viz_bad_input)
   "$femto" render "$scene" -o out/cb -D spp=1 -D res=16 -D bins=8 -q --npy || fail "render failed"
   expect_exit 2 '"nothere\.exr" does not exist' -- "$femto" viz peak-time nothere.exr -o out/p.png
+  # A link that cannot be followed exists: the message says why it cannot be read.
+  ln -s loop.exr loop.exr
+  expect_exit 2 'cannot open "loop\.exr": Too many levels of symbolic links' -- "$femto" viz frames loop.exr -o out/f
   expect_exit 2 'not a femto transient cube' -- "$femto" viz frames out/cb_steady.exr -o out/f
   expect_exit 2 'row 16 is out of range.*0 to 15' -- "$femto" viz streak out/cb.exr --row 16 -o out/s.png
   expect_exit 2 'no depth part' -- "$femto" viz unwarp out/cb.npy -o out/u.exr --to world

@@ -24,6 +24,7 @@
 #include "io/display.h"
 #include "io/exr_png.h"
 #include "io/oiio_module.h"
+#include "util/files.h"
 
 namespace fs = std::filesystem;
 namespace OCIO = OCIO_NAMESPACE;
@@ -205,7 +206,8 @@ bool is_streak(const io::Cube& cube) {
 
 io::Cube load_cube(const std::string& path) {
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw SceneError(fmt::format("\"{}\" does not exist", path));
+    if (!femto::detail::entry_exists(path))
+        throw SceneError(fmt::format("\"{}\" does not exist", path));
     if (fs::is_directory(path, ec))
         throw SceneError(fmt::format("\"{}\" is a folder, not a cube file", path));
     char magic[8] = {};

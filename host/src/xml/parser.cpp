@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "femto/input_file.h"
+#include "util/files.h"
 #include "util/lenient.h"
 #include "util/line_table.h"
 #include "util/strings.h"
@@ -389,16 +390,6 @@ XmlNode run_passes(XmlNode scene, const std::vector<std::pair<std::string, std::
     check_defines_used(defines, scene_params, top_file, lenient);
     scene.search_dirs = std::move(ex.search_dirs);
     return scene;
-}
-
-// Whether `p` names a directory entry. An entry that cannot be followed (a symbolic link in a
-// loop or to nowhere, a folder on the way that cannot be read) counts as found, so that opening
-// it reports why, instead of "not found".
-bool entry_exists(const fs::path& p) {
-    std::error_code ec;
-    const fs::file_status st = fs::symlink_status(p, ec);
-    if (ec) return ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory;
-    return st.type() != fs::file_type::not_found;
 }
 
 }  // namespace
