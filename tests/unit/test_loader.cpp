@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -529,8 +530,17 @@ TEST(Loader, InputFilesMustBeRegularFiles) {
 }
 
 TEST(Loader, LazyPluginLoading) {
+    // The registry is per process: only what this scene opened counts (ctest runs each test in
+    // a process of its own, where that is every plugin; a whole-binary run may have opened
+    // others before).
+    const std::vector<std::string> before = loaded_plugin_files();
     load_scene_string(scene_xml(kRect));
-    for (const auto& f : loaded_plugin_files()) {
+    const std::vector<std::string> after = loaded_plugin_files();
+    ASSERT_GE(after.size(), before.size());
+    if (before.empty()) EXPECT_FALSE(after.empty()) << "the scene opened no plugin at all";
+    EXPECT_TRUE(std::equal(before.begin(), before.end(), after.begin()));
+    for (auto it = after.begin() + std::ptrdiff_t(before.size()); it != after.end(); ++it) {
+        const std::string& f = *it;
         EXPECT_EQ(f.find("roughconductor"), std::string::npos)
             << "a plugin the scene never names was loaded: " << f;
         EXPECT_EQ(f.find("ply.so"), std::string::npos) << f;
