@@ -537,7 +537,9 @@ TEST(Loader, LazyPluginLoading) {
     load_scene_string(scene_xml(kRect));
     const std::vector<std::string> after = loaded_plugin_files();
     ASSERT_GE(after.size(), before.size());
-    if (before.empty()) EXPECT_FALSE(after.empty()) << "the scene opened no plugin at all";
+    if (before.empty()) {
+        EXPECT_FALSE(after.empty()) << "the scene opened no plugin at all";
+    }
     EXPECT_TRUE(std::equal(before.begin(), before.end(), after.begin()));
     for (auto it = after.begin() + std::ptrdiff_t(before.size()); it != after.end(); ++it) {
         const std::string& f = *it;
