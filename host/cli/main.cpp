@@ -328,7 +328,7 @@ int cmd_render(const std::string& scene_path, std::string out_base,
     info.write_npy = npy;
     info.processes = group ? uint32_t(group->size()) : 1;
     if (!quiet)
-        fmt::print(stderr, "{} {} of {} spp in {:.2f} s ({:.2f} M rays/s); writing {}.* ...\n",
+        fmt::print(stderr, "{} {} of {} spp in {:.3f} s ({:.3f} M rays/s); writing {}.* ...\n",
                    stats.interrupted ? "Interrupted after" : "Rendered", stats.spp_done,
                    stats.spp_requested, stats.seconds,
                    stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0, out_base);
