@@ -29,6 +29,7 @@
 #include "femto/sensor.h"
 #include "femto/shape.h"
 #include "femto/time_sampling.h"
+#include "femto/warp.h"
 
 namespace {
 
@@ -103,6 +104,21 @@ void SamplerDraw1d(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * 16);
 }
 BENCHMARK(SamplerDraw1d);
+
+// ---- warps ---------------------------------------------------------------------------------
+
+// A cosine-weighted direction (the concentric disk lifted to the hemisphere): every diffuse
+// bounce and every emission from an area light draws one.
+void CosineHemisphere(benchmark::State& state) {
+    const auto u = uniform_points(kInputs, 7);
+    size_t i = 0;
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(warp::square_to_cosine_hemisphere(u[i & (kInputs - 1)]));
+        ++i;
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(CosineHemisphere);
 
 // ---- light sample --------------------------------------------------------------------------
 
