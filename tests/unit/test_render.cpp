@@ -11,6 +11,7 @@
 #include "femto/integrator.h"
 #include "femto/sensor.h"
 #include "femto/testing/render.h"
+#include "render/tiles.h"
 #include "scene_util.h"
 
 using namespace femto;
@@ -209,11 +210,52 @@ const std::string kGaussianCubeFilm =
 
 }  // namespace
 
-// Many tiles whose Gaussian filter borders overlap (hdrfilm: 32-pixel tiles; a transient cube:
-// smaller ones): the tiles of a pass run without a barrier between colours, and each block
-// merges only after the overlapping blocks of earlier colours, so a pixel sums its blocks in
-// one order at any thread count. An arena of 8 threads on fewer cores shuffles which tile
-// finishes first (the renderer's workers are as many as its arena's concurrency).
+// A pass's threads share its tiles, so a film has at least 64 where 8-pixel tiles allow it (a
+// 32x32 film in 32-pixel tiles was one tile: one busy thread on any machine); a transient
+// cube's blocks shrink its tiles further (1/32 of the film at most); a wide filter keeps them at
+// twice its radius at least.
+TEST(Render, TilesAreManyEnoughForThreadsToShare) {
+    auto tile = [](const std::string& film) {
+        return detail::tile_size_for(
+            load_scene_string(femto::test::scene_xml("<sensor type=\"perspective\">" + film +
+                                                     "</sensor>" + femto::test::kRect))
+                ->sensor()
+                .film());
+    };
+    auto hdr = [](int w, int h, const std::string& rfilter = "<rfilter type=\"box\"/>") {
+        return "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(w) +
+               "\"/><integer name=\"height\" value=\"" + std::to_string(h) + "\"/>" + rfilter +
+               "</film>";
+    };
+    EXPECT_EQ(tile(hdr(32, 32)), 8);     // 16 tiles: 8 pixels is the smallest side
+    EXPECT_EQ(tile(hdr(64, 64)), 8);     // 64 tiles
+    EXPECT_EQ(tile(hdr(128, 128)), 16);  // 64
+    EXPECT_EQ(tile(hdr(100, 60)), 8);    // 13 x 8 = 104 (16-pixel tiles: 7 x 4 = 28)
+    EXPECT_EQ(tile(hdr(256, 256)), 32);  // 64
+    EXPECT_EQ(tile(hdr(1920, 1080)), 32);
+    EXPECT_EQ(tile(hdr(4, 4)), 8);
+    // A Gaussian of radius 2 still allows 8; one of radius 12 needs tiles of 24 or more.
+    EXPECT_EQ(tile(hdr(64, 64, "<rfilter type=\"gaussian\"/>")), 8);
+    EXPECT_EQ(tile(hdr(64, 64,
+                       "<rfilter type=\"gaussian\"><float name=\"stddev\" value=\"3\"/>"
+                       "</rfilter>")),
+              32);
+    // Cubes of 40 bins: at 64x64 with a tent (border 1), 8-pixel tiles, whose blocks of
+    // (8 + 2)^2 = 100 pixels fit in 64 x 64 / 32 = 128; at 32x32 with a box, 4 (a block of
+    // 8^2 = 64 pixels would exceed 32 x 32 / 32 = 32).
+    EXPECT_EQ(tile("<film type=\"transient\"><integer name=\"width\" value=\"64\"/><integer "
+                   "name=\"height\" value=\"64\"/><float name=\"start\" value=\"0\"/><float "
+                   "name=\"bin_width\" value=\"0.5\"/><integer name=\"bins\" value=\"40\"/>"
+                   "<rfilter type=\"tent\"/></film>"),
+              8);
+    EXPECT_EQ(tile(femto::test::box_transient_film(32, 32, 0, 0.5, 40)), 4);
+}
+
+// Many tiles whose Gaussian filter borders overlap (8-pixel tiles at these sizes): the tiles of a
+// pass run without a barrier between colours, and each block merges only after the overlapping
+// blocks of earlier colours, so a pixel sums its blocks in one order at any thread count. An arena
+// of 8 threads on fewer cores shuffles which tile finishes first (the renderer's workers are as
+// many as its arena's concurrency).
 TEST(Render, SameImageAtAnyThreadCountWithOverlappingTiles) {
     for (const std::string& film : std::vector<std::string>{
              kGaussianHdrFilm, kGaussianCubeFilm,

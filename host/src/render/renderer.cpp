@@ -33,8 +33,34 @@
 #include "femto/log.h"
 #include "femto/scene.h"
 #include "femto/sensor.h"
+#include "render/tiles.h"
 
 namespace femto {
+
+// The tile side: 32 pixels, or less, for two reasons. A pass renders its tiles in parallel, so
+// the tiles are all the work its threads can share: the side halves (down to kSmallestTile)
+// until the film has at least kMinTiles tiles, so that a small film still keeps many cores
+// busy (in 32-pixel tiles a 32x32 film is one tile, rendered by one thread however many there
+// are). And when the film's blocks are as dense as the film (a transient cube), it halves
+// further while a block (with its filter border) would exceed 1/32 of the film, so that the
+// blocks of a few threads add little to the film's memory. It depends on the film alone, never
+// on the thread count: renders stay bit-identical across thread counts. A tile is at least
+// twice the filter's radius (the 2x2 colouring needs borders narrower than a tile).
+int detail::tile_size_for(const Film& film) {
+    constexpr int64_t kMinTiles = 64;  // 2 or more a thread up to 32 threads
+    constexpr int kSmallestTile = 8;   // smaller ones cost more per tile than they balance
+    const int border = film.filter_border();
+    const int smallest = std::max(4, int(std::ceil(2 * film.rfilter().radius())));
+    const int64_t W = film.width(), H = film.height();
+    auto tiles = [&](int size) { return ((W + size - 1) / size) * ((H + size - 1) / size); };
+    int size = Film::kMaxTileSize;
+    while (size / 2 >= std::max(kSmallestTile, smallest) && tiles(size) < kMinTiles) size /= 2;
+    if (film.block_bytes_per_pixel() == 0) return size;
+    const int64_t budget = W * H / 32;
+    while (size / 2 >= smallest && int64_t(size + 2 * border) * (size + 2 * border) > budget)
+        size /= 2;
+    return size;
+}
 
 namespace {
 
@@ -118,22 +144,6 @@ void enable_flush_to_zero() {
     // Embree asks for FTZ/DAZ in every thread that traces rays.
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-}
-
-// The tile side: 32 pixels, or less when the film's blocks are as dense as the film (a
-// transient cube) and a 32-pixel block (with its filter border) would exceed 1/32 of the film,
-// so that the blocks of a few threads add little to the film's memory. It depends on the film
-// alone, never on the thread count: renders stay bit-identical across thread counts. A tile is
-// at least twice the filter's radius (the 2x2 colouring needs borders narrower than a tile).
-int tile_size_for(const Film& film) {
-    const int border = film.filter_border();
-    const int smallest = std::max(4, int(std::ceil(2 * film.rfilter().radius())));
-    if (film.block_bytes_per_pixel() == 0) return kTileSize;
-    const int64_t budget = int64_t(film.width()) * film.height() / 32;
-    int size = kTileSize;
-    while (size / 2 >= smallest && int64_t(size + 2 * border) * (size + 2 * border) > budget)
-        size /= 2;
-    return size;
 }
 
 // Tiles grouped by colour (tx % 2, ty % 2): tiles of one colour never overlap, filter borders
@@ -768,7 +778,7 @@ RenderStats render(Scene& scene, const RenderOptions& options) {
     scene.integrator().preprocess(scene);
     const bool from_lights = integrator.source() == SampleSource::Light;
     const bool splatting = prepare_film(film, integrator);
-    const int tile = tile_size_for(film);
+    const int tile = detail::tile_size_for(film);
     const uint64_t pixels = uint64_t(film.width()) * uint64_t(film.height());
     const uint32_t ranks = options.group ? uint32_t(options.group->size()) : 1;
     const uint32_t rank = options.group ? uint32_t(options.group->rank()) : 0;
