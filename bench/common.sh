@@ -19,6 +19,24 @@ bench_build() {
     ninja -C "$build" "$@"
 }
 
+# For scripts that compare two build folders (run_build_ab.sh, run_small_films.sh): exits 2
+# with the script's usage (its header comment, lines 2 to LAST) unless at least 3 arguments
+# were given, and with a message unless BUILD_A and BUILD_B each hold bin/femto.
+#     two_builds_args LAST "$@"
+two_builds_args() {
+    local last=$1 script=${BASH_SOURCE[1]}
+    shift
+    if [[ $# -lt 3 ]]; then
+        sed -n "2,${last}p" "$script"
+        exit 2
+    fi
+    local dir
+    for dir in "$2" "$3"; do
+        [[ -x "$dir/bin/femto" ]] ||
+            { echo "$(basename "$script"): $dir/bin/femto: no such program" >&2; exit 2; }
+    done
+}
+
 # Writes the source revision, machine, date and load to LOG (and the terminal).
 bench_log_header() {
     local log=$1

@@ -14,14 +14,8 @@
 set -euo pipefail
 
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-if [[ $# -lt 3 ]]; then
-    sed -n '2,13p' "$0"
-    exit 2
-fi
+two_builds_args 13 "$@"
 out=$1 build_a=$2 build_b=$3 rounds=${4:-10} threads=${5:-2}
-for dir in "$build_a" "$build_b"; do
-    [[ -x "$dir/bin/femto" ]] || { echo "run_build_ab.sh: $dir/bin/femto: no such program" >&2; exit 2; }
-done
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"; remove_scene_copies' EXIT
