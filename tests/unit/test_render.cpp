@@ -251,11 +251,11 @@ TEST(Render, TilesAreManyEnoughForThreadsToShare) {
     EXPECT_EQ(tile(femto::test::box_transient_film(32, 32, 0, 0.5, 40)), 4);
 }
 
-// Many tiles whose Gaussian filter borders overlap (8-pixel tiles at these sizes): the tiles of a
-// pass run without a barrier between colours, and each block merges only after the overlapping
-// blocks of earlier colours, so a pixel sums its blocks in one order at any thread count. An arena
-// of 8 threads on fewer cores shuffles which tile finishes first (the renderer's workers are as
-// many as its arena's concurrency).
+// Many tiles whose Gaussian filter borders overlap (8-pixel tiles in the hdrfilm, 4 in the
+// cube): the tiles of a pass run without a barrier between colours, and each block merges only
+// after the overlapping blocks of earlier colours, so a pixel sums its blocks in one order at any
+// thread count. An arena of 8 threads on fewer cores shuffles which tile finishes first (the
+// renderer's workers are as many as its arena's concurrency).
 TEST(Render, SameImageAtAnyThreadCountWithOverlappingTiles) {
     for (const std::string& film : std::vector<std::string>{
              kGaussianHdrFilm, kGaussianCubeFilm,
