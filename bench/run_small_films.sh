@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Small films at 1 and at all threads, two builds side by side: `path` into an hdrfilm on the
+# Small films at 1 and at THREADS threads, two builds side by side: `path` into an hdrfilm on the
 # Cornell box (bench/experiments/scenes/cornell-films.xml) at 32x32, 64x64, 128x128 and
 # 256x256, with spp chosen so that each render takes about the same time (512, 128, 32, 8).
 # A pass renders its tiles in parallel, so a film of few tiles leaves threads idle; this
@@ -12,7 +12,7 @@
 # with both builds, the builds' order alternating from round to round. ROUNDS default 7.
 # Rows `round,build,res,threads,seconds` go to OUT_CSV; tools/small_films.py OUT_CSV
 # summarises them (per size and thread count, B's time over A's per round, and each build's
-# scaling: its 1-thread time over its THREADS-thread time in the same round). About 25 s a
+# scaling: its 1-thread time over its THREADS-thread time in the same round). About 20 s a
 # round on 2 cores.
 set -euo pipefail
 

@@ -19,8 +19,15 @@ def main():
     seconds = {(r["round"], r["build"], int(r["res"]), int(r["threads"])): float(r["seconds"])
                for r in rows}
     sizes = sorted({int(r["res"]) for r in rows})
-    n = max(int(r["threads"]) for r in rows)
-    rounds = sorted({r["round"] for r in rows}, key=int)
+    n = max((int(r["threads"]) for r in rows), default=1)
+    if n < 2:
+        sys.exit(f"{path}: no rows of more than one thread to compare with one")
+    # Rounds with every render (an interrupted run leaves its last one partial).
+    rounds = sorted({r["round"] for r in rows if all(
+        (r["round"], b, res, t) in seconds for b in "AB" for res in sizes for t in (1, n))},
+        key=int)
+    if not rounds:
+        sys.exit(f"{path}: no complete round")
 
     def fmt(values):
         return f"{statistics.median(values):.3f} [{min(values):.3f}, {max(values):.3f}]"
@@ -38,7 +45,11 @@ def main():
         print(f"| {res}×{res} | {fmt(times[1])} | {fmt(times[n])} | {fmt(scaling[(res, 'A')])} "
               f"| {fmt(scaling[(res, 'B')])} |")
 
-    import matplotlib
+    try:
+        import matplotlib
+    except ImportError:
+        print("(matplotlib is missing: no plot)", file=sys.stderr)
+        return
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 3.5))

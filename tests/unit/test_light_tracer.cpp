@@ -189,7 +189,7 @@ TEST(LightTracer, GlassSlabDelayIsExact) {
 
 // Same seed, 1 and 2 threads: the splats merge in a fixed order, so the cubes are identical.
 TEST(LightTracer, BitIdenticalAcrossThreadCounts) {
-    // 64x64 pixels at 8 spp: 8 chunks of light paths, 4 tiles.
+    // 64x64 pixels at 8 spp: 8 chunks of light paths, 64 tiles.
     const std::vector<std::pair<std::string, std::string>> defines = {
         {"res", "64"}, {"spp", "8"}, {"bins", "64"}};
     const auto a = image_with_threads("cornell-box", "transient_light", defines, 1);

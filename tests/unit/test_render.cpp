@@ -210,10 +210,10 @@ const std::string kGaussianCubeFilm =
 
 }  // namespace
 
-// A pass's threads share its tiles, so a film has at least 64 where 8-pixel tiles allow it (a
-// 32x32 film in 32-pixel tiles was one tile: one busy thread on any machine); a transient
-// cube's blocks shrink its tiles further (1/32 of the film at most); a wide filter keeps them at
-// twice its radius at least.
+// A pass's threads share its tiles, so a film has at least 64 (that meet rows it records) where
+// 8-pixel tiles allow it (a 32x32 film in 32-pixel tiles was one tile: one busy thread on any
+// machine); a transient cube's blocks shrink its tiles further (1/32 of the film at most); a
+// wide filter keeps them at twice its radius at least.
 TEST(Render, TilesAreManyEnoughForThreadsToShare) {
     auto tile = [](const std::string& film) {
         return detail::tile_size_for(
@@ -249,6 +249,13 @@ TEST(Render, TilesAreManyEnoughForThreadsToShare) {
                    "<rfilter type=\"tent\"/></film>"),
               8);
     EXPECT_EQ(tile(femto::test::box_transient_film(32, 32, 0, 0.5, 40)), 4);
+    // Only tiles that meet a recorded row count: a 256x256 streak film of one row has 8 such
+    // 32-pixel tiles, and 32 of 8 pixels.
+    EXPECT_EQ(tile("<film type=\"streak\"><integer name=\"width\" value=\"256\"/><integer "
+                   "name=\"height\" value=\"256\"/><integer name=\"row\" value=\"100\"/>"
+                   "<float name=\"start\" value=\"0\"/><float name=\"bin_width\" "
+                   "value=\"0.5\"/><integer name=\"bins\" value=\"40\"/></film>"),
+              8);
 }
 
 // Many tiles whose Gaussian filter borders overlap (8-pixel tiles in the hdrfilm, 4 in the

@@ -713,7 +713,7 @@ StreakAndCube render_streak_and_cube(const std::filesystem::path& dir, const std
 }
 
 void check_streak_matches_transient(const std::string& filter, const std::string& tfilter = "") {
-    const std::vector<int> rows = {3, 32};  // 32 starts the second row of 32-pixel tiles
+    const std::vector<int> rows = {3, 32};  // 32 starts a row of tiles (of 8 or 32 pixels)
     const auto dir = test::temp_dir("streak-" + filter);
     const StreakAndCube both = render_streak_and_cube(dir, filter, tfilter);
     const Film& tf = both.transient->sensor().film();

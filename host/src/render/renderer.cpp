@@ -39,20 +39,30 @@ namespace femto {
 
 // The tile side: 32 pixels, or less, for two reasons. A pass renders its tiles in parallel, so
 // the tiles are all the work its threads can share: the side halves (down to kSmallestTile)
-// until the film has at least kMinTiles tiles, so that a small film still keeps many cores
-// busy (in 32-pixel tiles a 32x32 film is one tile, rendered by one thread however many there
-// are). And when the film's blocks are as dense as the film (a transient cube), it halves
-// further while a block (with its filter border) would exceed 1/32 of the film, so that the
-// blocks of a few threads add little to the film's memory. It depends on the film alone, never
-// on the thread count: renders stay bit-identical across thread counts. A tile is at least
-// twice the filter's radius (the 2x2 colouring needs borders narrower than a tile).
+// until at least kMinTiles tiles meet rows the film records (a streak film records few), so
+// that a small film still keeps many cores busy (in 32-pixel tiles a 32x32 film is one tile,
+// rendered by one thread however many there are). And when the film's blocks are as dense as
+// the film (a transient cube), it halves further while a block (with its filter border) would
+// exceed 1/32 of the film, so that the blocks of a few threads add little to the film's
+// memory. It depends on the film alone, never on the thread count: renders stay bit-identical
+// across thread counts. A tile is at least twice the filter's radius, so at least twice its
+// border (the 2x2 colouring: tiles of one colour lie a tile apart and must not overlap).
 int detail::tile_size_for(const Film& film) {
     constexpr int64_t kMinTiles = 64;  // 2 or more a thread up to 32 threads
     constexpr int kSmallestTile = 8;   // smaller ones cost more per tile than they balance
     const int border = film.filter_border();
     const int smallest = std::max(4, int(std::ceil(2 * film.rfilter().radius())));
     const int64_t W = film.width(), H = film.height();
-    auto tiles = [&](int size) { return ((W + size - 1) / size) * ((H + size - 1) / size); };
+    auto tiles = [&](int size) {  // that meet a row the film records
+        int64_t rows = 0;
+        for (int64_t y0 = 0; y0 < H; y0 += size)
+            for (int64_t y = y0; y < std::min(H, y0 + size); ++y)
+                if (film.row_active(int(y))) {
+                    ++rows;
+                    break;
+                }
+        return rows * ((W + size - 1) / size);
+    };
     int size = Film::kMaxTileSize;
     while (size / 2 >= std::max(kSmallestTile, smallest) && tiles(size) < kMinTiles) size /= 2;
     if (film.block_bytes_per_pixel() == 0) return size;
