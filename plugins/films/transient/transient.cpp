@@ -20,6 +20,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "block_storage.h"
 #include "femto/accumulator.h"
 #include "femto/film.h"
 #include "femto/image_io.h"
@@ -32,164 +33,9 @@
 namespace {
 
 using namespace femto;
+using transient_film::BlockStorage;
 
 class TransientFilm;
-
-// A block's sums: one entry per (block pixel, bin) the block received. A pass gives a tile's
-// block a few contributions per pixel spread over all of its bins (a 32x32 tile of 1024 bins
-// would be 25 MB dense), so a dense block missed the cache on almost every contribution; the
-// entries of a pass fit in the L2 cache instead, and the merge walks them in order.
-// Finding a (pixel, bin)'s entry: a tile's camera samples come pixel by pixel, and with a box
-// filter each reaches its own pixel only, so a pixel's entries are all made during one run of
-// puts. The entries of the pixel being splatted are found through a dense bin -> entry map (an
-// L1-resident array, no probing); the first time a pixel receives again after its run ended
-// (a wider filter, splats in any order), an open-addressing table over all entries takes over
-// for the rest of the block's use. Both find the same entries in the same order: the merge is
-// the same. Recycled through the film's pool, empty between uses.
-struct BlockStorage {
-    // Double: a pass may add many contributions to one entry (a light tracer's splats onto a
-    // one-pixel meter: every light path of the pass), and float sums of that many lose digits.
-    struct Entry {
-        uint64_t key;  // bin << 32 | block pixel (the merge takes them apart without dividing)
-        double rgb[3];
-    };
-    std::vector<Entry> entries;   // in the order of their first touch
-    std::vector<double> sq;       // [entry][3] sum of w * (per-sample bin value)^2 (variance)
-    std::vector<float> count;     // [entry] contributions (aovs="count")
-    std::vector<uint32_t> table;  // open addressing, linear probing: entry + 1, or 0 (free)
-    std::vector<PixelSums> weights;
-    const bool variance, counts;  // the storage keeps the second moment / the counts
-    int shift = 64;               // 64 - log2(table size)
-    // The run: its pixel's entries by bin (entry + 1, or 0), where they start, and which block
-    // pixels have had a run. Off (the table from the start) for grids of more than kRunBins.
-    static constexpr size_t kRunBins = size_t(1) << 16;
-    std::vector<uint32_t> run_entry;
-    std::vector<uint8_t> had_run;
-    uint64_t run_pixel = UINT64_MAX;
-    size_t run_begin = 0;
-    bool hashed = false;  // the table finds the entries
-
-    BlockStorage(bool with_variance, bool with_counts, size_t bins)
-        : variance(with_variance), counts(with_counts) {
-        grow();
-        if (bins <= kRunBins) run_entry.assign(bins, 0);
-        hashed = run_entry.empty();
-    }
-
-    /// The entry of `key`, created (zero) on its first touch.
-    size_t entry(uint64_t key) {
-        if (!hashed) {
-            const uint64_t pixel = key & 0xffffffffu;
-            if (pixel == run_pixel || start_run(pixel)) {
-                uint32_t& e = run_entry[size_t(key >> 32)];
-                if (e == 0) e = uint32_t(append(key) + 1);
-                return e - 1;
-            }
-        }
-        return find(key);
-    }
-    /// Empties the entries, the table and the run (keeping their memory for the next block).
-    void clear() {
-        if (hashed) {
-            // Latest first: the slots between an entry's home and its own hold earlier entries
-            // (so it was when it was placed, and growing re-places them in order), still there.
-            for (size_t e = entries.size(); e-- > 0;)
-                for (size_t i = home(entries[e].key); table[i] != 0; i = next(i))
-                    if (table[i] == e + 1) {
-                        table[i] = 0;
-                        break;
-                    }
-        } else {
-            end_run();
-        }
-        hashed = run_entry.empty();
-        std::fill(had_run.begin(), had_run.end(), uint8_t(0));
-        run_pixel = UINT64_MAX;
-        run_begin = 0;
-        entries.clear();
-        sq.clear();
-        count.clear();
-    }
-
-private:
-    [[gnu::noinline]] size_t find(uint64_t key) {  // through the table
-        for (size_t i = home(key);; i = next(i)) {
-            const uint32_t e = table[i];
-            if (e == 0) return insert(key, i);
-            if (entries[e - 1].key == key) return e - 1;
-        }
-    }
-    // Ends the current run and starts `pixel`'s, or, when `pixel` had one already, hands every
-    // entry to the table (returns false).
-    [[gnu::noinline]] bool start_run(uint64_t pixel) {
-        end_run();
-        run_pixel = UINT64_MAX;
-        if (had_run[size_t(pixel)]) {
-            size_t slots = table.size();
-            while (2 * (entries.size() + 1) > slots) slots *= 2;
-            rehash(slots);
-            hashed = true;
-            return false;
-        }
-        had_run[size_t(pixel)] = 1;
-        run_pixel = pixel;
-        return true;
-    }
-    void end_run() {
-        for (size_t e = run_begin; e < entries.size(); ++e)
-            run_entry[size_t(entries[e].key >> 32)] = 0;
-        run_begin = entries.size();
-    }
-    size_t home(uint64_t key) const {  // Fibonacci hashing: neighbouring keys spread apart
-        return size_t((key * 0x9E3779B97F4A7C15ull) >> shift);
-    }
-    size_t next(size_t slot) const { return (slot + 1) & (table.size() - 1); }
-    size_t free_slot(uint64_t key) const {  // where linear probing places a new key
-        size_t slot = home(key);
-        while (table[slot] != 0) slot = next(slot);
-        return slot;
-    }
-    size_t insert(uint64_t key, size_t slot) {
-        if (2 * (entries.size() + 1) > table.size()) {  // keep the load at most 1/2
-            grow();
-            slot = free_slot(key);
-        }
-        const size_t e = append(key);
-        table[slot] = uint32_t(e + 1);
-        return e;
-    }
-    size_t append(uint64_t key) {  // a new zero entry
-        const size_t e = entries.size();
-        // Small enough to inline into entry(), which every contribution calls: the AOVs'
-        // arrays and the overflow check are out of line.
-        if (e + 1 > std::numeric_limits<uint32_t>::max() || variance || counts)
-            return append_with_aovs(key);
-        entries.push_back({key, {0, 0, 0}});
-        return e;
-    }
-    [[gnu::noinline]] size_t append_with_aovs(uint64_t key) {
-        const size_t e = entries.size();
-        if (e + 1 > std::numeric_limits<uint32_t>::max()) throw std::length_error("block entries");
-        entries.push_back({key, {0, 0, 0}});
-        try {  // an allocation that fails leaves the storage as it was
-            if (variance) sq.insert(sq.end(), 3, 0.0);
-            if (counts) count.push_back(0.f);
-        } catch (...) {
-            entries.pop_back();
-            if (variance) sq.resize(3 * e);
-            throw;
-        }
-        return e;
-    }
-    void grow() { rehash(std::max<size_t>(4096, 2 * table.size())); }
-    // A table of `slots` (a power of two) holding every entry, placed in order.
-    void rehash(size_t slots) {
-        table.assign(slots, 0);
-        shift = 64 - std::countr_zero(table.size());
-        for (size_t e = 0; e < entries.size(); ++e)
-            table[free_slot(entries[e].key)] = uint32_t(e + 1);
-    }
-};
 
 // The splat itself is TimeResolvedBlock's; this block is its storage (slot = block pixel).
 class CubeBlock final : public TimeResolvedBlock {
@@ -328,10 +174,7 @@ public:
             st = std::make_unique<BlockStorage>(variance_enabled_, count_enabled_,
                                                 size_t(grid_.bins));
         }
-        if (st->weights.size() < pixels) {  // all zero between uses
-            st->weights.resize(pixels);
-            st->had_run.resize(pixels);
-        }
+        st->prepare(pixels);
         return st;
     }
     void release_storage(std::unique_ptr<BlockStorage> st) const {
