@@ -99,10 +99,13 @@ public:
         pass_ = pass;
         ++started_;
     }
+    /// True in the passes whose add() is `total += float(value)` (the first kNearestPasses):
+    /// a film's hot loop may then add so itself.
+    bool rounds_to_nearest() const { return started_ <= kNearestPasses; }
     /// Adds `value` to `total`, element `element` of its array; `salt` tells apart arrays
     /// whose elements share indices.
     void add(float& total, double value, uint64_t element, uint64_t salt = 0) const {
-        if (started_ <= kNearestPasses)
+        if (rounds_to_nearest())
             total += float(value);
         else
             add_without_drift(total, value, hash_combine(pass_, element) ^ salt);

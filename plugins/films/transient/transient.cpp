@@ -199,16 +199,31 @@ public:
             return dst_of[local] == SIZE_MAX ? SIZE_MAX : dst_of[local] * bins + bin;
         };
         // Each (pixel, bin) has one entry, so the order of the adds does not change the cube.
-        // Its entries lie anywhere in the cube: ask for them a few entries ahead.
+        // Its entries lie anywhere in the cube: ask for them a few entries ahead, and keep where
+        // they lie until their turn (a ring of the next kAhead).
         constexpr size_t kAhead = 24;  // the merge took 30 % less time than without
-        for (size_t e = 0; e < st.entries.size(); ++e) {
-            if (e + kAhead < st.entries.size())
-                if (const size_t at = film_entry(e + kAhead); at != SIZE_MAX)
-                    __builtin_prefetch(&cube_[at * 3], 1);
-            const size_t at = film_entry(e);
+        constexpr size_t kRing = 32;   // a power of two above kAhead
+        size_t ahead[kRing];
+        const size_t n = st.entries.size();
+        for (size_t e = 0; e < std::min(n, kAhead); ++e) ahead[e] = film_entry(e);
+        // In the passes that round to nearest, with no AOV, an entry's merge is three float
+        // adds: one test here instead of one per channel (a Gaussian filter's pass makes ~13
+        // entries a sample for the box filter's 1).
+        const bool plain = totals_.rounds_to_nearest() && !variance_enabled_ && !count_enabled_;
+        for (size_t e = 0; e < n; ++e) {
+            if (e + kAhead < n) {
+                const size_t next = film_entry(e + kAhead);
+                ahead[(e + kAhead) % kRing] = next;
+                if (next != SIZE_MAX) __builtin_prefetch(&cube_[next * 3], 1);
+            }
+            const size_t at = ahead[e % kRing];
             if (at == SIZE_MAX) continue;
-            for (size_t c = 0; c < 3; ++c)
-                totals_.add(cube_[at * 3 + c], st.entries[e].rgb[c], at * 3 + c);
+            const double* sums = st.entries[e].rgb;
+            if (plain) {
+                for (size_t c = 0; c < 3; ++c) cube_[at * 3 + c] += float(sums[c]);
+                continue;
+            }
+            for (size_t c = 0; c < 3; ++c) totals_.add(cube_[at * 3 + c], sums[c], at * 3 + c);
             if (variance_enabled_)
                 for (size_t c = 0; c < 3; ++c)
                     totals_.add(sq_[at * 3 + c], st.sq[e * 3 + c], at * 3 + c, ~uint64_t(0));
