@@ -38,7 +38,11 @@ def main():
         print(f"| {scene} | {fmt(times['transient_path'])} | {fmt(times['transient_bdpt'])} "
               f"| {fmt(ratios[(scene, 'A')])} | {fmt(ratios[(scene, 'B')])} |")
 
-    import matplotlib
+    try:
+        import matplotlib
+    except ImportError:
+        print("(matplotlib is missing: no plot)", file=sys.stderr)
+        return
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7, 4))
