@@ -93,3 +93,22 @@ TEST(TransientBlockStorage, ClearedStorageServesTheNextBlockAsANewOne) {
                                 [](uint32_t e) { return e == 0; }));
     }
 }
+
+TEST(TransientBlockStorage, MapsGrowOnlyWithinTheRoomTheyAreGiven) {
+    // The film bounds all its storages' maps together: a storage whose map would need more
+    // slots than the room left uses the table, and one whose map is large enough needs none.
+    constexpr size_t kBins = 64;
+    BlockStorage st(false, false, kBins);
+    EXPECT_EQ(st.prepare(100, 100 * kBins - 1), 0u);  // one slot short: the table
+    EXPECT_FALSE(st.dense_in_use);
+    EXPECT_TRUE(st.dense.empty());
+    EXPECT_EQ(st.prepare(100, 100 * kBins), 100 * kBins);  // room enough: the map
+    EXPECT_TRUE(st.dense_in_use);
+    EXPECT_EQ(st.prepare(50, 0), 0u);  // the map it has serves a smaller block
+    EXPECT_TRUE(st.dense_in_use);
+    EXPECT_EQ(st.prepare(150, 50 * kBins), 50 * kBins);  // grows by what the room allows
+    EXPECT_TRUE(st.dense_in_use);
+    EXPECT_EQ(st.prepare(200, 0), 0u);
+    EXPECT_FALSE(st.dense_in_use);
+    // Either way the entries are the same (MapAndTableMakeTheSameEntriesInTheSameOrder).
+}

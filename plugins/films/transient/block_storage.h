@@ -27,9 +27,10 @@ namespace {
 // reconstruction filter reaches from the current one, a few rows of the block: they stay in
 // the cache. (An open-addressing table found them before: with a Gaussian filter each
 // sample's 16 pixels hashed and probed it, and the map renders such a film 13 % faster.)
-// Grids too large for a map (kMaxDenseSlots) use that table. Both make the entries in the order of
-// their first touch: the merge is the same either way. Recycled through the film's pool,
-// empty between uses.
+// Grids too large for a map (kMaxDenseSlots), and blocks whose map would take the film's maps
+// past 1/8 of the cube's bytes (many threads), use that table. Both make the entries in the order
+// of their first touch: the merge is the same either way. Recycled through the film's pool, empty
+// between uses.
 struct BlockStorage {
     // Double: a pass may add many contributions to one entry (a light tracer's splats onto a
     // one-pixel meter: every light path of the pass), and float sums of that many lose digits.
@@ -60,12 +61,20 @@ struct BlockStorage {
           bins(grid_bins),
           max_dense(max_dense_slots) {}
 
-    /// Readies the (empty) storage for a block of `pixels` pixels.
-    void prepare(size_t pixels) {
+    /// Readies the (empty) storage for a block of `pixels` pixels. `map_room`: how many map
+    /// slots it may add (the film bounds all its storages' maps together); where its map would
+    /// pass that or max_dense, the block uses the table. Returns the slots it added.
+    size_t prepare(size_t pixels, size_t map_room = SIZE_MAX) {
         if (weights.size() < pixels) weights.resize(pixels);  // all zero between uses
-        dense_in_use = pixels <= max_dense / bins;
-        if (dense_in_use && dense.size() < pixels * bins) dense.resize(pixels * bins, 0);
-        if (!dense_in_use && table.empty()) grow();
+        const size_t slots = pixels <= max_dense / bins ? pixels * bins : SIZE_MAX;
+        const size_t added = slots > dense.size() ? slots - dense.size() : 0;
+        dense_in_use = slots != SIZE_MAX && added <= map_room;
+        if (!dense_in_use) {
+            if (table.empty()) grow();
+            return 0;
+        }
+        if (added > 0) dense.resize(slots, 0);
+        return added;
     }
 
     /// The entry of `key`, created (zero) on its first touch.

@@ -121,6 +121,7 @@ public:
             !problem.empty())
             props.fail("bins", problem);
         cube_.assign(pixels * size_t(grid_.bins) * 3, 0.f);
+        map_slot_budget_ = pixels * size_t(grid_.bins) * 3 / 8;
         if (count_enabled_) count_.assign(pixels * size_t(grid_.bins), 0.f);
         if (variance_enabled_) sq_.assign(cube_.size(), 0.f);
         weights_.resize(pixels);
@@ -174,7 +175,13 @@ public:
             st = std::make_unique<BlockStorage>(variance_enabled_, count_enabled_,
                                                 size_t(grid_.bins));
         }
-        st->prepare(pixels);
+        {
+            // Maps of every storage together within map_slot_budget_ (with many threads, one
+            // map per thread would add up to a good part of the cube): the blocks beyond use the
+            // table, which makes the same entries.
+            std::lock_guard<std::mutex> lock(pool_mutex_);
+            map_slots_ += st->prepare(pixels, map_slot_budget_ - map_slots_);
+        }
         return st;
     }
     void release_storage(std::unique_ptr<BlockStorage> st) const {
@@ -337,6 +344,9 @@ public:
     mutable std::mutex pool_mutex_;
     mutable std::vector<std::unique_ptr<BlockStorage>> pool_;
     mutable size_t storages_ = 0;  // made so far (the pool's reserved capacity)
+    // Block maps' slots allowed in all (4 bytes each: 1/8 of the cube's bytes) and made.
+    size_t map_slot_budget_ = 0;
+    mutable size_t map_slots_ = 0;
     std::vector<PixelSums> weights_;
 };
 
