@@ -6,9 +6,10 @@ per second per round (issue 11's ratio). Writes a plot of the ratios next to the
     bench/tools/build_ab.py RUNS_CSV
 """
 import csv
-import statistics
 import sys
 from pathlib import Path
+
+from ab_summary import median_range as fmt, plot_builds
 
 
 def main():
@@ -23,9 +24,6 @@ def main():
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     rounds = sorted({r["round"] for r in rows}, key=int)
 
-    def fmt(values):
-        return f"{statistics.median(values):.3f} [{min(values):.3f}, {max(values):.3f}]"
-
     print("| scene | path time B / A | BDPT time B / A | BDPT / path rays/s, A | B |")
     print("|---|---|---|---|---|")
     ratios = {}
@@ -38,27 +36,9 @@ def main():
         print(f"| {scene} | {fmt(times['transient_path'])} | {fmt(times['transient_bdpt'])} "
               f"| {fmt(ratios[(scene, 'A')])} | {fmt(ratios[(scene, 'B')])} |")
 
-    try:
-        import matplotlib
-    except ImportError:
-        print("(matplotlib is missing: no plot)", file=sys.stderr)
-        return
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for bi, b in enumerate(("A", "B")):
-        for si, scene in enumerate(scenes):
-            y = ratios[(scene, b)]
-            ax.plot([si + (bi - 0.5) * 0.3] * len(y), y, "o", color=f"C{bi}", alpha=0.6,
-                    label=f"build {b}" if si == 0 else None)
-    ax.axhline(0.8, color="gray", ls="--", label="issue 11's goal")
-    ax.set_xticks(range(len(scenes)))
-    ax.set_xticklabels(scenes)
-    ax.set_ylabel("transient_bdpt / transient_path rays/s")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path.with_suffix(".png"), dpi=100)
-
+    plot_builds(path.with_suffix(".png"), scenes,
+                {(i, b): ratios[(scene, b)] for i, scene in enumerate(scenes) for b in ("A", "B")},
+                "transient_bdpt / transient_path rays/s", 0.8, "issue 11's goal", "--", (7, 4))
 
 if __name__ == "__main__":
     main()

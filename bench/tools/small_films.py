@@ -6,9 +6,10 @@ over its N-thread time in the same round. Writes a plot of the scaling next to t
     bench/tools/small_films.py RUNS_CSV
 """
 import csv
-import statistics
 import sys
 from pathlib import Path
+
+from ab_summary import median_range as fmt, plot_builds
 
 
 def main():
@@ -29,9 +30,6 @@ def main():
     if not rounds:
         sys.exit(f"{path}: no complete round")
 
-    def fmt(values):
-        return f"{statistics.median(values):.3f} [{min(values):.3f}, {max(values):.3f}]"
-
     print(f"| film | time B / A, 1 thread | time B / A, {n} threads "
           f"| scaling A (1 → {n} threads) | scaling B |")
     print("|---|---|---|---|---|")
@@ -45,28 +43,10 @@ def main():
         print(f"| {res}×{res} | {fmt(times[1])} | {fmt(times[n])} | {fmt(scaling[(res, 'A')])} "
               f"| {fmt(scaling[(res, 'B')])} |")
 
-    try:
-        import matplotlib
-    except ImportError:
-        print("(matplotlib is missing: no plot)", file=sys.stderr)
-        return
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6, 3.5))
-    for bi, b in enumerate(("A", "B")):
-        for si, res in enumerate(sizes):
-            y = scaling[(res, b)]
-            ax.plot([si + (bi - 0.5) * 0.3] * len(y), y, "o", color=f"C{bi}", alpha=0.6,
-                    label=f"build {b}" if si == 0 else None)
-    ax.axhline(n, color="gray", ls=":", label=f"ideal ({n})")
-    ax.set_xticks(range(len(sizes)))
-    ax.set_xticklabels([f"{r}×{r}" for r in sizes])
-    ax.set_ylabel(f"1-thread time / {n}-thread time")
-    ax.legend(fontsize=8)
-    ax.grid(True, alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path.with_suffix(".png"), dpi=100)
-
+    plot_builds(path.with_suffix(".png"), [f"{r}×{r}" for r in sizes],
+                {(i, b): scaling[(res, b)] for i, res in enumerate(sizes) for b in ("A", "B")},
+                f"1-thread time / {n}-thread time", n, f"ideal ({n})", ":", (6, 3.5),
+                legend_size=8, grid=True)
 
 if __name__ == "__main__":
     main()
