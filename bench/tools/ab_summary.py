@@ -1,7 +1,20 @@
-"""What the two-build summaries (build_ab.py, small_films.py) share: the median [range] of a
-list of per-round values, and a plot of each build's per-round values per category."""
+"""What the two-build summaries (build_ab.py, small_films.py) share: reading their CSV, the
+median [range] of a list of per-round values, and a plot of each build's per-round values per
+category."""
+import csv
 import statistics
 import sys
+from pathlib import Path
+
+
+def read_runs(usage):
+    """The CSV named by the one command-line argument (else exits with `usage`): its path and
+    its rows."""
+    if len(sys.argv) != 2:
+        sys.exit(usage)
+    path = Path(sys.argv[1])
+    with open(path, newline="") as f:
+        return path, list(csv.DictReader(f))
 
 
 def median_range(values):

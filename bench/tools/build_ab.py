@@ -5,18 +5,12 @@ per second per round (issue 11's ratio). Writes a plot of the ratios next to the
 
     bench/tools/build_ab.py RUNS_CSV
 """
-import csv
-import sys
-from pathlib import Path
 
-from ab_summary import median_range as fmt, plot_builds
+from ab_summary import median_range as fmt, plot_builds, read_runs
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit(__doc__)
-    path = Path(sys.argv[1])
-    rows = list(csv.DictReader(open(path)))
+    path, rows = read_runs(__doc__)
     seconds = {(r["round"], r["build"], r["scene"], r["integrator"]): float(r["seconds"])
                for r in rows}
     rate = {(r["round"], r["build"], r["scene"], r["integrator"]): float(r["mrays"])

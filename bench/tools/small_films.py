@@ -5,18 +5,13 @@ over its N-thread time in the same round. Writes a plot of the scaling next to t
 
     bench/tools/small_films.py RUNS_CSV
 """
-import csv
 import sys
-from pathlib import Path
 
-from ab_summary import median_range as fmt, plot_builds
+from ab_summary import median_range as fmt, plot_builds, read_runs
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit(__doc__)
-    path = Path(sys.argv[1])
-    rows = list(csv.DictReader(open(path)))
+    path, rows = read_runs(__doc__)
     seconds = {(r["round"], r["build"], int(r["res"]), int(r["threads"])): float(r["seconds"])
                for r in rows}
     sizes = sorted({int(r["res"]) for r in rows})
