@@ -91,6 +91,24 @@ struct Vertex {
     // start plane of its plane wave (SceneSphere). Its densities are those of a direction,
     // and the next vertex takes the start disk's area density (pdf_light()).
     bool environment = false;
+    // The segment back to the previous vertex of its subpath, as to_area() and towards() find
+    // it from here (back_of()). Every connection at this vertex asks for the density of
+    // sampling that vertex from here (mis_weight()); kept, it is found once per vertex instead
+    // of once per connection, and not at all at vertices no connection uses (delta lobes).
+    struct Back {
+        bool valid = false;
+        bool direction_only = false;   // the previous vertex is an environment's
+        Vec3 dir;                      // towards(*this, previous)
+        double d2 = 0;                 // squared distance
+        double cos_over_distance = 1;  // |cos| at the previous vertex over the distance (surface)
+        // to_area(pdf_dir, *this, previous).
+        double to_area(double pdf_dir) const {
+            if (direction_only) return pdf_dir;
+            if (!(d2 > 0)) return 0;
+            return pdf_dir / d2 * cos_over_distance;
+        }
+    };
+    mutable Back back;  // a cache: filled on first use
 
     // Makes a vertex of an earlier sample a fresh one, as `Vertex()` would but without zeroing
     // `hit` (216 bytes): a surface vertex's hit comes from Scene::intersect(), which sets all of
@@ -108,6 +126,7 @@ struct Vertex {
         segment_fwd = segment_rev = 1;
         segment_optical = 0;
         segment_single_medium = delta = smooth = environment = false;
+        back.valid = false;
     }
 
     bool on_surface() const {
@@ -238,6 +257,21 @@ double to_area(double pdf_dir, const Vertex& from, const Vertex& to) {
     return pdf;
 }
 
+// The segment from v back to `prev`, the vertex before it on its subpath: what to_area(pdf, v,
+// prev) and towards(v, prev) compute, to the same bits, kept in v on first use.
+const Vertex::Back& back_of(const Vertex& v, const Vertex& prev) {
+    Vertex::Back& back = v.back;
+    if (back.valid) return back;
+    back.valid = true;
+    back.direction_only = prev.environment;
+    const Vec3 d = prev.p - v.p;
+    back.dir = normalize(d);
+    back.d2 = double(squared_length(d));
+    back.cos_over_distance =
+        prev.on_surface() ? double(std::abs(dot(prev.n, d))) / std::sqrt(back.d2) : 1.0;
+    return back;
+}
+
 // What a strategy's own connection adds to the path, for its MIS weight: the joining segment's
 // distance densities (which neither subpath sampled but other strategies of the same path do:
 // of reaching its light end walking from its camera end, and the reverse; 1 in vacuum), its
@@ -248,6 +282,7 @@ struct Join {
     double optical = 0;
     bool single_medium = false;
     double path_time = 0;
+    const Vec3* across = nullptr;  // towards(its camera end, its light end), where known
 };
 
 // Direction from a to b.
@@ -680,7 +715,7 @@ private:
             walk.medium.cross(v.hit, wo);
             walk.ray = v.hit.spawn(wo);
         }
-        prev.pdf_rev = v.delta ? 0 : to_area(pdf_rev_dir, v, prev) * v.segment_rev;
+        prev.pdf_rev = v.delta ? 0 : back_of(v, prev).to_area(pdf_rev_dir) * v.segment_rev;
         return true;
     }
 
@@ -777,9 +812,11 @@ private:
         if (c.blocked()) return;
         const float g = float(1.0 / (distance * distance));
         const Join join{segment.forward(lv.kind == Vertex::Kind::Medium),
-                        segment.backward(cv.kind == Vertex::Kind::Medium), c.optical_length,
+                        segment.backward(cv.kind == Vertex::Kind::Medium),
+                        c.optical_length,
                         segment.single_medium(),
-                        clock.time() + c.optical_length + light_clock.time() - paths.emission_time};
+                        clock.time() + c.optical_length + light_clock.time() - paths.emission_time,
+                        &to_light};
         const float w = unweighted() ? 1.f : mis_weight(scene, paths, s, t, join, nullptr, nullptr);
         const Color value =
             paths.camera_beta[size_t(t) - 1](f_camera * arriving * c.transmittance) * (g * w);
@@ -994,6 +1031,20 @@ private:
         }
         return 0;
     }
+    // The same toward `prev`, the vertex before v on its subpath, from the segment v keeps.
+    double pdf_back(const Scene& scene, const Vertex& v, const Vec3& w_prev,
+                    const Vertex& prev) const {
+        const Vertex::Back& back = back_of(v, prev);
+        switch (v.kind) {
+            case Vertex::Kind::Medium:
+                return back.to_area(v.phase->eval(w_prev, back.dir));
+            case Vertex::Kind::Surface:
+                return back.to_area(
+                    v.bsdf->pdf(v.hit, v.hit.to_local(w_prev), v.hit.to_local(back.dir)));
+            default:
+                return pdf(scene, v, w_prev, prev, back.dir);
+        }
+    }
     // Density with which an emitter at v sends light toward `next` (v on an emitter: a light
     // vertex, or a camera vertex that hit one).
     // A light of a single direction (collimated) has no density of it: the next vertex takes
@@ -1121,15 +1172,16 @@ private:
         if (s > 0) {
             Densities& xs = x[size_t(s) - 1];
             xs.delta = false;
-            const Vec3 across = towards(pt, *qs);  // and -across = towards(*qs, pt), exactly
+            // towards(pt, *qs), and -across = towards(*qs, pt), exactly
+            const Vec3 across = join.across ? *join.across : towards(pt, *qs);
             xt.from_light = pdf(scene, *qs, qs->wi, pt, -across) * join.at_camera_end;
             if (t > 1)
                 x[size_t(s) + 1].from_light =
-                    pdf(scene, pt, across, path.camera_vertex(t - 2)) * pt.segment_rev;
+                    pdf_back(scene, pt, across, path.camera_vertex(t - 2)) * pt.segment_rev;
             xs.from_camera = pdf(scene, pt, pt.wi, *qs, across) * join.at_light_end;
             if (s > 1)
                 x[size_t(s) - 2].from_camera =
-                    pdf(scene, *qs, -across, path.light_vertex(s - 2)) * qs->segment_rev;
+                    pdf_back(scene, *qs, -across, path.light_vertex(s - 2)) * qs->segment_rev;
         } else {
             xt.from_light = pdf_light_origin(scene, pt);
             x[size_t(s) + 1].from_light = pdf_light(pt, path.camera_vertex(t - 2)) * pt.segment_rev;
