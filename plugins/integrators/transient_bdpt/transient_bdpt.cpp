@@ -1098,6 +1098,17 @@ private:
         const Vertex& operator[](int i) const {
             return i < s ? light_vertex(i) : camera_vertex(s + t - 1 - i);
         }
+        // Whether x_i was scattered by a delta lobe. The connection's end points were not.
+        bool delta(int i) const { return i != s && i != s - 1 && (*this)[i].delta; }
+        // Whether strategy k (joining x_{k-1} and x_k) could have made this path: neither end
+        // scattered by a delta lobe, nor (k = 0) a light emitting a delta (`delta_light`). An
+        // environment's light vertex lies on no surface the camera could connect to (k = 1).
+        bool joinable(int k, bool delta_light) const {
+            if (k == 1 && s + t == 2 && (*this)[0].environment) return false;
+            if (k == s) return true;
+            if (k > s) return !delta(k - 1) && !delta(k);
+            return !delta(k) && !(k > 0 ? delta(k - 1) : delta_light);
+        }
         // The segment between x_i and x_{i+1}: its optical length, whether it lies in one
         // medium, and the distance densities of reaching x_i walking from x_{i+1} and of
         // reaching x_{i+1} walking from x_i.
@@ -1125,17 +1136,76 @@ private:
     // `placed`: the strategy is the connection strategy's variant of (s, t). A medium vertex's
     // densities include those of the distance strategy that placed it, so the weights favour
     // the strategies whose distances fit the path (the time-sampling strategies of ch. 5.6).
-    // Each vertex's density from either side, and `rel`: the density of strategy k (joining
-    // x_{k-1} and x_k) relative to strategy s.
-    struct Densities {
-        double from_light, from_camera;
-        bool delta;
-        double rel;
-    };
     float mis_weight(const Scene& scene, const Subpaths& paths, int s, int t, const Join& join,
                      const Vertex* light, const Vertex* camera, bool placed = false) const {
         const PathView path{paths, s, t, light, camera, join};
-        const int n = s + t;
+        // The connection changes the densities of its end points and their neighbours only, so
+        // with steady directions and no placed vertices the strategies near it are summed from
+        // those and the rest from the subpaths' own sums. Time-angular directions and placed
+        // vertices make densities depend on the whole path: all strategies are summed then.
+        if (steady_angular_ && !connecting_) return local_weight(scene, path);
+        return whole_path_weight(scene, path, placed);
+    }
+    // What a connection changes: the densities of its end points and their neighbours sampled
+    // from its other side. x_s (the camera end) and x_{s+1} from the light side; x_{s-1} (the
+    // light end) and x_{s-2} from the camera side (0 where a vertex does not exist).
+    struct Across {
+        double end_from_light = 0, beyond_end_from_light = 0;    // x_s, x_{s+1}
+        double end_from_camera = 0, beyond_end_from_camera = 0;  // x_{s-1}, x_{s-2}
+    };
+    Across across_densities(const Scene& scene, const PathView& path) const {
+        const int s = path.s, t = path.t;
+        const Vertex& pt = path.camera_vertex(t - 1);
+        Across a;
+        if (s == 0) {  // pt is on an emitter: the light side is its emission
+            a.end_from_light = pdf_light_origin(scene, pt);
+            a.beyond_end_from_light = pdf_light(pt, path.camera_vertex(t - 2)) * pt.segment_rev;
+            return a;
+        }
+        const Vertex& qs = path.light_vertex(s - 1);
+        // towards(pt, qs), and -d = towards(qs, pt), exactly
+        const Vec3 d = path.join.across ? *path.join.across : towards(pt, qs);
+        a.end_from_light = pdf(scene, qs, qs.wi, pt, -d) * path.join.at_camera_end;
+        if (t > 1)
+            a.beyond_end_from_light =
+                pdf_back(scene, pt, d, path.camera_vertex(t - 2)) * pt.segment_rev;
+        a.end_from_camera = pdf(scene, pt, pt.wi, qs, d) * path.join.at_light_end;
+        if (s > 1)
+            a.beyond_end_from_camera =
+                pdf_back(scene, qs, -d, path.light_vertex(s - 2)) * qs.segment_rev;
+        return a;
+    }
+    // mis_weight() with steady directions and no placed variants: strategies s - 2 .. s + 2
+    // from the densities the connection changes (Across) and the vertices' own, those beyond
+    // from far_sums(). The terms of whole_path_weight(), in its order, without its arrays.
+    float local_weight(const Scene& scene, const PathView& path) const {
+        const int s = path.s, t = path.t, n = s + t;
+        const int last = to_sensor_ ? n - 1 : n - 2;  // the last strategy: t = 1 or t = 2
+        const int lo = std::max(0, s - 2), hi = std::min(last, s + 2);
+        const Across a = across_densities(scene, path);
+        // Strategy k's density relative to strategy s's: rel[k - s + 2].
+        double rel[5] = {0, 0, 1.0, 0, 0};
+        if (hi >= s + 1) rel[3] = ratio(a.end_from_light, path.camera_vertex(t - 1).pdf_fwd);
+        if (hi >= s + 2)
+            rel[4] = rel[3] * ratio(a.beyond_end_from_light, path.camera_vertex(t - 2).pdf_fwd);
+        if (lo <= s - 1) rel[1] = ratio(a.end_from_camera, path.light_vertex(s - 1).pdf_fwd);
+        if (lo <= s - 2)
+            rel[0] = rel[1] * ratio(a.beyond_end_from_camera, path.light_vertex(s - 2).pdf_fwd);
+        const bool delta_light = s > 0 && delta_emission(path.light_vertex(0));
+        double sum = 0.0;
+        for (int k = lo; k <= hi; ++k)
+            if (path.joinable(k, delta_light)) sum += h(rel[k - s + 2]);
+        if (lo > 0) sum += h(rel[lo - s + 2]) * far_sums(path.paths, true, lo - 1);
+        if (hi < last) sum += h(rel[hi - s + 2]) * far_sums(path.paths, false, n - 1 - hi);
+        return float(1.0 / sum);
+    }
+    // mis_weight() over every strategy of the path: each vertex's density from either side,
+    // and `rel`, the density of strategy k (joining x_{k-1} and x_k) relative to strategy s.
+    struct Densities {
+        double from_light, from_camera, rel;
+    };
+    float whole_path_weight(const Scene& scene, const PathView& path, bool placed) const {
+        const int s = path.s, n = path.size();
         // Time-angular: an emitter hit right after a medium vertex is left to the other
         // strategies (as transient_path leaves it to light sampling). Its direction aimed at
         // another light point, and its density at the point hit (the target's own, infinite
@@ -1143,68 +1213,38 @@ private:
         const bool hit_excluded = !steady_angular_ && path[1].kind == Vertex::Kind::Medium;
         if (s == 0 && hit_excluded) return 0.f;
         const int last = to_sensor_ ? n - 1 : n - 2;  // the last strategy: t = 1 or t = 2
-        // The connection changes the densities of its end points and their neighbours only, so
-        // the strategies k in [s - 2, s + 2] are summed here and those beyond from the
-        // subpaths' own sums (far_sums()). Time-angular directions and placed vertices make
-        // densities depend on the whole path: all strategies are summed here then.
-        const bool local = steady_angular_ && !connecting_;
-        const int lo = local ? std::max(0, s - 2) : 0, hi = local ? std::min(last, s + 2) : last;
         // On the stack for the usual depths (a thread_local vector costs a TLS lookup per call).
         constexpr int kStack = 64;
         Densities stack[kStack];
         std::vector<Densities> heap(n > kStack ? size_t(n) : 0);
         Densities* x = n > kStack ? heap.data() : stack;
-        const int first = std::max(0, lo - 1), end = std::min(n, hi + 2);  // the x used
-        for (int i = first; i < std::min(s, end); ++i) {
+        for (int i = 0; i < s; ++i) {
             const Vertex& v = path.light_vertex(i);
-            x[size_t(i)] = {v.pdf_fwd, v.pdf_rev, v.delta, 0};
+            x[size_t(i)] = {v.pdf_fwd, v.pdf_rev, 0};
         }
-        for (int i = std::max(s, first); i < end; ++i) {
+        for (int i = s; i < n; ++i) {
             const Vertex& v = path.camera_vertex(n - 1 - i);
-            x[size_t(i)] = {v.pdf_rev, v.pdf_fwd, v.delta, 0};
+            x[size_t(i)] = {v.pdf_rev, v.pdf_fwd, 0};
         }
-        // The connection's end points are not scattered by a delta lobe, and the densities
-        // across the connection are those of the other side sampling them.
-        const Vertex& pt = path.camera_vertex(t - 1);
-        const Vertex* qs = s > 0 ? &path.light_vertex(s - 1) : nullptr;
-        Densities& xt = x[size_t(s)];  // pt
-        xt.delta = false;
-        if (s > 0) {
-            Densities& xs = x[size_t(s) - 1];
-            xs.delta = false;
-            // towards(pt, *qs), and -across = towards(*qs, pt), exactly
-            const Vec3 across = join.across ? *join.across : towards(pt, *qs);
-            xt.from_light = pdf(scene, *qs, qs->wi, pt, -across) * join.at_camera_end;
-            if (t > 1)
-                x[size_t(s) + 1].from_light =
-                    pdf_back(scene, pt, across, path.camera_vertex(t - 2)) * pt.segment_rev;
-            xs.from_camera = pdf(scene, pt, pt.wi, *qs, across) * join.at_light_end;
-            if (s > 1)
-                x[size_t(s) - 2].from_camera =
-                    pdf_back(scene, *qs, -across, path.light_vertex(s - 2)) * qs->segment_rev;
-        } else {
-            xt.from_light = pdf_light_origin(scene, pt);
-            x[size_t(s) + 1].from_light = pdf_light(pt, path.camera_vertex(t - 2)) * pt.segment_rev;
-        }
+        const Across a = across_densities(scene, path);
+        x[size_t(s)].from_light = a.end_from_light;
+        if (s + 1 < n) x[size_t(s) + 1].from_light = a.beyond_end_from_light;
+        if (s > 0) x[size_t(s) - 1].from_camera = a.end_from_camera;
+        if (s > 1) x[size_t(s) - 2].from_camera = a.beyond_end_from_camera;
         if (!steady_angular_) angular_densities(path, x);
         x[size_t(s)].rel = 1.0;
-        for (int k = s + 1; k <= hi; ++k)  // strategies with fewer camera vertices
+        for (int k = s + 1; k <= last; ++k)  // strategies with fewer camera vertices
             x[size_t(k)].rel = x[size_t(k) - 1].rel *
                                ratio(x[size_t(k) - 1].from_light, x[size_t(k) - 1].from_camera);
-        for (int k = s - 1; k >= lo; --k)  // strategies with fewer light vertices
+        for (int k = s - 1; k >= 0; --k)  // strategies with fewer light vertices
             x[size_t(k)].rel =
                 x[size_t(k) + 1].rel * ratio(x[size_t(k)].from_camera, x[size_t(k)].from_light);
         // (s = 0 runs while the camera subpath is traced: the light subpath is not there yet.)
         const bool delta_light = s > 0 && delta_emission(path.light_vertex(0));
         double sum = 0.0;
         double placed_factor = 0.0;  // strategy s's (k = s always joins)
-        for (int k = lo; k <= hi; ++k) {
-            const bool start_delta = k > 0 ? x[size_t(k) - 1].delta : delta_light;
-            const bool joins = k == s || (k > s ? !x[size_t(k) - 1].delta && !x[size_t(k)].delta
-                                                : !x[size_t(k)].delta && !start_delta);
-            // An environment's light vertex lies on no surface the camera could connect to.
-            const bool environment_to_camera = k == 1 && n == 2 && path[0].environment;
-            if (!joins || (k == 0 && hit_excluded) || environment_to_camera) continue;
+        for (int k = 0; k <= last; ++k) {
+            if (!path.joinable(k, delta_light) || (k == 0 && hit_excluded)) continue;
             sum += h(x[size_t(k)].rel);
             if (!connecting_) continue;  // no placed variants (placement_factor() would be 0)
             if (const double c = placement_factor(scene, path, k); c > 0) {
@@ -1212,8 +1252,6 @@ private:
                 if (k == s) placed_factor = c;
             }
         }
-        if (lo > 0) sum += h(x[size_t(lo)].rel) * far_sums(paths, true, lo - 1);
-        if (hi < last) sum += h(x[size_t(hi)].rel) * far_sums(paths, false, n - 1 - hi);
         return float((placed ? h(placed_factor) : 1.0) / sum);
     }
     // A light subpath's start emitting a delta in position or direction: no camera path hits
