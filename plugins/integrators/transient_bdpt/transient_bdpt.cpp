@@ -183,7 +183,7 @@ struct Subpaths {
     std::vector<Color> light_power;       // light arriving (before the vertex's event and BSDF)
     std::vector<LightClock> light_clock;  // after the vertex's delay
     // The ray each camera vertex's walk left along, on which connection strategies place
-    // vertices (camera_out[j] leaves camera[j]).
+    // vertices (camera_out[j] leaves camera[j]); empty without a connection strategy.
     struct Outgoing {
         Ray ray;
         double pdf_dir;        // its direction's density (solid angle)
@@ -464,11 +464,15 @@ private:
         paths.camera_beta.push_back(beta);
         paths.camera_clock.push_back(clock);
         walk.pdf_dir = scene.sensor().pdf_direction(camera_ray.d);
-        // `paths` is thread_local and outlives the sample: keep no pointer to the renderer's
-        // differential (the walk's own copy finds the footprint of the first hit).
-        Ray first_ray = walk.ray;
-        first_ray.differential = nullptr;
-        paths.camera_out.push_back({first_ray, walk.pdf_dir, kInfinity, walk.medium, beta});
+        // The rays out of camera vertices serve the connection strategy only (a 128-byte copy
+        // per vertex, 1-2 % of a render without it). `paths` is thread_local and outlives the
+        // sample: keep no pointer to the renderer's differential (the walk's own copy finds
+        // the footprint of the first hit).
+        if (connecting_) {
+            Ray first_ray = walk.ray;
+            first_ray.differential = nullptr;
+            paths.camera_out.push_back({first_ray, walk.pdf_dir, kInfinity, walk.medium, beta});
+        }
         while (int(paths.camera.size()) < max_vertices(true)) {
             sampler.advance_to(DimensionLayout::vertex(dims, paths.camera.size() - 1));
             // The vertex is built in place and taken back where the walk ends before it.
@@ -481,7 +485,7 @@ private:
                     clock.travel_to(p, eta);
                     return !clock.expired();
                 });
-            paths.camera_out.back().first_end = walk.first_end;
+            if (connecting_) paths.camera_out.back().first_end = walk.first_end;
             if (!found) {
                 paths.camera.pop_back();
                 if (walk.escaped) environment_hit(scene, sampler, walk, paths, beta, clock, out);
@@ -508,7 +512,8 @@ private:
             beta *= scatter;
             if (!survives_roulette(int(paths.camera.size()) - 1, beta.max_gain(), sampler, beta))
                 return;
-            paths.camera_out.push_back({walk.ray, walk.pdf_dir, kInfinity, walk.medium, beta});
+            if (connecting_)
+                paths.camera_out.push_back({walk.ray, walk.pdf_dir, kInfinity, walk.medium, beta});
         }
     }
 
