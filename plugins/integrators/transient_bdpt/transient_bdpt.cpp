@@ -1377,8 +1377,13 @@ private:
         size_t offset(int s, int t) const {
             return size_t(s * (depth + 2) + t) * size_t(width) * size_t(height) * 3;
         }
-        void add(int s, int t, Vec2 pos, Color value) const {
-            if (!enabled || !value.is_finite()) return;
+        // Every contribution passes here: the test is inlined, the rest is not (a call per
+        // contribution cost ~0.4 % of a render without the images).
+        void add(int s, int t, Vec2 pos, const Color& value) const {
+            if (enabled) add_enabled(s, t, pos, value);
+        }
+        [[gnu::noinline]] void add_enabled(int s, int t, Vec2 pos, Color value) const {
+            if (!value.is_finite()) return;
             if (t >= 2) value *= camera_weight;  // what the renderer applies to camera samples
             const int x = std::clamp(int(pos.x), 0, width - 1),
                       y = std::clamp(int(pos.y), 0, height - 1);
