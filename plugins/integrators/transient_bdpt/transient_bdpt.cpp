@@ -285,8 +285,10 @@ struct Join {
     const Vec3* across = nullptr;  // towards(its camera end, its light end), where known
 };
 
-// Direction from a to b.
-Vec3 towards(const Vertex& a, const Vertex& b) { return normalize(b.p - a.p); }
+// Direction from a to b (inlined: GCC kept it a call, ~1 % of a BDPT render in perf).
+[[gnu::always_inline]] inline Vec3 towards(const Vertex& a, const Vertex& b) {
+    return normalize(b.p - a.p);
+}
 
 class Bdpt : public MonteCarloIntegrator {
 public:
@@ -1280,7 +1282,12 @@ private:
     // instead of O(path length) (the recursive MIS of van Antwerpen 2011 and Georgiev 2012).
     // Filled on demand: a vertex's reverse density is known once the vertex after it has
     // scattered, which holds for every vertex a connection asks for here.
+    // (A sum found before is read inline; only filling new ones is a call.)
     double far_sums(const Subpaths& paths, bool light, int m) const {
+        const std::vector<double>& sums = light ? paths.light_far : paths.camera_far;
+        return size_t(m) < sums.size() ? sums[size_t(m)] : fill_far_sums(paths, light, m);
+    }
+    [[gnu::noinline]] double fill_far_sums(const Subpaths& paths, bool light, int m) const {
         std::vector<double>& sums = light ? paths.light_far : paths.camera_far;
         const VertexList& path = light ? paths.light : paths.camera;
         const int first_joinable = light ? 0 : (to_sensor_ ? 1 : 2);  // camera: t' >= 1 or 2
