@@ -7,7 +7,8 @@
 //   - connect_to_light(): the shadow connection to it, through null boundaries and media, with
 //     its transmittance and eta-weighted optical length;
 //   - DistanceMixture and sample_distance(): the distance strategy in a medium (ch. 5.6.1),
-//     alone or MIS-combined with mean-free-path sampling;
+//     alone or MIS-combined with mean-free-path sampling; DistanceMixtureCache keeps the
+//     last medium's;
 //   - SegmentDensities: a segment's distance densities seen from either end, for the MIS
 //     weights of bidirectional estimators (shadow connections report their MediumPieces);
 //   - connection_reach(): how far along a segment a connection strategy's vertex may lie and
@@ -22,6 +23,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -389,6 +391,31 @@ private:
     bool mis_;
 };
 
+/// The DistanceMixture of the medium asked for last, kept: a strategy's rates are fixed for a
+/// render, and finding them asks the medium and the strategy through several virtual calls
+/// (2-5 % of a path's instructions in fog when done at every segment). Keep one per sample
+/// or per path (it holds no lock).
+class DistanceMixtureCache {
+public:
+    DistanceMixtureCache(const DistanceSampler* strategy, bool mis, const DistanceContext& ctx)
+        : strategy_(strategy), mis_(mis), ctx_(ctx) {}
+    /// DistanceMixture(medium, strategy, mis, ctx), valid until a call with another medium.
+    const DistanceMixture& operator()(const Medium& medium) {
+        if (&medium != medium_) {
+            mixture_.emplace(medium, strategy_, mis_, ctx_);
+            medium_ = &medium;
+        }
+        return *mixture_;
+    }
+
+private:
+    const DistanceSampler* strategy_;
+    bool mis_;
+    DistanceContext ctx_;
+    const Medium* medium_ = nullptr;
+    std::optional<DistanceMixture> mixture_;
+};
+
 /// How likely distance sampling (a DistanceMixture in each medium, restarted at every boundary)
 /// is to reach the far end of a segment that crosses media in pieces, walking from either end:
 /// what a bidirectional integrator's MIS weights need of a segment that one strategy samples
@@ -398,15 +425,21 @@ private:
 class SegmentDensities final : public MediumPieces {
 public:
     SegmentDensities(const DistanceSampler* strategy, bool mis, const DistanceContext& ctx)
-        : strategy_(strategy), mis_(mis), ctx_(ctx) {}
+        : mixture(strategy, mis, ctx) {}
+
+    /// The distance strategy in each medium (kept across clear()).
+    DistanceMixtureCache mixture;
 
     /// Forgets the pieces: a new segment.
-    void clear() { *this = SegmentDensities(strategy_, mis_, ctx_); }
+    void clear() {
+        pieces_ = media_ = 0;
+        first_ = last_ = Piece{};
+        after_first_ = before_last_ = 1.0;
+    }
     /// The next piece from the segment's start (MediumPieces; null: vacuum).
     void piece(const Medium* medium, double length) override {
         if (!medium) return add_vacuum();
-        const DistanceMixture::AtDistance at =
-            DistanceMixture(*medium, strategy_, mis_, ctx_).at(length);
+        const DistanceMixture::AtDistance at = mixture(*medium).at(length);
         add(at.survival, at.pdf);
     }
     /// A piece in vacuum (passed surely).
@@ -439,9 +472,6 @@ private:
     struct Piece {
         double survival = 1.0, density = 0.0;
     };
-    const DistanceSampler* strategy_;
-    bool mis_;
-    DistanceContext ctx_;
     int pieces_ = 0, media_ = 0;  // all pieces; those in a medium
     Piece first_, last_;
     double after_first_ = 1.0, before_last_ = 1.0;  // survival of all pieces but the first / last

@@ -192,6 +192,9 @@ struct Subpaths {
         Throughput beta;       // the camera path's weight along it
     };
     std::vector<Outgoing> camera_out;
+    // The segment densities of each connection in turn (Bdpt::fresh_segment()): one object a
+    // sample keeps its distance strategy (SegmentDensities::mixture()) from one to the next.
+    mutable SegmentDensities connection_segment{nullptr, false, DistanceContext{}};
     double emission_time = 0;  // the light subpath's
     // Bdpt::far_sums(): per subpath vertex, the MIS sum of the strategies joining the subpath
     // at or before it, filled as connections ask for them.
@@ -366,6 +369,7 @@ public:
                 ContributionList& out) const override {
         Subpaths& paths = thread_subpaths();
         paths.clear();
+        paths.connection_segment = segment_densities();  // this integrator's strategy
         const DimensionLayout dims(sampler.dimension(), max_vertices(true), max_vertices(false),
                                    steady_angular_);
         if (steady_angular_) {
@@ -611,6 +615,11 @@ private:
     SegmentDensities segment_densities() const {
         return SegmentDensities(distance_.get(), mis_, DistanceContext{window_end_});
     }
+    // Subpaths::connection_segment, emptied for a new connection.
+    static SegmentDensities& fresh_segment(const Subpaths& paths) {
+        paths.connection_segment.clear();
+        return paths.connection_segment;
+    }
 
     // The density of the walk reaching v from prev (direction and distance), and of the
     // segment walked back.
@@ -636,8 +645,7 @@ private:
             const bool found = scene.intersect(walk.ray, hit);
             if (crossings == 0) walk.first_end = found ? double(hit.t) : kInfinity;
             if (const Medium* medium = walk.medium.medium) {
-                const DistanceMixture strategy(*medium, distance_.get(), mis_,
-                                               DistanceContext{window_end_});
+                const DistanceMixture& strategy = walk.segment.mixture(*medium);
                 const double tmax = found ? double(hit.t) : kInfinity;
                 const double u = walk.next_u >= 0 ? walk.next_u : double(sampler.next_1d());
                 walk.next_u = -1.0;
@@ -732,8 +740,7 @@ private:
     // `scatter` gets the phase function over the direction's density given the distance.
     bool angular_direction(Sampler& sampler, Walk& walk, const Vertex& v, Color& scatter,
                            Vec3& wo) const {
-        const DistanceMixture strategy(*v.medium.medium, distance_.get(), mis_,
-                                       DistanceContext{window_end_});
+        const DistanceMixture& strategy = walk.segment.mixture(*v.medium.medium);
         walk.next_u = double(sampler.next_1d());
         const AngularQuery q{
             v.p, v.wi, v.phase, strategy.sample(walk.next_u), walk.has_target, walk.target};
@@ -813,7 +820,7 @@ private:
         const Color arriving = light_toward(paths, s, -to_light);
         const Color f_camera = scattering(cv, to_light, false);
         if (arriving.is_black() || f_camera.is_black()) return;
-        SegmentDensities segment = segment_densities();
+        SegmentDensities& segment = fresh_segment(paths);
         const ShadowConnection c =
             connection(scene, sampler, cv, lv.p, to_light, distance, segment);
         if (c.blocked()) return;
@@ -842,7 +849,7 @@ private:
         if (std::isfinite(ls.distance) && double(ls.distance) > clock.remaining()) return;
         const Color f = scattering(cv, ls.wi, false);
         if (f.is_black()) return;
-        SegmentDensities segment = segment_densities();
+        SegmentDensities& segment = fresh_segment(paths);
         const ShadowConnection c =
             cv.kind == Vertex::Kind::Surface
                 ? connect_to_light(scene, cv.hit, ls, cv.medium, sampler, &segment)
@@ -879,7 +886,7 @@ private:
         if (!ss.valid() || !clock.arrives_in_time(ss.distance)) return;
         const Color value = light_toward(paths, s, ss.wi);
         if (value.is_black()) return;
-        SegmentDensities segment = segment_densities();
+        SegmentDensities& segment = fresh_segment(paths);
         const ShadowConnection c =
             lv.kind == Vertex::Kind::Surface
                 ? connect_to_sensor(scene, lv.hit, ss, lv.medium, sampler, &segment)
@@ -963,7 +970,7 @@ private:
         const Color f_camera = scattering(x, to_light, false);
         const Color arriving = light_toward(paths, s, -to_light);
         if (f_camera.is_black() || arriving.is_black()) return;
-        SegmentDensities segment = segment_densities();
+        SegmentDensities& segment = fresh_segment(paths);
         const ShadowConnection c = connection(scene, sampler, x, lv.p, to_light, distance, segment);
         if (c.blocked()) return;
         // The placed vertex's weight: transmittance and scattering over the placement density.
