@@ -56,12 +56,15 @@ struct PathState {
     bool has_target = false;
     Vec3 target;
     double next_u = -1.0;  // the next distance's uniform number, when drawn ahead (angular=time)
+    DistanceMixtureCache distances;  // the distance strategy in the medium travelled last
 
-    PathState(const Scene& scene, const Ray& camera_ray, ContributionList& out)
+    PathState(const Scene& scene, const Ray& camera_ray, ContributionList& out,
+              const DistanceSampler* distance, bool mis)
         : ray(camera_ray),
           clock(scene, out, camera_ray.o),
           medium(MediumTracker::at_sensor(scene)),
-          prev_p(camera_ray.o) {}
+          prev_p(camera_ray.o),
+          distances(distance, mis, DistanceContext{clock.window().end}) {}
     void aim_at(const EmitterSample& light) {
         if (light.pdf > 0 && std::isfinite(light.distance)) {
             target = light.p;
@@ -97,7 +100,7 @@ public:
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray,
                 ContributionList& out) const override {
         if (max_depth() == 0) return;
-        PathState path(scene, ray, out);
+        PathState path(scene, ray, out, distance_.get(), mis_);
         Hit hit;  // one for every vertex: intersect() sets all of it
         for (;;) {
             const bool found = scene.intersect(path.ray, hit);
@@ -207,8 +210,7 @@ private:
     SegmentEnd medium_segment(const Scene& scene, Sampler& sampler, PathState& path, bool found,
                               const Hit& hit) const {
         const Medium& medium = *path.medium.medium;
-        const DistanceMixture strategy(medium, distance_.get(), mis_,
-                                       DistanceContext{path.clock.window().end});
+        const DistanceMixture& strategy = path.distances(medium);
         const double u = path.next_u >= 0 ? path.next_u : double(sampler.next_1d());
         path.next_u = -1.0;
         const double tmax = found ? double(hit.t) : kInfinity;

@@ -46,6 +46,8 @@ struct LightPath {
     Color power;        // light the path carries (emitted / the densities that chose it)
     float start = 1.f;  // its largest channel at the emitter, for Russian roulette
     int64_t depth = 1;  // segments so far, the one being traced included
+    // Mean-free-path distances, in the medium travelled last.
+    DistanceMixtureCache distances{nullptr, false, DistanceContext{kInfinity}};
 };
 
 // What a segment through a medium ended in.
@@ -193,7 +195,7 @@ private:
     SegmentEnd medium_segment(const Scene& scene, Sampler& sampler, LightPath& path, bool found,
                               const Hit& hit, SplatList& out) const {
         const Medium& medium = *path.medium.medium;
-        const DistanceMixture strategy(medium, nullptr, false, DistanceContext{kInfinity});
+        const DistanceMixture& strategy = path.distances(medium);
         const double tmax = found ? double(hit.t) : kInfinity;
         const double u = double(sampler.next_1d());
         const DistanceSample ds = sample_distance(medium, path.ray, tmax, strategy, u, sampler);
