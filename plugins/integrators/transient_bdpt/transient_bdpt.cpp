@@ -465,10 +465,13 @@ private:
         cam.p = camera_ray.o;
         cam.pdf_fwd = 1.f;
         cam.medium = walk.medium;
+        // The camera vertex's weight and clock are made in place, not copied from the walk's
+        // just-built ones (a copy read them back before their stores had landed: perf put
+        // ~0.4 % of the render on it).
         PathClock clock(scene, out, camera_ray.o);
         Throughput beta;
-        paths.camera_beta.push_back(beta);
-        paths.camera_clock.push_back(clock);
+        paths.camera_beta.emplace_back();
+        paths.camera_clock.emplace_back(scene, out, camera_ray.o);
         walk.pdf_dir = scene.sensor().pdf_direction(camera_ray.d);
         // The rays out of camera vertices serve the connection strategy only (a 128-byte copy
         // per vertex, 1-2 % of a render without it). `paths` is thread_local and outlives the
