@@ -33,6 +33,8 @@ struct PhotonPath {
     Color power;        ///< flux the path carries (emitted / densities / paths per pass)
     float start = 1.f;  ///< its largest channel at the emitter, for Russian roulette
     int64_t depth = 1;  ///< segments so far, the one being traced included
+    /// Mean-free-path distances, in the medium crossed last.
+    DistanceMixtureCache free_paths{nullptr, false, DistanceContext{kInfinity}};
 };
 
 /// The free flight of a photon path through a medium (PhotonVisitor::medium_segment()).
@@ -86,7 +88,7 @@ template <typename Visitor>
 FlightEnd photon_in_medium(const MonteCarloIntegrator& rules, Sampler& sampler, PhotonPath& path,
                            bool found, const Hit& hit, Visitor& visitor) {
     const Medium& medium = *path.medium.medium;
-    const DistanceMixture free_path(medium, nullptr, false, DistanceContext{kInfinity});
+    const DistanceMixture& free_path = path.free_paths(medium);
     const double tmax = found ? double(hit.t) : kInfinity;
     const double u = double(sampler.next_1d());
     const DistanceSample ds = sample_distance(medium, path.ray, tmax, free_path, u, sampler);

@@ -137,6 +137,7 @@ struct EyePath {
     MediumTracker medium;
     Throughput throughput;
     int64_t depth = 1;
+    DistanceMixtureCache free_paths{nullptr, false, DistanceContext{kInfinity}};  // last medium's
 };
 
 // Where a segment through a medium ended.
@@ -260,7 +261,7 @@ void TransientPpm::sample(const Scene& scene, Sampler& sampler, const Ray& camer
 SegmentEnd TransientPpm::eye_in_medium(Sampler& sampler, EyePath& eye, bool found,
                                        const Hit& hit) const {
     const Medium& medium = *eye.medium.medium;
-    const DistanceMixture free_path(medium, nullptr, false, DistanceContext{kInfinity});
+    const DistanceMixture& free_path = eye.free_paths(medium);
     const double tmax = found ? double(hit.t) : kInfinity;
     const double u = double(sampler.next_1d());
     const DistanceSample ds = sample_distance(medium, eye.ray, tmax, free_path, u, sampler);
