@@ -14,7 +14,9 @@
 //   - connect(): the strategies with s >= 1 and t >= 1: the light sample (s = 1), the sensor
 //     connection (t = 1, a splat onto the film), and the general connection;
 //   - place_and_connect(): the connection strategy's variants (below);
-//   - mis_weight(): the heuristic over the path's strategies, from the vertices' densities.
+//   - mis_weight(): the heuristic over the path's strategies, from the vertices' densities:
+//     local_weight() sums those near the connection (the usual case),
+//     whole_path_weight() all of them (time-angular directions, placed vertices).
 // Time: each camera vertex keeps its PathClock and each light vertex its LightClock; a joined
 // path's time is the light subpath's, plus the connection's optical length, plus the camera
 // subpath's (femto/path_clock.h). The window is checked before a connection's shadow ray.
