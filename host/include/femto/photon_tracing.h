@@ -34,7 +34,7 @@ struct PhotonPath {
     float start = 1.f;  ///< its largest channel at the emitter, for Russian roulette
     int64_t depth = 1;  ///< segments so far, the one being traced included
     /// Mean-free-path distances, in the medium crossed last.
-    DistanceMixtureCache free_paths{nullptr, false, DistanceContext{kInfinity}};
+    DistanceMixtureCache free_paths{};
 };
 
 /// The free flight of a photon path through a medium (PhotonVisitor::medium_segment()).
@@ -92,9 +92,8 @@ FlightEnd photon_in_medium(const MonteCarloIntegrator& rules, Sampler& sampler, 
     const double tmax = found ? double(hit.t) : kInfinity;
     const double u = double(sampler.next_1d());
     const DistanceSample ds = sample_distance(medium, path.ray, tmax, free_path, u, sampler);
-    visitor.medium_segment(path,
-                           FreeFlight{&medium, ds.scattered ? ds.distance : tmax, ds.scattered,
-                                      DistanceSampler::mean_free_path_rate(medium)});
+    visitor.medium_segment(path, FreeFlight{&medium, ds.scattered ? ds.distance : tmax,
+                                            ds.scattered, free_path.steady_rate()});
     path.power *= ds.weight;
     if (path.power.is_black()) return FlightEnd::Stop;
     if (!ds.scattered) return found ? FlightEnd::Surface : FlightEnd::Stop;

@@ -336,6 +336,9 @@ public:
     }
     /// Density of sample() returning r.
     double pdf(double r) const { return at(r).pdf; }
+    /// The mean-free-path rate (DistanceSampler::mean_free_path_rate(); the only rate when
+    /// there is no strategy).
+    double steady_rate() const { return steady_; }
     /// Probability that sample() returns more than d.
     double survival(double d) const { return at(d).survival; }
     /// survival(d) and pdf(d) together, from one exponential per rate (an exponential's density
@@ -399,6 +402,8 @@ class DistanceMixtureCache {
 public:
     DistanceMixtureCache(const DistanceSampler* strategy, bool mis, const DistanceContext& ctx)
         : strategy_(strategy), mis_(mis), ctx_(ctx) {}
+    /// Mean-free-path distances alone (no strategy, no time window).
+    DistanceMixtureCache() : DistanceMixtureCache(nullptr, false, DistanceContext{kInfinity}) {}
     /// DistanceMixture(medium, strategy, mis, ctx), valid until a call with another medium.
     const DistanceMixture& operator()(const Medium& medium) {
         if (&medium != medium_) {

@@ -47,7 +47,7 @@ struct LightPath {
     float start = 1.f;  // its largest channel at the emitter, for Russian roulette
     int64_t depth = 1;  // segments so far, the one being traced included
     // Mean-free-path distances, in the medium travelled last.
-    DistanceMixtureCache distances{nullptr, false, DistanceContext{kInfinity}};
+    DistanceMixtureCache distances{};
 };
 
 // What a segment through a medium ended in.

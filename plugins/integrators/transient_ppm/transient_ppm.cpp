@@ -137,7 +137,7 @@ struct EyePath {
     MediumTracker medium;
     Throughput throughput;
     int64_t depth = 1;
-    DistanceMixtureCache free_paths{nullptr, false, DistanceContext{kInfinity}};  // last medium's
+    DistanceMixtureCache free_paths{};  // mean-free-path distances, in the last medium
 };
 
 // Where a segment through a medium ended.
