@@ -184,6 +184,36 @@ TEST(DistanceMixture, DensityIntegratesToOneAndMatchesSurvival) {
     }
 }
 
+// The cache gives the mixture a fresh DistanceMixture of the medium asked for would be, and
+// a new one whenever the medium changes (media alternating, as at a path's boundaries).
+TEST(DistanceMixtureCache, GivesTheMixtureOfTheMediumAskedFor) {
+    auto medium_of = [](double sigma_t) {
+        Properties props("homogeneous", {});
+        props.set_float("sigma_t", sigma_t);
+        return create_child_object(PluginKind::Medium, "homogeneous", props);
+    };
+    const auto thin_obj = medium_of(0.5), dense_obj = medium_of(4.0);
+    const Medium& thin = static_cast<const Medium&>(*thin_obj);
+    const Medium& dense = static_cast<const Medium&>(*dense_obj);
+    auto exp_obj = create_default_object(PluginKind::Distance, "exponential", {});
+    const auto& exponential = static_cast<const DistanceSampler&>(*exp_obj);
+    const DistanceContext ctx{4.0};
+    DistanceMixtureCache cache(&exponential, true, ctx);
+    DistanceMixtureCache free_paths;  // mean free paths alone
+    for (const Medium* m : {&thin, &thin, &dense, &thin, &dense, &dense}) {
+        const DistanceMixture fresh(*m, &exponential, true, ctx);
+        const DistanceMixture fresh_free(*m, nullptr, false, DistanceContext{kInfinity});
+        for (const double d : {0.1, 0.7, 2.5}) {
+            EXPECT_EQ(cache(*m).at(d).pdf, fresh.at(d).pdf);
+            EXPECT_EQ(cache(*m).at(d).survival, fresh.at(d).survival);
+            EXPECT_EQ(free_paths(*m).at(d).pdf, fresh_free.at(d).pdf);
+        }
+        EXPECT_EQ(free_paths(*m).steady_rate(), DistanceSampler::mean_free_path_rate(*m));
+    }
+    EXPECT_EQ(free_paths(thin).steady_rate(), 0.5);
+    EXPECT_EQ(free_paths(dense).steady_rate(), 4.0);
+}
+
 TEST(ConnectionReach, AVertexAtTheReachArrivesExactlyAtTheWindow) {
     // eta r + |x(r) - target| = remaining at the reach, and less before it.
     const Vec3 o(0.f, 0.f, 0.f), d(1.f, 0.f, 0.f), target(2.f, 1.f, 0.f);
