@@ -491,6 +491,10 @@ struct DistanceSample {
     double distance = 0.0;
     double pdf = 0.0;  ///< of the vertex, when scattered
     Color weight{1.f, 1.f, 1.f};
+    /// The strategy's survival and density at the segment's end (`distance` when scattered, a
+    /// finite tmax otherwise; zero when the ray leaves to infinity): what a bidirectional
+    /// integrator's segment densities need of it, from the exponential the weight took.
+    DistanceMixture::AtDistance at{0.0, 0.0};
 };
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
                                const DistanceMixture& strategy, double u, Sampler& sampler);

@@ -177,11 +177,13 @@ DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax
     if (r < tmax) {
         ds.scattered = true;
         ds.distance = r;
-        ds.pdf = strategy.pdf(r);
+        ds.at = strategy.at(r);
+        ds.pdf = ds.at.pdf;
         const Vec3 p = ray.o + ray.d * float(r);
         ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / ds.pdf);
     } else if (std::isfinite(tmax)) {
-        ds.weight = medium.transmittance(ray, tmax, sampler) * float(1.0 / strategy.survival(tmax));
+        ds.at = strategy.at(tmax);
+        ds.weight = medium.transmittance(ray, tmax, sampler) * float(1.0 / ds.at.survival);
     } else {
         ds.weight = Color(0.f);  // an infinite medium with no surface ahead absorbs it all
     }

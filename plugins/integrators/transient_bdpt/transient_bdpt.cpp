@@ -656,9 +656,8 @@ private:
                 walk.next_u = -1.0;
                 const DistanceSample ds =
                     sample_distance(*medium, walk.ray, tmax, strategy, u, sampler);
-                const double piece = ds.scattered ? ds.distance : tmax;
-                const DistanceMixture::AtDistance at = strategy.at(piece);
-                walk.segment.add(at.survival, at.pdf);
+                // (A ray that leaves to infinity ends the walk: its piece's densities go unread.)
+                walk.segment.add(ds.at.survival, ds.at.pdf);
                 weight *= ds.weight;
                 if (ds.scattered) {  // v.hit (the surface beyond) stays: only surfaces read it
                     v.kind = Vertex::Kind::Medium;
