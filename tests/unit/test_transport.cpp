@@ -214,6 +214,40 @@ TEST(DistanceMixtureCache, GivesTheMixtureOfTheMediumAskedFor) {
     EXPECT_EQ(free_paths(dense).steady_rate(), 4.0);
 }
 
+TEST(DistanceMixture, SurvivalIsTheTransmittanceOnlyWhereItIs) {
+    // Mean-free-path distances in a grey homogeneous medium survive with exactly the medium's
+    // transmittance, and a shadow connection's segment densities hand it over
+    // (SegmentDensities::piece()); with another rate, or another extinction per channel, they
+    // leave the medium to compute it.
+    auto medium_with = [](const Color& sigma_t) {
+        Properties props("homogeneous", {});
+        props.set_color("sigma_t", sigma_t);
+        return create_child_object(PluginKind::Medium, "homogeneous", props);
+    };
+    const auto grey_obj = medium_with(Color(1.7f)), coloured_obj = medium_with(Color(0.5f, 1, 2));
+    const Medium& grey = static_cast<const Medium&>(*grey_obj);
+    const Medium& coloured = static_cast<const Medium&>(*coloured_obj);
+    auto exp_obj = create_default_object(PluginKind::Distance, "exponential", {});
+    const auto& exponential = static_cast<const DistanceSampler&>(*exp_obj);
+    const DistanceContext window{4.0};
+    auto sampler = create_default_object(PluginKind::Sampler, "independent", {});
+    Sampler& s = static_cast<Sampler&>(*sampler);
+    s.start(1, 0, 0);
+    const Ray ray{Vec3(0.f), Vec3(0.f, 0.f, 1.f), 0.f, kInfinity};
+    EXPECT_TRUE(DistanceMixture(grey, nullptr, false, window).survival_is_transmittance());
+    EXPECT_FALSE(DistanceMixture(grey, &exponential, true, window).survival_is_transmittance());
+    EXPECT_FALSE(DistanceMixture(coloured, nullptr, false, window).survival_is_transmittance());
+    SegmentDensities segment(nullptr, false, window);
+    for (const double d : {0.05, 0.7, 2.5, 9.0}) {
+        const std::optional<Color> known = segment.piece(&grey, d);
+        ASSERT_TRUE(known.has_value());
+        const Color exact = grey.transmittance(ray, d, s);
+        for (int c = 0; c < 3; ++c) EXPECT_EQ((*known)[c], exact[c]) << d;
+        EXPECT_FALSE(segment.piece(&coloured, d).has_value());
+        EXPECT_FALSE(segment.piece(nullptr, d).has_value());
+    }
+}
+
 TEST(ConnectionReach, AVertexAtTheReachArrivesExactlyAtTheWindow) {
     // eta r + |x(r) - target| = remaining at the reach, and less before it.
     const Vec3 o(0.f, 0.f, 0.f), d(1.f, 0.f, 0.f), target(2.f, 1.f, 0.f);
@@ -320,7 +354,11 @@ TEST(ShadowConnection, ThroughANullBoundedSlab) {
     // The connection reports its one medium piece: mean-free-path sampling (sigma_t 2) passes
     // the slab with probability e^(-1) and stops at its far side with density 2 e^(-1).
     SegmentDensities segment(nullptr, false, DistanceContext{});
-    connect_to_light(*scene, Vec3(0.f, 0.f, -3.f), light, MediumTracker{}, s, &segment);
+    const ShadowConnection reported =
+        connect_to_light(*scene, Vec3(0.f, 0.f, -3.f), light, MediumTracker{}, s, &segment);
+    // The pieces' survival stood in for the slab's transmittance: the same, bit for bit.
+    EXPECT_EQ(reported.transmittance.r, c.transmittance.r);
+    EXPECT_EQ(reported.optical_length, c.optical_length);
     EXPECT_NEAR(segment.forward(false), std::exp(-1.0), 1e-5);
     EXPECT_NEAR(segment.forward(true), 2 * std::exp(-1.0), 1e-5);
     EXPECT_NEAR(segment.backward(true), 2 * std::exp(-1.0), 1e-5);

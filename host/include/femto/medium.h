@@ -45,7 +45,9 @@ public:
     /// Index of refraction: the medium slows light to c / eta.
     double eta() const { return eta_; }
     const PhaseFunction& phase() const { return *phase_; }
-    /// True when sigma_t and sigma_s are the same everywhere (transmittance is exact).
+    /// True when sigma_t and sigma_s are the same everywhere. transmittance() must then be
+    /// exp(-sigma_t distance) per channel (exact), which the toolkit may compute itself
+    /// (DistanceMixture::survival_is_transmittance()).
     virtual bool homogeneous() const = 0;
     /// Largest extinction anywhere in the medium over all channels (a majorant for tracking).
     virtual float majorant() const = 0;

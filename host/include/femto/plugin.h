@@ -59,7 +59,9 @@ namespace femto {
 /// (27: RayDifferential::to_pixel_centre and PixelFootprint::to_pixel_centre change Ray's
 ///  differential and Hit's layout.)
 /// (28: Sampler::dimension() and Sampler::advance_to() change Sampler's vtable.)
-inline constexpr uint32_t kPluginAbiVersion = 28;
+/// (29: DistanceSample::at changes the layout sample_distance() returns; DistanceMixture's
+///  layout and MediumPieces::piece()'s result change.)
+inline constexpr uint32_t kPluginAbiVersion = 29;
 
 struct PluginDescriptor {
     uint32_t abi_version;

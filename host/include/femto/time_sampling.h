@@ -42,10 +42,17 @@ public:
     /// The steady (mean-free-path) rate in `medium`: the mean of sigma_t's channels when it
     /// is homogeneous, the majorant otherwise (the path weight then carries the ratio-tracked
     /// transmittance).
-    static double mean_free_path_rate(const Medium& medium) {
-        if (!medium.homogeneous()) return double(medium.majorant());
+    static double mean_free_path_rate(const Medium& medium) { return mean_free_path(medium).rate; }
+    /// The same rate, and whether it is the extinction of a homogeneous medium that is the same
+    /// in every channel (its survival exp(-rate d) is then the medium's transmittance).
+    struct MeanFreePath {
+        double rate;
+        bool grey_homogeneous;
+    };
+    static MeanFreePath mean_free_path(const Medium& medium) {
+        if (!medium.homogeneous()) return {double(medium.majorant()), false};
         const Color st = medium.sigma_t(Vec3(0.f));
-        return (double(st.r) + double(st.g) + double(st.b)) / 3.0;
+        return {(double(st.r) + double(st.g) + double(st.b)) / 3.0, st.r == st.g && st.r == st.b};
     }
 
     /// Samples a distance from one uniform u in [0, 1): -ln(1 - u) / lambda.

@@ -171,7 +171,10 @@ inline EmitterSample sample_emitter(const Scene& scene, Hit& hit, Sampler& sampl
 /// strategies with the distance densities of these pieces (SegmentDensities).
 class MediumPieces {
 public:
-    virtual void piece(const Medium* medium, double length) = 0;
+    /// The next piece. Returns the transmittance over it where the listener's own work found
+    /// it (DistanceMixture::survival_is_transmittance()): trace_shadow() then does not ask the
+    /// medium again. std::nullopt otherwise, and in vacuum.
+    virtual std::optional<Color> piece(const Medium* medium, double length) = 0;
 
 protected:
     ~MediumPieces() = default;
@@ -321,9 +324,7 @@ class DistanceMixture {
 public:
     DistanceMixture(const Medium& medium, const DistanceSampler* strategy, bool mis,
                     const DistanceContext& ctx)
-        : steady_(DistanceSampler::mean_free_path_rate(medium)),
-          strategy_(strategy ? strategy->rate(medium, ctx) : steady_),
-          mix_(mis && strategy && strategy_ != steady_) {}
+        : DistanceMixture(DistanceSampler::mean_free_path(medium), medium, strategy, mis, ctx) {}
 
     /// A distance from one uniform number (+infinity when the rate is zero).
     double sample(double u) const {
@@ -353,10 +354,24 @@ public:
         const double e_steady = DistanceSampler::survival(steady_, d);
         return {0.5 * (e_steady + e_strategy), 0.5 * (steady_ * e_steady + strategy_ * e_strategy)};
     }
+    /// True when survival(d) is the medium's transmittance over d: mean-free-path distances
+    /// alone in a homogeneous medium whose extinction is the same in every channel (its rate is
+    /// that extinction, and Medium::homogeneous() promises exp(-sigma_t d)). A shadow
+    /// connection that needs both then takes one exponential instead of two.
+    bool survival_is_transmittance() const { return survival_is_transmittance_; }
 
 private:
+    // (The medium is looked at once: a mixture is made per medium and per sample.)
+    DistanceMixture(const DistanceSampler::MeanFreePath& steady, const Medium& medium,
+                    const DistanceSampler* strategy, bool mis, const DistanceContext& ctx)
+        : steady_(steady.rate),
+          strategy_(strategy ? strategy->rate(medium, ctx) : steady_),
+          mix_(mis && strategy && strategy_ != steady_),
+          survival_is_transmittance_(!mix_ && strategy_ == steady_ && steady.grey_homogeneous) {}
+
     double steady_, strategy_;
     bool mix_;
+    bool survival_is_transmittance_;
 };
 
 /// The angular strategy at a medium vertex (ch. 5.6.3): a direction by `strategy` alone, or,
@@ -442,10 +457,16 @@ public:
         after_first_ = before_last_ = 1.0;
     }
     /// The next piece from the segment's start (MediumPieces; null: vacuum).
-    void piece(const Medium* medium, double length) override {
-        if (!medium) return add_vacuum();
-        const DistanceMixture::AtDistance at = mixture(*medium).at(length);
+    std::optional<Color> piece(const Medium* medium, double length) override {
+        if (!medium) {
+            add_vacuum();
+            return std::nullopt;
+        }
+        const DistanceMixture& m = mixture(*medium);
+        const DistanceMixture::AtDistance at = m.at(length);
         add(at.survival, at.pdf);
+        if (m.survival_is_transmittance()) return Color(float(at.survival));
+        return std::nullopt;
     }
     /// A piece in vacuum (passed surely).
     void add_vacuum() { ++pieces_; }

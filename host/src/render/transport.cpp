@@ -39,8 +39,10 @@ ShadowConnection trace_shadow(const Scene& scene, Ray ray, const Vec3& from, con
         // Attenuation over the length light travels, not over the ray's: a shadow ray stops
         // short of its target (by 1e-4 of its length), which would leave exp(1e-4 sigma_t d)
         // too much light.
-        if (medium.medium) c.transmittance *= medium.medium->transmittance(ray, length, sampler);
-        if (pieces) pieces->piece(medium.medium, length);
+        const std::optional<Color> known =
+            pieces ? pieces->piece(medium.medium, length) : std::nullopt;
+        if (medium.medium)
+            c.transmittance *= known ? *known : medium.medium->transmittance(ray, length, sampler);
         c.optical_length += length * medium.eta();
         last = next;
         if (!found) return c;
