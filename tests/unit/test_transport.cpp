@@ -246,6 +246,19 @@ TEST(DistanceMixture, SurvivalIsTheTransmittanceOnlyWhereItIs) {
         EXPECT_FALSE(segment.piece(&coloured, d).has_value());
         EXPECT_FALSE(segment.piece(nullptr, d).has_value());
     }
+    // sample_distance() takes the same shortcut: its weight is what the medium's own
+    // transmittance gives, a vertex's (u = 0.1, 0.5) and the surface's at 0.8 (u = 0.9).
+    const DistanceMixture free_paths(grey, nullptr, false, window);
+    for (const double u : {0.1, 0.5, 0.9}) {
+        const DistanceSample ds = sample_distance(grey, ray, 0.8, free_paths, u, s);
+        EXPECT_EQ(ds.scattered, u < 0.6) << u;
+        const double d = ds.scattered ? ds.distance : 0.8;
+        const Color tr = grey.transmittance(ray, d, s);
+        const Color expected = ds.scattered
+                                   ? tr * grey.sigma_s(ray.at(float(d))) * float(1.0 / ds.pdf)
+                                   : tr * float(1.0 / free_paths.survival(d));
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(ds.weight[c], expected[c]) << u;
+    }
 }
 
 TEST(ConnectionReach, AVertexAtTheReachArrivesExactlyAtTheWindow) {

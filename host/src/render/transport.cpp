@@ -172,6 +172,16 @@ ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const Sens
     return trace_shadow(scene, ray, x, sensor.p, medium, sampler, pieces, through_masks);
 }
 
+namespace {
+// The medium's transmittance over d, from the strategy's survival there where that is it (one
+// exponential instead of two: DistanceMixture::survival_is_transmittance()).
+Color transmittance(const Medium& medium, const Ray& ray, double d, const DistanceMixture& strategy,
+                    const DistanceMixture::AtDistance& at, Sampler& sampler) {
+    return strategy.survival_is_transmittance() ? Color(float(at.survival))
+                                                : medium.transmittance(ray, d, sampler);
+}
+}  // namespace
+
 DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax,
                                const DistanceMixture& strategy, double u, Sampler& sampler) {
     DistanceSample ds;
@@ -182,10 +192,12 @@ DistanceSample sample_distance(const Medium& medium, const Ray& ray, double tmax
         ds.at = strategy.at(r);
         ds.pdf = ds.at.pdf;
         const Vec3 p = ray.o + ray.d * float(r);
-        ds.weight = medium.transmittance(ray, r, sampler) * medium.sigma_s(p) * float(1.0 / ds.pdf);
+        ds.weight = transmittance(medium, ray, r, strategy, ds.at, sampler) * medium.sigma_s(p) *
+                    float(1.0 / ds.pdf);
     } else if (std::isfinite(tmax)) {
         ds.at = strategy.at(tmax);
-        ds.weight = medium.transmittance(ray, tmax, sampler) * float(1.0 / ds.at.survival);
+        ds.weight = transmittance(medium, ray, tmax, strategy, ds.at, sampler) *
+                    float(1.0 / ds.at.survival);
     } else {
         ds.weight = Color(0.f);  // an infinite medium with no surface ahead absorbs it all
     }
