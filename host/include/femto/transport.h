@@ -172,7 +172,7 @@ inline EmitterSample sample_emitter(const Scene& scene, Hit& hit, Sampler& sampl
 class MediumPieces {
 public:
     /// The next piece. Returns the transmittance over it where the listener's own work found
-    /// it (DistanceMixture::survival_is_transmittance()): trace_shadow() then does not ask the
+    /// it (DistanceMixture::transmittance()): trace_shadow() then does not ask the
     /// medium again. std::nullopt otherwise, and in vacuum.
     virtual std::optional<Color> piece(const Medium* medium, double length) = 0;
 
@@ -359,6 +359,13 @@ public:
     /// that extinction, and Medium::homogeneous() promises exp(-sigma_t d)). A shadow
     /// connection that needs both then takes one exponential instead of two.
     bool survival_is_transmittance() const { return survival_is_transmittance_; }
+    /// The medium's transmittance over the distance `at` was found at, from its survival, where
+    /// survival_is_transmittance() (rounded to float per channel, as a homogeneous medium's
+    /// transmittance() is); std::nullopt elsewhere.
+    std::optional<Color> transmittance(const AtDistance& at) const {
+        if (!survival_is_transmittance_) return std::nullopt;
+        return Color(float(at.survival));
+    }
 
 private:
     // (The medium is looked at once: a mixture is made per medium and per sample.)
@@ -465,8 +472,7 @@ public:
         const DistanceMixture& m = mixture(*medium);
         const DistanceMixture::AtDistance at = m.at(length);
         add(at.survival, at.pdf);
-        if (m.survival_is_transmittance()) return Color(float(at.survival));
-        return std::nullopt;
+        return m.transmittance(at);
     }
     /// A piece in vacuum (passed surely).
     void add_vacuum() { ++pieces_; }

@@ -174,11 +174,11 @@ ShadowConnection connect_to_sensor(const Scene& scene, const Vec3& x, const Sens
 
 namespace {
 // The medium's transmittance over d, from the strategy's survival there where that is it (one
-// exponential instead of two: DistanceMixture::survival_is_transmittance()).
+// exponential instead of two: DistanceMixture::transmittance()).
 Color transmittance(const Medium& medium, const Ray& ray, double d, const DistanceMixture& strategy,
                     const DistanceMixture::AtDistance& at, Sampler& sampler) {
-    return strategy.survival_is_transmittance() ? Color(float(at.survival))
-                                                : medium.transmittance(ray, d, sampler);
+    const std::optional<Color> known = strategy.transmittance(at);
+    return known ? *known : medium.transmittance(ray, d, sampler);
 }
 }  // namespace
 
