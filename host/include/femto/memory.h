@@ -3,7 +3,9 @@
 // itself would fail late, or the kernel's OOM killer would end the process without a word.
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <vector>
 
 namespace femto {
 
@@ -19,5 +21,25 @@ double usable_memory_bytes();
 /// Empty when `bytes` fit in 3/4 of usable_memory_bytes() (or it is unknown); else a message:
 /// "WHAT would need X GiB, more than 3/4 of the Y GiB of memory ...".
 std::string memory_shortfall(double bytes, const std::string& what);
+
+/// Marks the whole 2 MiB pages within [p, p + bytes) for transparent huge pages
+/// (madvise(MADV_HUGEPAGE)). Call it before the memory is first touched: zeroing or filling it
+/// then costs one page fault per 2 MiB instead of one per 4 KiB, which for a cube of hundreds of
+/// megabytes on a virtual machine was seconds (bench/README.md). Does nothing below 4 MiB, or
+/// where the kernel gives no huge pages (the memory stays in ordinary pages).
+void advise_huge_pages(void* p, size_t bytes);
+
+/// v.assign(n, value), with v's storage in huge pages where the kernel has them: for arrays of
+/// tens of megabytes and more (a film's cube, a cube read from a file). A vector too small for
+/// n gives its storage back first, so the old and the new are never held together.
+template <typename T>
+void assign_in_huge_pages(std::vector<T>& v, size_t n, const T& value) {
+    if (v.capacity() < n) {
+        std::vector<T>().swap(v);
+        v.reserve(n);
+        advise_huge_pages(v.data(), n * sizeof(T));
+    }
+    v.assign(n, value);
+}
 
 }  // namespace femto

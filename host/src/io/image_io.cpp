@@ -625,6 +625,15 @@ void gather_strip_rows(const CubeView& v, const float* data, const float* pixel_
         for (int x = 0; x < v.width; ++x) {
             const size_t pixel = size_t(y) * size_t(v.width) + size_t(x);
             const float* src = data + v.at(pixel, int(t_lo));
+            // Each pixel's run starts a whole pixel's bins (kilobytes) past the last, a cache
+            // miss the loop waits on. With the cube in huge pages it waited longer
+            // (femto_bench_write's uncompressed cube: 0.19 s in 4 KiB pages, 0.27-0.32 s in
+            // huge pages); asking 8 pixels ahead gives 0.18-0.21 s.
+            if (x + 8 < v.width) {
+                const float* ahead = data + v.at(pixel + 8, int(t_lo));
+                __builtin_prefetch(ahead);
+                __builtin_prefetch(ahead + 3 * (t_hi - t_lo));
+            }
             const float s = pixel_scale ? pixel_scale[pixel] : 1.f;
             for (int64_t t = t_lo; t <= t_hi; ++t) {
                 float* dst = out + (size_t(t * H + y - r0) * size_t(v.width) + size_t(x)) * 3;
@@ -639,6 +648,11 @@ void scatter_frames(const CubeView& v, const float* in, int t0, int n, float* da
     const size_t pixels = v.pixels();
     for (size_t pixel = 0; pixel < pixels; ++pixel) {
         float* dst = data + v.at(pixel, t0);
+        if (pixel + 8 < pixels) {  // as in gather_strip_rows()
+            float* ahead = data + v.at(pixel + 8, t0);
+            __builtin_prefetch(ahead, 1);
+            __builtin_prefetch(ahead + 3 * (n - 1), 1);
+        }
         for (int k = 0; k < n; ++k)
             for (int c = 0; c < 3; ++c) dst[k * 3 + c] = in[(size_t(k) * pixels + pixel) * 3 + c];
     }
@@ -889,7 +903,7 @@ Cube read_exr_cube(const std::string& path) {
                 memory_shortfall(double(values) * sizeof(float), "its pixels");
             !problem.empty())
             throw std::runtime_error(problem);
-        cube.data.assign(values, 0.f);
+        assign_in_huge_pages(cube.data, values, 0.f);
         if (frames_part >= 0)
             read_frames_part(file, frames_part, cube);
         else
@@ -1030,7 +1044,8 @@ std::vector<float> read_npy(const std::string& path, std::vector<size_t>& shape)
     // Checked before allocating: a header may declare far more data than the file holds.
     if (count * sizeof(float) > in.size() - 10 - len)
         throw SceneError(fmt::format("\"{}\" is truncated", path));
-    std::vector<float> data(count);
+    std::vector<float> data;
+    assign_in_huge_pages(data, count, 0.f);
     if (in.read(data.data(), count * sizeof(float)) != count * sizeof(float))
         throw SceneError(fmt::format("\"{}\" is truncated", path));
     return data;

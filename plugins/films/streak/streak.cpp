@@ -125,7 +125,7 @@ public:
             for (int r : rows_)
                 if (double(y) <= r + 0.5 + radius && double(y) + 1.0 > r + 0.5 - radius)
                     active_[size_t(y)] = 1;
-        data_.assign(rows_.size() * size_t(width_) * size_t(grid_.bins) * 3, 0.f);
+        assign_in_huge_pages(data_, rows_.size() * size_t(width_) * size_t(grid_.bins) * 3, 0.f);
         sums_.assign(rows_.size() * size_t(width_), PixelSums());
     }
 

@@ -120,10 +120,10 @@ public:
         if (const std::string problem = memory_shortfall(total, "the cube and its AOVs");
             !problem.empty())
             props.fail("bins", problem);
-        cube_.assign(pixels * size_t(grid_.bins) * 3, 0.f);
+        assign_in_huge_pages(cube_, pixels * size_t(grid_.bins) * 3, 0.f);
         map_slot_budget_ = pixels * size_t(grid_.bins) * 3 / 8;
-        if (count_enabled_) count_.assign(pixels * size_t(grid_.bins), 0.f);
-        if (variance_enabled_) sq_.assign(cube_.size(), 0.f);
+        if (count_enabled_) assign_in_huge_pages(count_, pixels * size_t(grid_.bins), 0.f);
+        if (variance_enabled_) assign_in_huge_pages(sq_, cube_.size(), 0.f);
         weights_.resize(pixels);
     }
 
