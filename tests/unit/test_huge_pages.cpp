@@ -62,15 +62,6 @@ TEST(HugePages, AssignedArraysHoldTheirValues) {
     EXPECT_EQ(cube[9], 3.f);
 }
 
-TEST(HugePages, SmallOrOddRangesAreLeftAlone) {
-    // Below two huge pages, unaligned, or null: nothing happens, and the memory stays usable.
-    std::vector<char> small(1000, 1);
-    advise_huge_pages(small.data(), small.size());
-    advise_huge_pages(small.data() + 1, small.size() - 1);
-    advise_huge_pages(nullptr, size_t(64) << 20);
-    EXPECT_EQ(std::accumulate(small.begin(), small.end(), 0), 1000);
-}
-
 TEST(HugePages, TheKernelMayBackALargeArrayWithThem) {
     const std::string mode = huge_page_mode();
     if (mode != "madvise" && mode != "always")
