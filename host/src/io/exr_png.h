@@ -31,6 +31,17 @@ Attributes read_attributes(const Imf::Header& header);
 /// else odd is left for OpenEXR to report.
 std::string exr_header_problem(const std::string& path);
 
+/// Throws std::runtime_error unless `input` (any OpenEXR input file or part) has an offset
+/// table that names every pixel block (isComplete()): the first test of require_whole_exr()
+/// and of the cube reader's tiled check.
+template <class ExrInput>
+void require_complete(ExrInput& input) {
+    if (!input.isComplete())
+        throw std::runtime_error(
+            "it is incomplete: some of its pixel blocks are missing (a truncated or partly "
+            "written file)");
+}
+
 /// Throws std::runtime_error unless `input` (an Imf::InputFile or Imf::InputPart) looks whole:
 /// its offset table names every pixel block (isComplete()) and the first and last rows of its
 /// data window `dw` read, each of `channels` into a row of scratch. A cut file lacks the blocks
@@ -40,10 +51,7 @@ std::string exr_header_problem(const std::string& path);
 template <class ExrInput>
 void require_whole_exr(ExrInput& input, const Imath::Box2i& dw,
                        std::initializer_list<const char*> channels) {
-    if (!input.isComplete())
-        throw std::runtime_error(
-            "it is incomplete: some of its pixel blocks are missing (a truncated or partly "
-            "written file)");
+    require_complete(input);
     const int64_t width = int64_t(dw.max.x) - dw.min.x + 1;
     std::vector<float> row(static_cast<size_t>(width));
     for (const int y : {dw.min.y, dw.max.y}) {

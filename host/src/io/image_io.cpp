@@ -809,10 +809,7 @@ int frames_tile_rows(const Imf::Header& h, int width) {
 // require_whole_exr() for a part read by tiles: its offset table whole, and its first and last
 // tile rows decoded into scratch (a cut file lacks the last).
 void require_whole_tiles(Imf::TiledInputPart& part, const Imath::Box2i& dw, int tile_h) {
-    if (!part.isComplete())
-        throw std::runtime_error(
-            "it is incomplete: some of its pixel blocks are missing (a truncated or partly "
-            "written file)");
+    detail::require_complete(part);
     const int width = dw.max.x - dw.min.x + 1;
     std::vector<float> rows(size_t(width) * size_t(tile_h) * 3);
     const size_t xs = 3 * sizeof(float), ys = xs * size_t(width);
