@@ -284,15 +284,45 @@ bool combine_processes(femto::cli::Distributed& group, femto::Scene& scene,
     return true;
 }
 
-int cmd_render(const std::string& scene_path, std::string out_base,
-               const std::vector<std::string>& defines, uint32_t spp, int threads, uint64_t seed,
-               bool quiet, bool npy, femto::LoadOptions opts, femto::cli::Distributed* group) {
+// What `femto render` was asked for on its command line.
+struct RenderArgs {
+    std::string scene_path, out_base;
+    std::vector<std::string> defines;
+    uint32_t spp = 0;
+    int threads = 0;
+    uint64_t seed = 0;
+    bool quiet = false, npy = false;
+};
+
+CLI::App* add_render_command(CLI::App& app, RenderArgs& a, femto::LoadOptions& opts) {
+    auto* render = app.add_subcommand("render", "Render a scene");
+    render->add_option("scene", a.scene_path, "Scene file (Mitsuba 0.6 / 3.x XML)")->required();
+    render->add_option("-o,--output", a.out_base,
+                       "Output path, without extension or with .exr/.png/.npy (default: scene "
+                       "name)");
+    render->add_option("-D", a.defines, "Set a scene parameter: -D name=value (repeatable)");
+    render->add_option("--spp", a.spp, "Samples per pixel (overrides the sampler)")
+        ->check(whole_number_in(1, std::numeric_limits<uint32_t>::max()));
+    render->add_option("--threads", a.threads, "Worker threads (default: all cores)")
+        ->check(whole_number_in(1, 4096));
+    render->add_option("--seed", a.seed, "Random seed")
+        ->check(whole_number_in(0, std::numeric_limits<uint64_t>::max()));
+    render->add_option("--plugin-dir", opts.plugin_dirs, kPluginDirHelp);
+    render->add_flag("--lenient", opts.lenient,
+                     "Warn about unknown/unused parameters instead of failing");
+    render->add_flag("-q,--quiet", a.quiet, "No progress or summary output");
+    render->add_flag("--npy", a.npy,
+                     "Transient films: also write OUTBASE.npy (float32 [H, W, T, C])");
+    return render;
+}
+
+int cmd_render(RenderArgs args, femto::LoadOptions opts, femto::cli::Distributed* group) {
     const bool root = !group || group->rank() == 0;
     if (!root) {  // rank 0 speaks for the job
-        quiet = true;
+        args.quiet = true;
         femto::silence_log(true);
     }
-    for (const auto& d : defines) {
+    for (const auto& d : args.defines) {
         auto define = parse_define(d);
         // Which of two values would win is not obvious, and the loser would never be checked.
         for (const auto& [name, value] : opts.defines)
@@ -302,52 +332,53 @@ int cmd_render(const std::string& scene_path, std::string out_base,
         opts.defines.push_back(std::move(define));
     }
     femto::plugin_search_path(opts);  // checks the --plugin-dir folders before any work
-    if (out_base.empty()) out_base = fs::path(scene_path).stem().string();
-    out_base = strip_output_extension(out_base);
-    if (root) prepare_output(out_base);
+    if (args.out_base.empty()) args.out_base = fs::path(args.scene_path).stem().string();
+    args.out_base = strip_output_extension(args.out_base);
+    if (root) prepare_output(args.out_base);
     // From here on Ctrl-C means "stop rendering and write what was rendered".
     handle_stop_signals(true, group ? kDistributedRenderStopMessage : kRenderStopMessage);
-    auto scene = femto::load_scene(scene_path, opts);
+    auto scene = femto::load_scene(args.scene_path, opts);
     if (group) render_totals(*scene);  // a film that cannot be combined fails before rendering
     femto::RenderOptions ro;
-    ro.spp = spp;
-    ro.threads = threads > 0 || !group ? threads : group->default_threads();
-    ro.seed = seed;
-    ro.progress = !quiet && (isatty(STDERR_FILENO) || group);
+    ro.spp = args.spp;
+    ro.threads = args.threads > 0 || !group ? args.threads : group->default_threads();
+    ro.seed = args.seed;
+    ro.progress = !args.quiet && (isatty(STDERR_FILENO) || group);
     ro.progress_lines = group != nullptr;  // mpirun's stderr is a pipe: lines, not a bar
-    ro.scene_file = scene_path;
+    ro.scene_file = args.scene_path;
     ro.stop = &g_stop;
     ro.group = group;
     femto::RenderStats stats = femto::render(*scene, ro);
-    if (group && !combine_processes(*group, *scene, stats, quiet))
+    if (group && !combine_processes(*group, *scene, stats, args.quiet))
         return g_first_signal.load() ? kExitSignalBase + g_first_signal.load()
                : stats.interrupted   ? kExitInterrupted
                                      : kExitOk;
     g_writing.store(true);
     femto::RenderInfo info = femto::make_render_info(*scene, ro, stats);
-    info.write_npy = npy;
+    info.write_npy = args.npy;
     info.processes = group ? uint32_t(group->size()) : 1;
-    if (!quiet)
+    if (!args.quiet)
         fmt::print(stderr, "{} {} of {} spp in {:.3f} s ({:.3f} M rays/s); writing {}.* ...\n",
                    stats.interrupted ? "Interrupted after" : "Rendered", stats.spp_done,
                    stats.spp_requested, stats.seconds,
-                   stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0, out_base);
-    if (!quiet && stats.pilot_seconds > 0)
+                   stats.seconds > 0 ? double(stats.rays) / stats.seconds * 1e-6 : 0.0,
+                   args.out_base);
+    if (!args.quiet && stats.pilot_seconds > 0)
         fmt::print(stderr, "(the temporal filter's pilot pass took {:.2f} s of it)\n",
                    stats.pilot_seconds);
-    if (!quiet && stats.pilot_image_spp > 0)
+    if (!args.quiet && stats.pilot_image_spp > 0)
         fmt::print(stderr, "(the temporal filter's pilot was the image's first {} spp)\n",
                    stats.pilot_image_spp);
-    if (!quiet && stats.adaptive) {
+    if (!args.quiet && stats.adaptive) {
         const femto::Film& film = scene->sensor().film();
         fmt::print(stderr, "adaptive sampling: {:.1f} samples per pixel on average\n",
                    double(stats.camera_samples) / (double(film.width()) * film.height()));
     }
     const auto write_start = std::chrono::steady_clock::now();
-    auto files = scene->sensor().film().write(out_base, info);
-    for (auto& f : scene->integrator().write(out_base, info)) files.push_back(std::move(f));
+    auto files = scene->sensor().film().write(args.out_base, info);
+    for (auto& f : scene->integrator().write(args.out_base, info)) files.push_back(std::move(f));
     handle_stop_signals(false);
-    if (!quiet) {
+    if (!args.quiet) {
         const std::chrono::duration<double> took = std::chrono::steady_clock::now() - write_start;
         for (const auto& f : files) fmt::print(stderr, "wrote {}\n", f);
         fmt::print(stderr, "({} files in {:.2f} s)\n", files.size(), took.count());
@@ -365,30 +396,8 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     femto::LoadOptions opts;
 
-    auto* render = app.add_subcommand("render", "Render a scene");
-    std::string scene_path, out_base;
-    std::vector<std::string> defines;
-    uint32_t spp = 0;
-    int threads = 0;
-    uint64_t seed = 0;
-    bool quiet = false, npy = false;
-    render->add_option("scene", scene_path, "Scene file (Mitsuba 0.6 / 3.x XML)")->required();
-    render->add_option("-o,--output", out_base,
-                       "Output path, without extension or with .exr/.png/.npy (default: scene "
-                       "name)");
-    render->add_option("-D", defines, "Set a scene parameter: -D name=value (repeatable)");
-    render->add_option("--spp", spp, "Samples per pixel (overrides the sampler)")
-        ->check(whole_number_in(1, std::numeric_limits<uint32_t>::max()));
-    render->add_option("--threads", threads, "Worker threads (default: all cores)")
-        ->check(whole_number_in(1, 4096));
-    render->add_option("--seed", seed, "Random seed")
-        ->check(whole_number_in(0, std::numeric_limits<uint64_t>::max()));
-    render->add_option("--plugin-dir", opts.plugin_dirs, kPluginDirHelp);
-    render->add_flag("--lenient", opts.lenient,
-                     "Warn about unknown/unused parameters instead of failing");
-    render->add_flag("-q,--quiet", quiet, "No progress or summary output");
-    render->add_flag("--npy", npy,
-                     "Transient films: also write OUTBASE.npy (float32 [H, W, T, C])");
+    RenderArgs render_args;
+    CLI::App* render = add_render_command(app, render_args, opts);
 
     auto* plugins = app.add_subcommand("plugins", "List plugins, or print one plugin's parameters");
     std::string plugin_name;
@@ -439,8 +448,7 @@ int main(int argc, char** argv) {
     };
     try {
         if (render->parsed()) {
-            const int code = cmd_render(scene_path, out_base, defines, spp, threads, seed, quiet,
-                                        npy, opts, group.get());
+            const int code = cmd_render(render_args, opts, group.get());
             femto::cli::finish_distributed(std::move(group));
             return code;
         }
