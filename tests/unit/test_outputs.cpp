@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <string>
@@ -26,6 +27,7 @@
 #include "femto/error.h"
 #include "femto/image_io.h"
 #include "femto/testing/render.h"
+#include "femto/viz.h"
 
 namespace fs = std::filesystem;
 using namespace femto;
@@ -331,6 +333,61 @@ TEST(ImageRead, AnAttributeLargerThanTheFileIsRefused) {
                 << e.what();
         }
     }
+}
+
+// OpenEXR allocates a buffer of one pixel block (a tile, or a compression's group of
+// scanlines) per thread as it opens a file, sized by the header alone: a 538-byte file found by
+// the cube fuzzer declared tiles of 16388 x 4096 pixels (805 MB a buffer). femto refuses such
+// a header before OpenEXR opens the file.
+TEST(ImageRead, PixelBlocksTooLargeToDecodeAreRefused) {
+    const auto dir = temp_dir("image-read-huge-blocks");
+    const auto read_bytes = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    // Overwrites the value of header attribute `name` of type `type` with `value`.
+    const auto patch = [](std::string& bytes, const std::string& name, const std::string& type,
+                          const std::string& value) {
+        const std::string key = name + '\0' + type + '\0';
+        const size_t at = bytes.find(key);
+        ASSERT_NE(at, std::string::npos) << name;
+        bytes.replace(at + key.size() + 4, value.size(), value);
+    };
+    const auto le32 = [](uint32_t v) {
+        return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+    };
+    const auto expect_refused = [](const std::function<void()>& read, const std::string& why) {
+        try {
+            read();
+            FAIL() << "no error";
+        } catch (const SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    };
+
+    // A cube's tiled frames part with tiles of 16388 x 4096 float RGB pixels: 768 MiB a tile.
+    const std::string cube = (dir / "cube.exr").string();
+    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f);
+    io::write_exr_cube(cube, 4, 3, 5, values.data(), nullptr, {{"femto:bins", "5"}});
+    std::string bytes = read_bytes(cube);
+    patch(bytes, "tiles", "tiledesc", le32(16388) + le32(4096));
+    std::ofstream(cube, std::ios::binary | std::ios::trunc) << bytes;
+    expect_refused([&] { io::read_exr_cube(cube); },
+                   "its tiles of 16388 x 4096 pixels would take 768 MiB each to decode");
+    expect_refused([&] { viz::load_cube(cube); }, "768 MiB");
+
+    // A scanline image of six float channels, 65536 pixels wide, DWAB-compressed (blocks of
+    // 256 scanlines): 384 MiB a block.
+    const std::string image = (dir / "image.exr").string();
+    const float rgb[3] = {1, 2, 3}, depth = 4, extra[2] = {5, 6};
+    io::write_exr_rgb(image, 1, 1, rgb, {}, &depth, {{"a", "b"}, extra});
+    bytes = read_bytes(image);
+    patch(bytes, "dataWindow", "box2i", le32(0) + le32(0) + le32(65535));
+    patch(bytes, "compression", "compression", std::string(1, '\x09'));
+    std::ofstream(image, std::ios::binary | std::ios::trunc) << bytes;
+    int w = 0, h = 0;
+    expect_refused([&] { io::read_image_rgb(image, w, h, false); },
+                   "its blocks of scanlines, 65536 pixels wide, would take 384 MiB each");
 }
 
 TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {

@@ -27,8 +27,10 @@ Attributes read_attributes(const Imf::Header& header);
 /// file; else why not. OpenEXR 3.1 allocates a text, vector, preview or unknown attribute's
 /// declared size before reading it, so a 300-byte file declaring a 2 GB attribute cost 2 GB
 /// (the EXR fuzzer ran at 10 inputs a second). The header is walked as OpenEXR walks it:
-/// attributes of a fixed-size type by their type's size, a channel list to its end. Anything
-/// else odd is left for OpenEXR to report.
+/// attributes of a fixed-size type by their type's size, a channel list to its end. Also not
+/// empty when a header's pixel blocks (tiles, or a compression's group of scanlines) would
+/// each take over 256 MiB to decode: OpenEXR allocates such a buffer per thread on opening
+/// the file. Anything else odd is left for OpenEXR to report.
 std::string exr_header_problem(const std::string& path);
 
 /// Throws std::runtime_error unless `input` (any OpenEXR input file or part) has an offset

@@ -389,6 +389,54 @@ bool read_exr_name(std::istream& in, std::string& s) {
     return false;
 }
 
+int32_t read_le32(const unsigned char* b) {
+    return int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 |
+                   uint32_t(b[3]) << 24);
+}
+
+// What one header says of the size of its pixel blocks (chunks).
+struct ChunkLayout {
+    int64_t channel_bytes = 0;  // a pixel's bytes over all channels
+    int64_t width = 0;          // the data window's (0: not known)
+    int64_t tile_w = 0, tile_h = 0;
+    int compression = 0;
+    bool tiled = false;
+    // The MiB OpenEXR decodes one chunk into, and allocates such a buffer per thread on
+    // opening the file: a tile, or a block of scanlines (as many as the compression groups).
+    // In double: a header's sizes can make any integer product overflow.
+    double mebibytes() const {
+        static constexpr int kLinesPerBlock[] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+        const int lines = compression >= 0 && compression < 10 ? kLinesPerBlock[compression] : 1;
+        const double pixels = tiled ? double(tile_w) * double(tile_h) : double(width) * lines;
+        return pixels * double(channel_bytes) / double(1 << 20);
+    }
+};
+
+// Notes attribute `name` of type `type` and `size` bytes, whose value starts at the stream's
+// position, in `layout` when it tells a chunk's size; leaves the position where it was.
+void note_chunk_attribute(std::istream& in, const std::string& name, const std::string& type,
+                          int64_t size, ChunkLayout& layout) {
+    char v[16] = {};
+    const auto* b = reinterpret_cast<const unsigned char*>(v);
+    const std::streampos at = in.tellg();
+    if (name == "dataWindow" && type == "box2i" && in.read(v, 16))
+        layout.width = std::max<int64_t>(0, int64_t(read_le32(b + 8)) - read_le32(b) + 1);
+    else if (name == "tiles" && type == "tiledesc" && in.read(v, 9))
+        layout.tile_w = uint32_t(read_le32(b)), layout.tile_h = uint32_t(read_le32(b + 4));
+    else if (name == "compression" && type == "compression" && in.read(v, 1))
+        layout.compression = b[0];
+    else if (name == "type" && type == "string" && size == 10 && in.read(v, 10))
+        layout.tiled = std::string(v, 10) == "tiledimage";  // a part of a multi-part file
+    in.clear();
+    in.seekg(at);
+}
+
+// The most a pixel block may take decoded. femto's cubes use tiles of at most 256 kB; a tile
+// of 2048 x 2048 float RGBA pixels is 64 MiB, and a 32768-pixel-wide scanline block of 256
+// lines (DWAB) of half RGBA 64 MiB. A 538-byte file declaring tiles of 16388 x 4096 made
+// OpenEXR allocate 805 MB per buffer (the cube fuzzer: 10 s an input under ASan).
+constexpr double kMaxChunkMebibytes = 256;
+
 }  // namespace
 
 std::string exr_header_problem(const std::string& path) {
@@ -399,20 +447,25 @@ std::string exr_header_problem(const std::string& path) {
     const bool multipart = (version[5] & 0x10) != 0;  // bit 12 of the version field
     for (;;) {  // headers: one, or (multi-part) several and then an empty one
         bool empty = true;
+        ChunkLayout chunk;
+        chunk.tiled = !multipart && (version[5] & 0x02) != 0;  // bit 9: a tiled single part
         for (std::string name, type;;) {
             if (!read_exr_name(in, name)) return {};
             if (name.empty()) break;
             empty = false;
             unsigned char b[4];
             if (!read_exr_name(in, type) || !in.read(reinterpret_cast<char*>(b), 4)) return {};
-            const int64_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 |
-                                         uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+            const int64_t size = read_le32(b);
             if (type == "chlist") {  // channels (a name and 16 bytes) up to an empty name
-                for (std::string channel; read_exr_name(in, channel) && !channel.empty();)
-                    in.seekg(16, std::ios::cur);
+                for (std::string channel; read_exr_name(in, channel) && !channel.empty();) {
+                    unsigned char c[16];
+                    if (!in.read(reinterpret_cast<char*>(c), 16)) return {};
+                    chunk.channel_bytes += read_le32(c) == 1 ? 2 : 4;  // HALF, else UINT / FLOAT
+                }
                 if (!in) return {};
                 continue;
             }
+            note_chunk_attribute(in, name, type, size, chunk);
             const int64_t fixed = fixed_attribute_size(type);
             const std::streamoff left = file_size - in.tellg();
             if (fixed < 0 && (size < 0 || size > left))
@@ -422,6 +475,18 @@ std::string exr_header_problem(const std::string& path) {
                     name, size, left);
             in.seekg(fixed < 0 ? size : fixed, std::ios::cur);
         }
+        // (Wider blocks than OpenEXR's limit it refuses itself: limit_openexr_sizes().)
+        const int64_t block_width = chunk.tiled ? chunk.tile_w : chunk.width;
+        if (!empty && block_width <= kMaxImageSide && chunk.mebibytes() > kMaxChunkMebibytes)
+            return chunk.tiled
+                       ? fmt::format(
+                             "its tiles of {} x {} pixels would take {:.0f} MiB each to "
+                             "decode (at most {:.0f} MiB)",
+                             chunk.tile_w, chunk.tile_h, chunk.mebibytes(), kMaxChunkMebibytes)
+                       : fmt::format(
+                             "its blocks of scanlines, {} pixels wide, would take {:.0f} "
+                             "MiB each to decode (at most {:.0f} MiB)",
+                             chunk.width, chunk.mebibytes(), kMaxChunkMebibytes);
         if (!multipart || empty) return {};
     }
 }
