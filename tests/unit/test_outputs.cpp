@@ -390,6 +390,36 @@ TEST(ImageRead, PixelBlocksTooLargeToDecodeAreRefused) {
                    "its blocks of scanlines, 65536 pixels wide, would take 384 MiB each");
 }
 
+// OpenEXR's limit on widths (65536 pixels; limit_openexr_sizes()) holds for cubes as for
+// images, also in a process that has read no image before (ctest runs each test alone): a cube
+// whose depth part claimed 3,276,803 pixels a row made OpenEXR allocate 210 MB of scanline
+// buffers (the cube fuzzer).
+TEST(ImageRead, ACubeWiderThanOpenExrsLimitIsRefusedAtTheHeader) {
+    const auto dir = temp_dir("image-read-wide-cube");
+    const std::string cube = (dir / "cube.exr").string();
+    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f), depth(4 * 3, 1.f);
+    io::write_exr_cube(cube, 4, 3, 5, values.data(), depth.data(), {{"femto:bins", "5"}});
+    std::string bytes;
+    {
+        std::ifstream in(cube, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::string key = std::string("dataWindow") + '\0' + "box2i" + '\0';
+    const size_t frames = bytes.find(key), depth_part = bytes.find(key, frames + 1);
+    ASSERT_NE(depth_part, std::string::npos);
+    const uint32_t x_max = 3'276'802;
+    bytes.replace(depth_part + key.size() + 4 + 8, 4, reinterpret_cast<const char*>(&x_max), 4);
+    std::ofstream(cube, std::ios::binary | std::ios::trunc) << bytes;
+    try {
+        viz::load_cube(cube);
+        FAIL() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("exceeds the maximum width of 65536"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
 TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
     const auto dir = temp_dir("image-read-bad-exr");
     const std::string good = (dir / "good.exr").string();

@@ -30,7 +30,8 @@ Attributes read_attributes(const Imf::Header& header);
 /// attributes of a fixed-size type by their type's size, a channel list to its end. Also not
 /// empty when a header's pixel blocks (tiles, or a compression's group of scanlines) would
 /// each take over 256 MiB to decode: OpenEXR allocates such a buffer per thread on opening
-/// the file. Anything else odd is left for OpenEXR to report.
+/// the file. Anything else odd is left for OpenEXR to report, with femto's limits on widths
+/// set first (the process-wide Imf::Header::setMaxImageSize and setMaxTileSize).
 std::string exr_header_problem(const std::string& path);
 
 /// Throws std::runtime_error unless `input` (any OpenEXR input file or part) has an offset

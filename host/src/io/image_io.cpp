@@ -440,6 +440,8 @@ constexpr double kMaxChunkMebibytes = 256;
 }  // namespace
 
 std::string exr_header_problem(const std::string& path) {
+    // Every reader asks here before it opens a file with OpenEXR: its limits then hold too.
+    limit_openexr_sizes();
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     const std::streamoff file_size = in.tellg();
     unsigned char version[8] = {};
