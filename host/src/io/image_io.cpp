@@ -396,26 +396,27 @@ int32_t read_le32(const unsigned char* b) {
 
 // What one header says of the size of its pixel blocks (chunks).
 struct ChunkLayout {
-    int64_t channel_bytes = 0;  // a pixel's bytes over all channels
-    int64_t width = 0;          // the data window's (0: not known)
-    int64_t tile_w = 0, tile_h = 0;
+    int64_t channel_bytes = 0;       // a pixel's bytes over all channels
+    int64_t width = 0;               // the data window's (0: not known)
+    int64_t tile_w = 0, tile_h = 0;  // 0 without a tile description
     int compression = 0;
-    bool tiled = false;
     // The MiB OpenEXR decodes one chunk into, and allocates such a buffer per thread on
     // opening the file: a tile, or a block of scanlines (as many as the compression groups).
     // In double: a header's sizes can make any integer product overflow.
-    double mebibytes() const {
+    double tile_mebibytes() const {
+        return double(tile_w) * double(tile_h) * double(channel_bytes) / double(1 << 20);
+    }
+    double scanline_mebibytes() const {
         static constexpr int kLinesPerBlock[] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
         const int lines = compression >= 0 && compression < 10 ? kLinesPerBlock[compression] : 1;
-        const double pixels = tiled ? double(tile_w) * double(tile_h) : double(width) * lines;
-        return pixels * double(channel_bytes) / double(1 << 20);
+        return double(width) * lines * double(channel_bytes) / double(1 << 20);
     }
 };
 
-// Notes attribute `name` of type `type` and `size` bytes, whose value starts at the stream's
-// position, in `layout` when it tells a chunk's size; leaves the position where it was.
+// Notes attribute `name` of type `type`, whose value starts at the stream's position, in
+// `layout` when it tells a chunk's size; leaves the position where it was.
 void note_chunk_attribute(std::istream& in, const std::string& name, const std::string& type,
-                          int64_t size, ChunkLayout& layout) {
+                          ChunkLayout& layout) {
     char v[16] = {};
     const auto* b = reinterpret_cast<const unsigned char*>(v);
     const std::streampos at = in.tellg();
@@ -425,8 +426,6 @@ void note_chunk_attribute(std::istream& in, const std::string& name, const std::
         layout.tile_w = uint32_t(read_le32(b)), layout.tile_h = uint32_t(read_le32(b + 4));
     else if (name == "compression" && type == "compression" && in.read(v, 1))
         layout.compression = b[0];
-    else if (name == "type" && type == "string" && size == 10 && in.read(v, 10))
-        layout.tiled = std::string(v, 10) == "tiledimage";  // a part of a multi-part file
     in.clear();
     in.seekg(at);
 }
@@ -450,7 +449,6 @@ std::string exr_header_problem(const std::string& path) {
     for (;;) {  // headers: one, or (multi-part) several and then an empty one
         bool empty = true;
         ChunkLayout chunk;
-        chunk.tiled = !multipart && (version[5] & 0x02) != 0;  // bit 9: a tiled single part
         for (std::string name, type;;) {
             if (!read_exr_name(in, name)) return {};
             if (name.empty()) break;
@@ -467,7 +465,7 @@ std::string exr_header_problem(const std::string& path) {
                 if (!in) return {};
                 continue;
             }
-            note_chunk_attribute(in, name, type, size, chunk);
+            note_chunk_attribute(in, name, type, chunk);
             const int64_t fixed = fixed_attribute_size(type);
             const std::streamoff left = file_size - in.tellg();
             if (fixed < 0 && (size < 0 || size > left))
@@ -477,18 +475,20 @@ std::string exr_header_problem(const std::string& path) {
                     name, size, left);
             in.seekg(fixed < 0 ? size : fixed, std::ios::cur);
         }
-        // (Wider blocks than OpenEXR's limit it refuses itself: limit_openexr_sizes().)
-        const int64_t block_width = chunk.tiled ? chunk.tile_w : chunk.width;
-        if (!empty && block_width <= kMaxImageSide && chunk.mebibytes() > kMaxChunkMebibytes)
-            return chunk.tiled
-                       ? fmt::format(
-                             "its tiles of {} x {} pixels would take {:.0f} MiB each to "
-                             "decode (at most {:.0f} MiB)",
-                             chunk.tile_w, chunk.tile_h, chunk.mebibytes(), kMaxChunkMebibytes)
-                       : fmt::format(
-                             "its blocks of scanlines, {} pixels wide, would take {:.0f} "
-                             "MiB each to decode (at most {:.0f} MiB)",
-                             chunk.width, chunk.mebibytes(), kMaxChunkMebibytes);
+        // Whether the part is tiled is left open (a single part's version flag, a part's type
+        // attribute, either of which a corrupt file may contradict): both block sizes must
+        // fit. Blocks wider than OpenEXR's limit it refuses itself (limit_openexr_sizes()).
+        if (!empty && chunk.tile_w <= kMaxImageSide && chunk.tile_mebibytes() > kMaxChunkMebibytes)
+            return fmt::format(
+                "its tiles of {} x {} pixels would take {:.0f} MiB each to decode "
+                "(at most {:.0f} MiB)",
+                chunk.tile_w, chunk.tile_h, chunk.tile_mebibytes(), kMaxChunkMebibytes);
+        if (!empty && chunk.width <= kMaxImageSide &&
+            chunk.scanline_mebibytes() > kMaxChunkMebibytes)
+            return fmt::format(
+                "its blocks of scanlines, {} pixels wide, would take {:.0f} MiB "
+                "each to decode (at most {:.0f} MiB)",
+                chunk.width, chunk.scanline_mebibytes(), kMaxChunkMebibytes);
         if (!multipart || empty) return {};
     }
 }
