@@ -454,6 +454,28 @@ TEST(ImageRead, TheCubeFuzzersFindingsAreRefused) {
     EXPECT_LT(peak_virtual_kb() - peak_before, 256 << 10) << "kB";
 }
 
+// A 131-byte file the EXR fuzzer found, which OpenImageIO reads as a WebP of 7425 x 13429
+// pixels whose decoding fails: femto zeroed a float buffer for all of them first (1.6 GB; the
+// render took 7 s and 2 GB of memory to exit with 2). Now the buffer stays untouched until
+// pixels are decoded into it; what remains is OpenImageIO's own buffer (400 MB here).
+TEST(ImageRead, AnImageDeclaringHugeSizeIsNotZeroedBeforeDecoding) {
+    const std::string path = (std::filesystem::path(FEMTO_SOURCE_DIR) / "fuzz" / "regressions" /
+                              "exr" / "webp-7425x13429-131-bytes.exr")
+                                 .string();
+    rusage before{};
+    getrusage(RUSAGE_SELF, &before);
+    try {
+        int w = 0, h = 0;
+        io::read_image_rgb(path, w, h);
+        FAIL() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+    rusage after{};
+    getrusage(RUSAGE_SELF, &after);
+    EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 1 << 20) << "kB of peak resident memory";
+}
+
 TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
     const auto dir = temp_dir("image-read-bad-exr");
     const std::string good = (dir / "good.exr").string();

@@ -570,7 +570,7 @@ std::vector<float> read_image_rgb(const std::string& path, int& width, int& heig
     width = image.width;
     height = image.height;
     const int nc = image.channels;
-    const std::vector<float>& pixels = image.pixels;
+    const float* pixels = image.pixels.get();
     const bool decode = srgb_8bit && image.integer_8_or_16;
     std::vector<float> rgb(size_t(width) * height * 3);
     for (size_t i = 0; i < size_t(width) * height; ++i)

@@ -35,8 +35,8 @@ std::string decode(const std::string& path, int64_t max_pixels, DecodedImage& ou
     out.channels = spec.nchannels;
     out.integer_8_or_16 =
         spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16;
-    out.pixels.resize(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.data()))
+    out.pixels.reset(new float[size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels)]);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.get()))
         return take_error(in.get());
     return {};
 }
