@@ -7,6 +7,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <string_view>
 #include <typeinfo>
 
 #include "femto/error.h"
@@ -50,24 +51,52 @@ void register_tally() {
     std::abort();
 }
 
-}  // namespace
+void count_located(const SceneError& e) {
+    ++g_located;
+    // For looking at what the readers say about a corpus (docs/fuzzing.md).
+    static const bool verbose = std::getenv("FEMTO_FUZZ_VERBOSE") != nullptr;
+    if (verbose) std::fprintf(stderr, "femto-fuzz error: %s\n", e.what());
+}
 
-void run(const std::function<void()>& load) {
+// Runs `body`; a SceneError goes to `on_error`, anything else thrown is a finding.
+void classify(const std::function<void()>& body,
+              const std::function<void(const SceneError&)>& on_error) {
     register_tally();
     try {
-        load();
+        body();
         ++g_accepted;
     } catch (const SceneError& e) {
-        if (e.location().file.empty()) finding("a SceneError without a location", e.what());
-        ++g_located;
-        // For looking at what the loader says about a corpus (docs/fuzzing.md).
-        static const bool verbose = std::getenv("FEMTO_FUZZ_VERBOSE") != nullptr;
-        if (verbose) std::fprintf(stderr, "femto-fuzz error: %s\n", e.what());
+        on_error(e);
     } catch (const std::exception& e) {
         finding(typeid(e).name(), e.what());
     } catch (...) {
         finding("an exception of unknown type", "");
     }
+}
+
+}  // namespace
+
+void run(const std::function<void()>& load) {
+    classify(load, [](const SceneError& e) {
+        if (e.location().file.empty()) finding("a SceneError without a location", e.what());
+        count_located(e);
+    });
+}
+
+void run_file(const std::string& path, const std::function<void()>& read,
+              const std::function<void()>& then) {
+    bool reading = true;
+    classify(
+        [&] {
+            read();
+            reading = false;
+            if (then) then();
+        },
+        [&](const SceneError& e) {
+            if (reading && std::string_view(e.what()).find(path) == std::string_view::npos)
+                finding("an error that does not name the file", e.what());
+            count_located(e);
+        });
 }
 
 const std::string& scratch_dir() {

@@ -17,6 +17,13 @@ namespace femto::fuzz {
 /// finding: it is printed and the process aborts, so libFuzzer keeps the input as a crash.
 void run(const std::function<void()>& load);
 
+/// As run(), for a reader of files that are not scenes (a cube for `femto viz`): its errors
+/// name the file instead of a line and column, so a SceneError counts as located when its
+/// message holds `path`. SceneErrors thrown by `then` (computations on what was read, which the
+/// CLI reports with exit 2 as well) count as located whatever they say.
+void run_file(const std::string& path, const std::function<void()>& read,
+              const std::function<void()>& then = {});
+
 /// This process's scratch folder (created on first use, removed at exit).
 const std::string& scratch_dir();
 

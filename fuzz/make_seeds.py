@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,serialized,vol,btf,exr}.
+"""Writes the fuzzers' seed corpora into OUT_DIR/{xml,ply,obj,serialized,vol,btf,exr,experiment}.
 
 xml: every scenes/*/scene.xml of the repository (as <folder>.xml) with its film shrunk to 8 x 8
 pixels and 8 time bins (loading allocates the film: at the scenes' sizes, up to 200 MB, a load
@@ -10,6 +10,9 @@ the BTFs are Bonn BDI, DFMF and FMF files of 3 directions and 2 x 2 texels, in t
 host/src/btf/btf_write.cpp writes).
 exr: small scan-line EXRs (uncompressed and ZIPS) of half and float RGB, RGBA and luminance,
 one with a data window off the origin, written here from the OpenEXR file layout.
+experiment: the `femto bench` experiments of bench/experiments, every file they name made
+scene.xml and every plugin folder plugins (the harness writes both beside its input), and one
+with a plugin folder and a reference file.
 
 Usage: make_seeds.py REPO_DIR OUT_DIR
 """
@@ -26,6 +29,20 @@ NORMALS = [(0, 0, 1)] * 5
 UVS = [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0.5)]
 FACES = [(0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4), (3, 2, 1, 0)]
 TRIANGLES = [f for f in FACES if len(f) == 3] + [(3, 2, 1), (3, 1, 0)]
+
+
+# An experiment with a variant's plugin folder and a reference file, which no shipped one has.
+PLUGIN_DIR_EXPERIMENT = """<experiment name="plugin folder">
+    <scene file="scene.xml" name="s">
+        <define name="res" value="8"/>
+    </scene>
+    <reference file="scene.xml"/>
+    <variant name="a"><define name="integrator" value="path"/></variant>
+    <variant name="b"><plugin_dir path="plugins"/></variant>
+    <budgets spp="1 4"/>
+    <seeds count="2"/>
+</experiment>
+"""
 
 
 def ply_header(fmt, normals, uvs, extra=""):
@@ -250,6 +267,13 @@ def main():
     for scene in sorted(repo.glob("scenes/*/scene.xml")):
         text = re.sub(r'(<default name="(res|bins)" value=")[0-9]+"', r'\g<1>8"', scene.read_text())
         files[f"xml/{scene.parent.name}.xml"] = text.encode()
+    # femto bench's experiment files, each file they name made scene.xml and each plugin folder
+    # plugins (the experiment harness writes both next to its input).
+    for experiment in sorted(repo.glob("bench/experiments/*.xml")):
+        text = re.sub(r'\bfile="[^"]*"', 'file="scene.xml"', experiment.read_text())
+        text = re.sub(r'(<plugin_dir[^>]*\bpath=)"[^"]*"', r'\1"plugins"', text)
+        files[f"experiment/{experiment.stem}.xml"] = text.encode()
+    files["experiment/plugin-dir.xml"] = PLUGIN_DIR_EXPERIMENT.encode()
     if out.exists():
         shutil.rmtree(out)
     for name, data in files.items():

@@ -2,7 +2,7 @@
 # Builds the libFuzzer harnesses (build-fuzz, clang, ASan + UBSan) and fuzzes each one for a
 # bounded time on a fresh copy of its seed corpus; see docs/fuzzing.md.
 #
-#   scripts/fuzz.sh [SECONDS_PER_TARGET] [--runs N] [--targets "xml ply obj serialized vol btf exr"]
+#   scripts/fuzz.sh [SECONDS_PER_TARGET] [--runs N] [--targets "xml ply obj serialized vol btf exr cube experiment"]
 #   scripts/fuzz.sh --replay DIR [TARGET]    run TARGET's harness (default xml) once over every
 #                                            file in DIR and report the share of located errors
 #
@@ -16,7 +16,7 @@ ROOT=$PWD
 
 SECONDS_PER_TARGET=30
 RUNS=""
-TARGETS="xml ply obj serialized vol btf exr"
+TARGETS="xml ply obj serialized vol btf exr cube experiment"
 REPLAY=""
 REPLAY_TARGET=xml
 while [ $# -gt 0 ]; do
@@ -50,7 +50,7 @@ if [ ! -f "$BUILD/build.ninja" ]; then
 fi
 # The harnesses and what they load (libfemto, every plugin, the seeds), not the CLI.
 cmake --build "$BUILD" -j "$(nproc)" --target femto_fuzz_xml femto_fuzz_ply femto_fuzz_obj femto_fuzz_serialized \
-  femto_fuzz_vol femto_fuzz_btf femto_fuzz_exr >/dev/null
+  femto_fuzz_vol femto_fuzz_btf femto_fuzz_exr femto_fuzz_cube femto_fuzz_experiment >/dev/null
 
 # Leaks are reported (scripts/test.sh's suppressions: OpenImageIO's own leak). UBSan stops at
 # the first report so that libFuzzer records it as a crash.

@@ -15,8 +15,9 @@ ctest --test-dir build --output-on-failure -j "$JOBS"
 # btf material, the direction triangulation, the surface tangents, the CLI's error cases, the
 # temporal filters (the kernel's pilot and bin arithmetic, the films' spill accounting) and the
 # media (the .vol reader's corrupt files, volumetric paths, the connection and angular
-# strategies' sampling routines), every plugin built with its defaults (the schema test) and
-# the transport toolkit run under it.
+# strategies' sampling routines), every plugin built with its defaults (the schema test), the
+# transport toolkit, and libfemto_io's readers and writers (cube EXRs and .npy files, images,
+# output sets) with `femto viz`'s computations run under it.
 # Leak detection stays off: LeakSanitizer's tracer crashes at exit in some tests (e.g.
 # ShadowConnection.ThroughANullBoundedSlab: "Tracer caught signal 11"), and the one leak it
 # reports in these tests is OpenImageIO 2.4's (31 bytes per corrupt PNG, lost in its PNG
@@ -34,7 +35,8 @@ CC=clang CXX=clang++ cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=Re
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" -DFEMTO_TESTS=ON -DFEMTO_FUZZ=ON
 cmake --build build-sanitize -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-sanitize --output-on-failure -j "$JOBS" \
-  -R '^(AliasTable|Mutation|Loader|BtfFile|BtfMaterial|AdaptiveSampling|LightCone|DirectionMesh|VGroove|HitTangent|PeerTransient|Instancing|ShapeCylinder|MaskErrors|MaskRender|EmitterCollimated|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|MeasurementSensors|Stress|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach)\.|^(LightTracer|Bdpt)\.(BadInput|BitIdentical|TofPlaneArrival|GlassSlab|SplatsConserve|EachStrategyAloneEstimatesTheSameImage$)|^DistantLight\.(BadInput|EnvmapMapsPixels|MitsubaFiles)|^StreakFilm\.EqualsTransientRowsKernel|^WarpChi2\.AliasTable|^cli\.(bad|unknown|missing|unwritable|compat)' 
+  -R '^(AliasTable|Mutation|Loader|BtfFile|BtfMaterial|AdaptiveSampling|LightCone|DirectionMesh|VGroove|HitTangent|PeerTransient|Instancing|ShapeCylinder|MaskErrors|MaskRender|EmitterCollimated|Scale|Serialized|Ply|Compat|TextureBitmap|KernelFilter|TemporalFilterEnergy|Heterogeneous|Media|MeasurementSensors|Stress|ConnectionSampling|AngularSampling|PluginSchemas|PathClock|Throughput|ShadowConnection|DistanceMixture|ConnectionReach|Viz|VizAttributes|CubeLayout|Npy|ImageRead|OutputSet)\.|^(LightTracer|Bdpt)\.(BadInput|BitIdentical|TofPlaneArrival|GlassSlab|SplatsConserve|EachStrategyAloneEstimatesTheSameImage$)|^DistantLight\.(BadInput|EnvmapMapsPixels|MitsubaFiles)|^StreakFilm\.EqualsTransientRowsKernel|^WarpChi2\.AliasTable|^cli\.(bad|unknown|missing|unwritable|compat)' 
 # Fuzzing (fuzz/, docs/fuzzing.md): each libFuzzer harness (the scene loader, the PLY, OBJ,
-# serialized, .vol, BTF and EXR readers) for 20 s on its seed corpus, in the sanitizer build above.
+# serialized, .vol, BTF and EXR readers, `femto viz`'s cube readers and `femto bench`'s
+# experiment files) for 20 s on its seed corpus, in the sanitizer build above.
 FEMTO_FUZZ_BUILD=build-sanitize scripts/fuzz.sh 20
