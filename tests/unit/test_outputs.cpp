@@ -476,6 +476,40 @@ TEST(ImageRead, AnImageDeclaringHugeSizeIsNotZeroedBeforeDecoding) {
     EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 1 << 20) << "kB of peak resident memory";
 }
 
+// A cube's size comes from its femto:frame_height and femto:bins attributes; a header whose
+// attributes disagree with the frames part's pixels is refused before the cube is allocated
+// (it was allocated, and zeroed, first: here 3.6 GB for a file of a few kB).
+TEST(CubeLayout, AttributesThatDisagreeWithThePixelsAreRefusedBeforeAllocating) {
+    const auto dir = temp_dir("cube-disagreeing-bins");
+    const std::string cube = (dir / "cube.exr").string();
+    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f);
+    io::write_exr_cube(cube, 4, 3, 5, values.data(), nullptr, {{"femto:bins", "5"}});
+    std::string bytes;
+    {
+        std::ifstream in(cube, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::string key =
+        std::string("femto:bins") + '\0' + "int" + '\0' + std::string("\4\0\0\0", 4);
+    const size_t at = bytes.find(key);
+    ASSERT_NE(at, std::string::npos);
+    const int32_t bins = 100'000'000;
+    bytes.replace(at + key.size(), 4, reinterpret_cast<const char*>(&bins), 4);
+    std::ofstream(cube, std::ios::binary | std::ios::trunc) << bytes;
+    rusage before{};
+    getrusage(RUSAGE_SELF, &before);
+    try {
+        io::read_exr_cube(cube);
+        FAIL() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find("is not 4x300000000 pixels"), std::string::npos)
+            << e.what();
+    }
+    rusage after{};
+    getrusage(RUSAGE_SELF, &after);
+    EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 256 << 10) << "kB of peak resident memory";
+}
+
 TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
     const auto dir = temp_dir("image-read-bad-exr");
     const std::string good = (dir / "good.exr").string();

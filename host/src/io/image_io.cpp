@@ -843,7 +843,7 @@ void write_exr_cube(const std::string& path, int width, int height, int bins, co
 
 namespace {
 
-Imath::Box2i checked_window(const Imf::Header& h, int width, int height) {
+Imath::Box2i checked_window(const Imf::Header& h, int64_t width, int64_t height) {
     const Imath::Box2i w = h.dataWindow();
     if (int64_t(w.max.x) - w.min.x + 1 != width || int64_t(w.max.y) - w.min.y + 1 != height)
         throw std::runtime_error(fmt::format("part \"{}\" is not {}x{} pixels",
@@ -895,7 +895,8 @@ void require_whole_tiles(Imf::TiledInputPart& part, const Imath::Box2i& dw, int 
 // peak-time`'s time on a 805 MB cube). A tile row on a batch's edge is read by both batches.
 void read_frames_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
     const CubeView v{cube.width, cube.height, cube.bins};
-    const Imath::Box2i w = checked_window(file.header(p), cube.width, cube.height * cube.bins);
+    const Imath::Box2i w =
+        checked_window(file.header(p), cube.width, int64_t(cube.height) * cube.bins);
     const size_t frame_bytes = v.pixels() * 3 * sizeof(float);
     const int frames =
         int(std::clamp<size_t>((size_t(8) << 20) / frame_bytes, 1, size_t(cube.bins)));
@@ -1009,6 +1010,11 @@ Cube read_exr_cube(const std::string& path) {
         if (cube.width <= 0 || values > (uint64_t(1) << 34))
             throw std::runtime_error(fmt::format("its size {}x{}x{} is out of range", cube.width,
                                                  cube.height, cube.bins));
+        // The parts' windows against that size, before it is allocated: a header's femto:bins
+        // or femto:frame_height need not agree with the pixels its file holds.
+        if (frames_part >= 0)
+            checked_window(file.header(frames_part), cube.width, int64_t(cube.height) * cube.bins);
+        if (depth_part >= 0) checked_window(file.header(depth_part), cube.width, cube.height);
         for (int p = 0; p < parts; ++p)  // what will be read, before it is allocated
             if (p == frames_part || p == depth_part || is_legacy_bin_part(file.header(p))) {
                 if (const int tile_h = frames_tile_rows(file.header(p), cube.width);
