@@ -3,10 +3,12 @@
 // image (a single-part EXR), or a .npy. A cube it accepts then goes through what the viz
 // commands compute from it (time grid, levels, frames, peak times, rainbow fusion, a streak
 // slice, unwarping), since mutated headers reach those as odd sizes and attributes.
-// Seeds: cubes written by femto's own writers (fuzz/make_cube_seeds.cpp).
+// Seeds: cubes written by femto's own writers (fuzz/make_cube_seeds.cpp) and the inputs of
+// earlier findings (fuzz/regressions/cube/).
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "femto/viz.h"
 #include "fuzz_common.h"
@@ -34,8 +36,9 @@ void compute_pictures(const femto::io::Cube& cube) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    // load_cube() tells the formats apart by their magic numbers; the name only decides how a
-    // file without the .npy magic is read (as an EXR), so both readers see mutated files.
+    // load_cube() reads a file with the .npy magic number, or named .npy, as a .npy and any
+    // other as an EXR: an input is named .npy only when it has the magic, so that a mutated EXR
+    // stays with the EXR readers.
     const bool npy =
         size >= 6 && std::string(reinterpret_cast<const char*>(data), 6) == "\x93NUMPY";
     const std::string path =
