@@ -851,8 +851,9 @@ Imath::Box2i checked_window(const Imf::Header& h, int64_t width, int64_t height)
     return w;
 }
 
+// (read_exr_cube() checked the part's window before allocating the cube.)
 void read_depth_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
-    const Imath::Box2i w = checked_window(file.header(p), cube.width, cube.height);
+    const Imath::Box2i w = file.header(p).dataWindow();
     cube.depth.assign(size_t(cube.width) * size_t(cube.height), -1.f);
     Imf::InputPart part(file, p);
     Imf::FrameBuffer fb;
@@ -893,10 +894,10 @@ void require_whole_tiles(Imf::TiledInputPart& part, const Imath::Box2i& dw, int 
 // tiled strip (what write_exr_cube() writes) is read by whole tile rows: through the scanline
 // interface OpenEXR copies each tile into a line buffer first (about a quarter of `femto viz
 // peak-time`'s time on a 805 MB cube). A tile row on a batch's edge is read by both batches.
+// (read_exr_cube() checked the part's window before allocating the cube.)
 void read_frames_part(Imf::MultiPartInputFile& file, int p, Cube& cube) {
     const CubeView v{cube.width, cube.height, cube.bins};
-    const Imath::Box2i w =
-        checked_window(file.header(p), cube.width, int64_t(cube.height) * cube.bins);
+    const Imath::Box2i w = file.header(p).dataWindow();
     const size_t frame_bytes = v.pixels() * 3 * sizeof(float);
     const int frames =
         int(std::clamp<size_t>((size_t(8) << 20) / frame_bytes, 1, size_t(cube.bins)));
