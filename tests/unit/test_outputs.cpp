@@ -53,6 +53,54 @@ std::string read_text(const fs::path& p) {
 
 void write_text(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
+std::string read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// Overwrites the start of the value of EXR header attribute `name` of type `type` (its
+// `occurrence`-th, counting from 0: a multi-part file has one per part) with `value`.
+void patch_attribute(std::string& bytes, const std::string& name, const std::string& type,
+                     const std::string& value, int occurrence = 0) {
+    const std::string key = name + '\0' + type + '\0';
+    size_t at = bytes.find(key);
+    for (int i = 0; i < occurrence && at != std::string::npos; ++i) at = bytes.find(key, at + 1);
+    ASSERT_NE(at, std::string::npos) << name;
+    bytes.replace(at + key.size() + 4, value.size(), value);  // past the 4-byte size
+}
+
+std::string le32(uint32_t v) {
+    return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+}
+
+// `read` throws a SceneError whose message holds `text`.
+void expect_scene_error(const std::function<void()>& read, const std::string& text) {
+    try {
+        read();
+        ADD_FAILURE() << "no error";
+    } catch (const SceneError& e) {
+        EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+    }
+}
+
+// The process' peak resident memory (getrusage's ru_maxrss) and peak virtual memory (VmPeak),
+// in kB. Buffers allocated and never touched show in the second only.
+int64_t peak_resident_kb() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return usage.ru_maxrss;
+}
+int64_t peak_virtual_kb() {
+    std::ifstream status("/proc/self/status");
+    for (std::string line; std::getline(status, line);)
+        if (line.rfind("VmPeak:", 0) == 0) return std::stoll(line.substr(7));
+    return -1;
+}
+
 }  // namespace
 
 // Shapes that take each batch path of the writer: a band of rows of one frame (< 32 bins),
@@ -341,40 +389,16 @@ TEST(ImageRead, AnAttributeLargerThanTheFileIsRefused) {
 // a header before OpenEXR opens the file.
 TEST(ImageRead, PixelBlocksTooLargeToDecodeAreRefused) {
     const auto dir = temp_dir("image-read-huge-blocks");
-    const auto read_bytes = [](const std::string& path) {
-        std::ifstream in(path, std::ios::binary);
-        return std::string(std::istreambuf_iterator<char>(in), {});
-    };
-    // Overwrites the value of header attribute `name` of type `type` with `value`.
-    const auto patch = [](std::string& bytes, const std::string& name, const std::string& type,
-                          const std::string& value) {
-        const std::string key = name + '\0' + type + '\0';
-        const size_t at = bytes.find(key);
-        ASSERT_NE(at, std::string::npos) << name;
-        bytes.replace(at + key.size() + 4, value.size(), value);
-    };
-    const auto le32 = [](uint32_t v) {
-        return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
-    };
-    const auto expect_refused = [](const std::function<void()>& read, const std::string& why) {
-        try {
-            read();
-            FAIL() << "no error";
-        } catch (const SceneError& e) {
-            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
-        }
-    };
-
     // A cube's tiled frames part with tiles of 16388 x 4096 float RGB pixels: 768 MiB a tile.
     const std::string cube = (dir / "cube.exr").string();
     const std::vector<float> values(4 * 3 * 5 * 3, 0.5f);
     io::write_exr_cube(cube, 4, 3, 5, values.data(), nullptr, {{"femto:bins", "5"}});
     std::string bytes = read_bytes(cube);
-    patch(bytes, "tiles", "tiledesc", le32(16388) + le32(4096));
-    std::ofstream(cube, std::ios::binary | std::ios::trunc) << bytes;
-    expect_refused([&] { io::read_exr_cube(cube); },
-                   "its tiles of 16388 x 4096 pixels would take 768 MiB each to decode");
-    expect_refused([&] { viz::load_cube(cube); }, "768 MiB");
+    patch_attribute(bytes, "tiles", "tiledesc", le32(16388) + le32(4096));
+    write_bytes(cube, bytes);
+    expect_scene_error([&] { io::read_exr_cube(cube); },
+                       "its tiles of 16388 x 4096 pixels would take 768 MiB each to decode");
+    expect_scene_error([&] { viz::load_cube(cube); }, "768 MiB");
 
     // A scanline image of six float channels, 65536 pixels wide, DWAB-compressed (blocks of
     // 256 scanlines): 384 MiB a block.
@@ -382,12 +406,12 @@ TEST(ImageRead, PixelBlocksTooLargeToDecodeAreRefused) {
     const float rgb[3] = {1, 2, 3}, depth = 4, extra[2] = {5, 6};
     io::write_exr_rgb(image, 1, 1, rgb, {}, &depth, {{"a", "b"}, extra});
     bytes = read_bytes(image);
-    patch(bytes, "dataWindow", "box2i", le32(0) + le32(0) + le32(65535));
-    patch(bytes, "compression", "compression", std::string(1, '\x09'));
-    std::ofstream(image, std::ios::binary | std::ios::trunc) << bytes;
+    patch_attribute(bytes, "dataWindow", "box2i", le32(0) + le32(0) + le32(65535));
+    patch_attribute(bytes, "compression", "compression", std::string(1, '\x09'));
+    write_bytes(image, bytes);
     int w = 0, h = 0;
-    expect_refused([&] { io::read_image_rgb(image, w, h, false); },
-                   "its blocks of scanlines, 65536 pixels wide, would take 384 MiB each");
+    expect_scene_error([&] { io::read_image_rgb(image, w, h, false); },
+                       "its blocks of scanlines, 65536 pixels wide, would take 384 MiB each");
 }
 
 // OpenEXR's limit on widths (65536 pixels; limit_openexr_sizes()) holds for cubes as for
@@ -399,33 +423,11 @@ TEST(ImageRead, ACubeWiderThanOpenExrsLimitIsRefusedAtTheHeader) {
     const std::string cube = (dir / "cube.exr").string();
     const std::vector<float> values(4 * 3 * 5 * 3, 0.5f), depth(4 * 3, 1.f);
     io::write_exr_cube(cube, 4, 3, 5, values.data(), depth.data(), {{"femto:bins", "5"}});
-    std::string bytes;
-    {
-        std::ifstream in(cube, std::ios::binary);
-        bytes.assign(std::istreambuf_iterator<char>(in), {});
-    }
-    const std::string key = std::string("dataWindow") + '\0' + "box2i" + '\0';
-    const size_t frames = bytes.find(key), depth_part = bytes.find(key, frames + 1);
-    ASSERT_NE(depth_part, std::string::npos);
-    const uint32_t x_max = 3'276'802;
-    bytes.replace(depth_part + key.size() + 4 + 8, 4, reinterpret_cast<const char*>(&x_max), 4);
-    std::ofstream(cube, std::ios::binary | std::ios::trunc) << bytes;
-    try {
-        viz::load_cube(cube);
-        FAIL() << "no error";
-    } catch (const SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("exceeds the maximum width of 65536"),
-                  std::string::npos)
-            << e.what();
-    }
-}
-
-// The process' peak virtual memory (VmPeak), in kB.
-int64_t peak_virtual_kb() {
-    std::ifstream status("/proc/self/status");
-    for (std::string line; std::getline(status, line);)
-        if (line.rfind("VmPeak:", 0) == 0) return std::stoll(line.substr(7));
-    return -1;
+    std::string bytes = read_bytes(cube);
+    // The depth part's (the second) data window: x_max, after x_min and y_min.
+    patch_attribute(bytes, "dataWindow", "box2i", le32(0) + le32(0) + le32(3'276'802), 1);
+    write_bytes(cube, bytes);
+    expect_scene_error([&] { viz::load_cube(cube); }, "exceeds the maximum width of 65536");
 }
 
 // The inputs the cube fuzzer found (fuzz/regressions/cube/, docs/fuzzing.md), each a header
@@ -443,12 +445,7 @@ TEST(ImageRead, TheCubeFuzzersFindingsAreRefused) {
         const std::string path = entry.path().string();
         SCOPED_TRACE(path);
         ++files;
-        try {
-            viz::load_cube(path);
-            ADD_FAILURE() << "no error";
-        } catch (const SceneError& e) {
-            EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-        }
+        expect_scene_error([&] { viz::load_cube(path); }, path);
     }
     EXPECT_GE(files, 5);
     EXPECT_LT(peak_virtual_kb() - peak_before, 256 << 10) << "kB";
@@ -467,21 +464,28 @@ TEST(ImageRead, AnImageDeclaringHugeSizeIsNotAllocatedBeforeDecoding) {
     for (const char* name : {"webp-7425x13429-131-bytes.exr", "webp-16129x14395-31-bytes.exr"}) {
         const std::string path = (dir / name).string();
         SCOPED_TRACE(path);
-        const int64_t peak_before = peak_virtual_kb();
-        rusage before{};
-        getrusage(RUSAGE_SELF, &before);
-        try {
-            int w = 0, h = 0;
-            io::read_image_rgb(path, w, h);
-            FAIL() << "no error";
-        } catch (const SceneError& e) {
-            EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-        }
-        rusage after{};
-        getrusage(RUSAGE_SELF, &after);
-        EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 1 << 20) << "kB of peak resident memory";
-        EXPECT_LT(peak_virtual_kb() - peak_before, 1 << 20) << "kB of peak virtual memory";
+        const int64_t resident_before = peak_resident_kb(), virtual_before = peak_virtual_kb();
+        int w = 0, h = 0;
+        expect_scene_error([&] { io::read_image_rgb(path, w, h); }, path);
+        EXPECT_LT(peak_resident_kb() - resident_before, 1 << 20) << "kB of peak resident memory";
+        EXPECT_LT(peak_virtual_kb() - virtual_before, 1 << 20) << "kB of peak virtual memory";
     }
+}
+
+// A cube's size comes from its femto:frame_height and femto:bins attributes; a header whose
+// attributes disagree with the frames part's pixels is refused before the cube is allocated
+// (it was allocated, and zeroed, first: here 3.6 GB for a file of a few kB).
+TEST(CubeLayout, AttributesThatDisagreeWithThePixelsAreRefusedBeforeAllocating) {
+    const auto dir = temp_dir("cube-disagreeing-bins");
+    const std::string cube = (dir / "cube.exr").string();
+    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f);
+    io::write_exr_cube(cube, 4, 3, 5, values.data(), nullptr, {{"femto:bins", "5"}});
+    std::string bytes = read_bytes(cube);
+    patch_attribute(bytes, "femto:bins", "int", le32(100'000'000));
+    write_bytes(cube, bytes);
+    const int64_t resident_before = peak_resident_kb();
+    expect_scene_error([&] { io::read_exr_cube(cube); }, "is not 4x300000000 pixels");
+    EXPECT_LT(peak_resident_kb() - resident_before, 256 << 10) << "kB of peak resident memory";
 }
 
 TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
