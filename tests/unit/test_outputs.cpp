@@ -356,11 +356,7 @@ TEST(ImageRead, AnAttributeLargerThanTheFileIsRefused) {
                        {{"femto:bins", "2"}, {"femto:note", "abc"}});
     for (const std::string& path : {image, cube}) {
         SCOPED_TRACE(path);
-        std::string bytes;
-        {
-            std::ifstream in(path, std::ios::binary);
-            bytes.assign(std::istreambuf_iterator<char>(in), {});
-        }
+        std::string bytes = read_bytes(path);
         const std::string key = std::string("femto:note") + '\0' + "string" + '\0';
         const size_t at = bytes.find(key);
         ASSERT_NE(at, std::string::npos);
@@ -493,11 +489,7 @@ TEST(ImageRead, AnExrFemtoRefusesOpenImageIoRefusesToo) {
     const std::string good = (dir / "good.exr").string();
     write_test_exr(good, Imath::Box2i({0, 0}, {5, 3}),
                    {{"R", Imf::HALF}, {"G", Imf::HALF}, {"B", Imf::HALF}});
-    std::string bytes;
-    {
-        std::ifstream in(good, std::ios::binary);
-        bytes.assign(std::istreambuf_iterator<char>(in), {});
-    }
+    std::string bytes = read_bytes(good);
     const size_t last_attribute = bytes.find("screenWindowWidth");
     ASSERT_NE(last_attribute, std::string::npos);
     const size_t header_end = last_attribute + 40;  // past its value
