@@ -77,6 +77,15 @@ std::string le32(uint32_t v) {
     return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
 }
 
+// Writes a 4 x 3 pixel, 5-bin cube (with a depth part when `depth`) to `path`; returns the
+// file's bytes, for tests that corrupt its header.
+std::string write_small_cube(const std::string& path, bool depth = false) {
+    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f), depths(4 * 3, 1.f);
+    io::write_exr_cube(path, 4, 3, 5, values.data(), depth ? depths.data() : nullptr,
+                       {{"femto:bins", "5"}});
+    return read_bytes(path);
+}
+
 // `read` throws a SceneError whose message holds `text`.
 void expect_scene_error(const std::function<void()>& read, const std::string& text) {
     try {
@@ -387,9 +396,7 @@ TEST(ImageRead, PixelBlocksTooLargeToDecodeAreRefused) {
     const auto dir = temp_dir("image-read-huge-blocks");
     // A cube's tiled frames part with tiles of 16388 x 4096 float RGB pixels: 768 MiB a tile.
     const std::string cube = (dir / "cube.exr").string();
-    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f);
-    io::write_exr_cube(cube, 4, 3, 5, values.data(), nullptr, {{"femto:bins", "5"}});
-    std::string bytes = read_bytes(cube);
+    std::string bytes = write_small_cube(cube);
     patch_attribute(bytes, "tiles", "tiledesc", le32(16388) + le32(4096));
     write_bytes(cube, bytes);
     expect_scene_error([&] { io::read_exr_cube(cube); },
@@ -417,9 +424,7 @@ TEST(ImageRead, PixelBlocksTooLargeToDecodeAreRefused) {
 TEST(ImageRead, ACubeWiderThanOpenExrsLimitIsRefusedAtTheHeader) {
     const auto dir = temp_dir("image-read-wide-cube");
     const std::string cube = (dir / "cube.exr").string();
-    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f), depth(4 * 3, 1.f);
-    io::write_exr_cube(cube, 4, 3, 5, values.data(), depth.data(), {{"femto:bins", "5"}});
-    std::string bytes = read_bytes(cube);
+    std::string bytes = write_small_cube(cube, true);
     // The depth part's (the second) data window: x_max, after x_min and y_min.
     patch_attribute(bytes, "dataWindow", "box2i", le32(0) + le32(0) + le32(3'276'802), 1);
     write_bytes(cube, bytes);
@@ -474,9 +479,7 @@ TEST(ImageRead, AnImageDeclaringHugeSizeIsNotAllocatedBeforeDecoding) {
 TEST(CubeLayout, AttributesThatDisagreeWithThePixelsAreRefusedBeforeAllocating) {
     const auto dir = temp_dir("cube-disagreeing-bins");
     const std::string cube = (dir / "cube.exr").string();
-    const std::vector<float> values(4 * 3 * 5 * 3, 0.5f);
-    io::write_exr_cube(cube, 4, 3, 5, values.data(), nullptr, {{"femto:bins", "5"}});
-    std::string bytes = read_bytes(cube);
+    std::string bytes = write_small_cube(cube);
     patch_attribute(bytes, "femto:bins", "int", le32(100'000'000));
     write_bytes(cube, bytes);
     const int64_t resident_before = peak_resident_kb();
