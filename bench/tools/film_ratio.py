@@ -5,6 +5,11 @@ variant V to BASELINE in the same round and seed, then the median and the 5 % / 
 over all pairs. Used for issue 17's transient-film goal (experiments/transient-throughput.xml).
 
     bench/tools/film_ratio.py RUNS_CSV [BASELINE]      (BASELINE: path-hdrfilm)
+
+It also reads `femto bench` results.csv files (no build or round column): each file is then a
+build of its own, named by the file, and a round of it; several such files may be given:
+
+    bench/tools/film_ratio.py OUT-1/results.csv OUT-2/results.csv ...
 """
 import csv
 import statistics
@@ -12,17 +17,25 @@ import sys
 
 
 def main():
-    if len(sys.argv) < 2:
+    args = sys.argv[1:]
+    if not args:
         sys.exit(__doc__)
-    baseline = sys.argv[2] if len(sys.argv) > 2 else "path-hdrfilm"
+    baseline = "path-hdrfilm"
+    if len(args) == 2 and not args[1].endswith(".csv"):
+        baseline = args.pop()
     rate = {}
-    with open(sys.argv[1], newline="") as f:
-        for r in csv.DictReader(f):
-            key = (r["build"], r["scene"], r["round"], r["seed"], r["variant"])
-            rate[key] = float(r["samples"]) / float(r["seconds"])
+    builds = []
+    for path in args:
+        with open(path, newline="") as f:
+            for r in csv.DictReader(f):
+                build = r.get("build", path)
+                if build not in builds:
+                    builds.append(build)
+                key = (build, r["scene"], r.get("round", "1"), r["seed"], r["variant"])
+                rate[key] = float(r["samples"]) / float(r["seconds"])
     variants = sorted({k[4] for k in rate} - {baseline})
     print("build,scene,variant,pairs,median,q05,q95")
-    for build in ("before", "after"):
+    for build in builds:
         for scene in sorted({k[1] for k in rate}):
             for v in variants:
                 ratios = sorted(
