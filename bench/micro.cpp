@@ -89,6 +89,30 @@ BENCHMARK_CAPTURE(SamplerDraw, independent, std::string("independent"))
     ->Args({1, 1})
     ->Args({16, 1});
 
+// Draws as BDPT makes them: each subpath vertex or connection starts at a dimension block of
+// its own (Sampler::advance_to, 8 dimensions apart) and takes a few numbers of it: here 16
+// draws in blocks of state.range(0).
+void SamplerDrawInBlocks(benchmark::State& state) {
+    Properties props;
+    auto sampler =
+        std::static_pointer_cast<Sampler>(create_object(PluginKind::Sampler, "ldsampler", props));
+    const int per_block = int(state.range(0));
+    uint32_t sample = 0;
+    for (auto _ : state) {
+        sampler->start(7, sample & 0xfffu, sample >> 12);
+        ++sample;
+        float sum = 0;
+        for (int d = 0; d < 16; ++d) {
+            if (d % per_block == 0) sampler->advance_to(uint64_t(d / per_block + 1) * 8);
+            const Vec2 u = sampler->next_2d();
+            sum += u.x + u.y;
+        }
+        benchmark::DoNotOptimize(sum);
+    }
+    state.SetItemsProcessed(state.iterations() * 16);
+}
+BENCHMARK(SamplerDrawInBlocks)->Arg(1)->Arg(2)->Arg(4);
+
 void SamplerDraw1d(benchmark::State& state) {
     Properties props;
     auto sampler =

@@ -11,6 +11,7 @@ PACKAGES=(
   libopenmpi-dev openmpi-bin
   python3 python3-numpy python3-scipy python3-matplotlib python3-skimage
   ffmpeg  # optional for users (`femto viz frames --mp4`); here so that cli.viz_mp4 runs
+  qemu-user  # the samplers.simd_clone_on_* tests run ldsampler on emulated CPUs
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -15,6 +15,7 @@
 #include "chi2.h"
 #include "femto/host.h"
 #include "femto/log.h"
+#include "femto/random.h"
 #include "femto/sampler.h"
 #include "femto/sensor.h"
 #include "femto/testing/render.h"
@@ -326,6 +327,84 @@ TEST(SamplerLd, EveryPixelIsAZeroTwoNet) {
                 EXPECT_TRUE(is_02_net(pair2, k));
             }
         }
+    }
+}
+
+// ldsampler's numbers, defined one slot at a time as its header comment states them (Burley's
+// hash-based Owen scrambling of Sobol dimensions 0 and 1, the index shuffled per slot), and
+// written here independently of the plugin, which computes eight slots at once in SIMD lanes.
+// Locks every value bit for bit: a change of the sampler's numbers changes every image made
+// with it, and must be a decision, not a side effect.
+struct LdReference {
+    static uint32_t reverse(uint32_t x) {
+        uint32_t r = 0;
+        for (int b = 0; b < 32; ++b) r |= ((x >> b) & 1u) << (31 - b);
+        return r;
+    }
+    static uint32_t laine_karras(uint32_t x, uint32_t seed) {
+        x ^= x * 0x3d20adeau;
+        x += seed;
+        x *= (seed >> 16) | 1u;
+        x ^= x * 0x05526c56u;
+        x ^= x * 0x53a22864u;
+        return x;
+    }
+    static uint32_t owen(uint32_t x, uint32_t seed) {
+        return reverse(laine_karras(reverse(x), seed));
+    }
+    static uint32_t sobol1(uint32_t index) {  // generator columns v_j = v_{j-1} ^ (v_{j-1} >> 1)
+        uint32_t y = 0;
+        for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1)
+            if (index & 1u) y ^= v;
+        return y;
+    }
+    static float unit(uint32_t x) { return float(x >> 8) * 0x1p-24f; }
+
+    uint64_t pixel_seed;
+    uint32_t index;
+    uint64_t slot = 0;
+
+    LdReference(uint64_t sampler_seed, uint64_t seed, uint64_t pixel, uint32_t sample)
+        : pixel_seed(femto::hash_combine(femto::hash_combine(sampler_seed, seed), pixel)),
+          index(sample) {}
+    Vec2 next_2d() {
+        const uint64_t h = femto::hash_combine(pixel_seed, slot++);
+        const uint64_t g = femto::mix64(h ^ 0x2545f4914f6cdd1dULL);
+        const uint32_t i = owen(index, uint32_t(h));  // the shuffled index
+        return {unit(owen(reverse(i), uint32_t(h >> 32))), unit(owen(sobol1(i), uint32_t(g)))};
+    }
+};
+
+TEST(SamplerLd, NumbersAreTheOneSlotDefinitionsBitForBit) {
+    for (const int64_t sampler_seed : {int64_t(0), int64_t(77)}) {
+        auto s = make_sampler("ldsampler", 16, sampler_seed, true);
+        for (const uint64_t pixel : {uint64_t(0), uint64_t(3), uint64_t(1) << 40, ~uint64_t(0)})
+            for (const uint32_t sample : {0u, 1u, 5u, 1000u, 0xffffffffu}) {
+                SCOPED_TRACE("seed " + std::to_string(sampler_seed) + ", pixel " +
+                             std::to_string(pixel) + ", sample " + std::to_string(sample));
+                s->start(9, pixel, sample);
+                LdReference ref(uint64_t(sampler_seed), 9, pixel, sample);
+                // Draws of both kinds across batch boundaries, and skips within a batch, to
+                // its end and far past it (advance_to, as BDPT's fixed layout uses it).
+                for (int draw = 0; draw < 60; ++draw) {
+                    if (draw == 11 || draw == 20 || draw == 40) {
+                        const uint64_t to = s->dimension() + (draw == 11   ? 2
+                                                              : draw == 20 ? 5
+                                                                           : 1000);
+                        s->advance_to(to);
+                        ref.slot = to;
+                    }
+                    ASSERT_EQ(s->dimension(), ref.slot);
+                    const Vec2 expected = ref.next_2d();
+                    if (draw % 3 == 1) {
+                        ASSERT_EQ(s->next_1d(), expected.x) << "draw " << draw;
+                    } else {
+                        const Vec2 u = s->next_2d();
+                        ASSERT_EQ(u.x, expected.x) << "draw " << draw;
+                        ASSERT_EQ(u.y, expected.y) << "draw " << draw;
+                    }
+                }
+            }
     }
 }
 

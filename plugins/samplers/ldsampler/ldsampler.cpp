@@ -26,11 +26,15 @@
 // rendering past sample_count continues the same sequence). With sample_count a power of two
 // each pixel's samples form a complete (0,k,2)-net in every dimension pair; other counts give
 // a subset of one (at most one point per elementary interval).
+//
+// Being pure functions of the slot, the slots of a sample are computed eight at a time in SIMD
+// lanes when the integrator draws them in sequence (the path tracer): one slot's value is a
+// chain of multiplications each waiting on the last, which lanes overlap. The numbers are the
+// same either way (tests/unit/test_samplers.cpp checks them against the one-slot definition).
 #include <algorithm>
 #include <cstdint>
-#include <limits>
 #include <memory>
-#include <string>
+#include <type_traits>
 
 #include "femto/plugin.h"
 #include "femto/random.h"
@@ -38,9 +42,23 @@
 
 namespace {
 
-/// The bits of x in reverse order: the bytes swapped, then the bits within each byte.
-constexpr uint32_t reverse_bits(uint32_t x) {
-    x = __builtin_bswap32(x);
+// Every helper below works on one 32- or 64-bit word and, unchanged, on eight of them in SIMD
+// lanes (GCC's vector extensions: the same operators, scalars broadcast). A sampler drawing its
+// dimensions in sequence gets eight slots computed at once (slot_values_batch()); the
+// static_asserts check the helpers on single words.
+using U32x8 = uint32_t __attribute__((vector_size(32)));
+using U64x8 = uint64_t __attribute__((vector_size(64)));
+
+/// The bits of x in reverse order: halves and bytes swapped (one bswap for a single word), then
+/// nibbles, pairs and bits.
+template <class U>
+[[gnu::always_inline]] constexpr U reverse_bits(U x) {
+    if constexpr (std::is_same_v<U, uint32_t>) {
+        x = __builtin_bswap32(x);
+    } else {
+        x = (x >> 16) | (x << 16);
+        x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    }
     x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
     return ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
@@ -49,7 +67,8 @@ static_assert(reverse_bits(1u) == 0x80000000u && reverse_bits(0x12345678u) == 0x
 
 /// A random permutation of 32-bit words in which output bit i depends only on input bits
 /// 0..i and the seed (every step only propagates information towards higher bits).
-constexpr uint32_t laine_karras_permutation(uint32_t x, uint32_t seed) {
+template <class U>
+[[gnu::always_inline]] constexpr U laine_karras_permutation(U x, U seed) {
     x ^= x * 0x3d20adeau;
     x += seed;
     x *= (seed >> 16) | 1u;
@@ -62,36 +81,9 @@ constexpr uint32_t laine_karras_permutation(uint32_t x, uint32_t seed) {
 // the flip of each digit depends on all the digits before it, is then Burley's nested uniform
 // scramble: owen(x, seed) = reverse_bits(laine_karras_permutation(reverse_bits(x), seed)).
 
-/// The second Sobol dimension is y = C i over GF(2), with the generator matrix's columns
-/// v_0 = 1 << 31, v_j = v_{j-1} ^ (v_{j-1} >> 1) (Pascal's triangle mod 2). Being linear, it is
-/// tabulated per byte. The tables hold the bit-reversed y, which is what the scrambling below
-/// consumes, and are indexed by the bytes of the bit-reversed index, which is what the index
-/// shuffle produces: neither needs a reversal of its own.
-struct SobolDim1Tables {
-    uint32_t by_reversed_index[4][256];
-    constexpr SobolDim1Tables() : by_reversed_index{} {
-        uint32_t v[32] = {};
-        v[0] = 1u << 31;
-        for (int j = 1; j < 32; ++j) v[j] = v[j - 1] ^ (v[j - 1] >> 1);
-        // Bit k of the reversed index r is bit 31 - k of the index.
-        for (int b = 0; b < 4; ++b)
-            for (uint32_t byte = 0; byte < 256; ++byte) {
-                uint32_t y = 0;
-                for (int k = 0; k < 8; ++k)
-                    if (byte & (1u << k)) y ^= v[31 - (8 * b + k)];
-                by_reversed_index[b][byte] = reverse_bits(y);
-            }
-    }
-};
-constexpr SobolDim1Tables kSobolDim1{};
-
-/// reverse_bits(y) of the second Sobol dimension at index reverse_bits(r).
-constexpr uint32_t sobol_dim1_reversed(uint32_t r) {
-    const auto& t = kSobolDim1.by_reversed_index;
-    return t[0][r & 0xffu] ^ t[1][(r >> 8) & 0xffu] ^ t[2][(r >> 16) & 0xffu] ^ t[3][r >> 24];
-}
-
-/// Reference definition of the same dimension, used to check the tables at compile time.
+/// The second Sobol dimension, y = C i over GF(2) with the generator matrix's columns
+/// v_0 = 1 << 31, v_j = v_{j-1} ^ (v_{j-1} >> 1) (Pascal's triangle mod 2): the reference
+/// definition, for the check below.
 constexpr uint32_t sobol_dim1(uint32_t index) {
     uint32_t result = 0;
     for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1)
@@ -100,15 +92,102 @@ constexpr uint32_t sobol_dim1(uint32_t index) {
 }
 static_assert(sobol_dim1(1) == 0x80000000u && sobol_dim1(2) == 0xc0000000u &&
               sobol_dim1(3) == 0x40000000u && sobol_dim1(4) == 0xa0000000u);
-static_assert(sobol_dim1_reversed(reverse_bits(0xdeadbeefu)) ==
-              reverse_bits(sobol_dim1(0xdeadbeefu)));
-static_assert(sobol_dim1_reversed(reverse_bits(0x01234567u)) ==
-              reverse_bits(sobol_dim1(0x01234567u)));
+
+/// reverse_bits(sobol_dim1(i)), the form the scrambling consumes. Vectors compute it without
+/// tables: by Lucas' theorem C's entry (k, j) is binom(j, k) mod 2, which is 1 iff the bits of k
+/// are a subset of j's, so digit k of y is the XOR of the index bits j at superset positions of
+/// k: a superset transform in five shift-and-XOR steps (shifts vectorise where lookups do not).
+/// A single word reads it from byte tables instead, indexed by the bits of r = reverse_bits(i)
+/// that the index shuffle produces, which takes the reversal of i off the path to y.
+template <class U>
+[[gnu::always_inline]] constexpr U sobol_dim1_reversed(U i) {
+    i ^= (i >> 1) & 0x55555555u;
+    i ^= (i >> 2) & 0x33333333u;
+    i ^= (i >> 4) & 0x0f0f0f0fu;
+    i ^= (i >> 8) & 0x00ff00ffu;
+    return i ^ (i >> 16);
+}
+struct SobolDim1Tables {
+    uint32_t by_reversed_index[4][256];
+    constexpr SobolDim1Tables() : by_reversed_index{} {
+        for (int b = 0; b < 4; ++b)
+            for (uint32_t byte = 0; byte < 256; ++byte)
+                by_reversed_index[b][byte] = sobol_dim1_reversed(reverse_bits(byte << (8 * b)));
+    }
+};
+constexpr SobolDim1Tables kSobolDim1{};
+/// sobol_dim1_reversed(reverse_bits(r)), by the tables (the map is linear over GF(2)).
+constexpr uint32_t sobol_dim1_reversed_from_r(uint32_t r) {
+    const auto& t = kSobolDim1.by_reversed_index;
+    return t[0][r & 0xffu] ^ t[1][(r >> 8) & 0xffu] ^ t[2][(r >> 16) & 0xffu] ^ t[3][r >> 24];
+}
+static_assert(sobol_dim1_reversed_from_r(0x89abcdefu) ==
+              reverse_bits(sobol_dim1(reverse_bits(0x89abcdefu))));
+static_assert(sobol_dim1_reversed(0xdeadbeefu) == reverse_bits(sobol_dim1(0xdeadbeefu)));
+static_assert(sobol_dim1_reversed(0x01234567u) == reverse_bits(sobol_dim1(0x01234567u)));
+static_assert(sobol_dim1_reversed(0xffffffffu) == reverse_bits(sobol_dim1(0xffffffffu)));
+
+/// femto::mix64 (femto/random.h), for single words and vectors of them.
+template <class U>
+[[gnu::always_inline]] constexpr U mix64(U z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+static_assert(mix64(uint64_t(12345)) == femto::mix64(12345) && mix64(~0ull) == femto::mix64(~0ull));
+
+/// The low 32 bits of each 64-bit word.
+template <class U32, class U64>
+[[gnu::always_inline]] constexpr U32 low_words(U64 x) {
+    if constexpr (std::is_same_v<U64, uint64_t>)
+        return static_cast<uint32_t>(x);
+    else
+        return __builtin_convertvector(x, U32);
+}
+
+/// The pair of dimension slot `slot` (a word, or a vector of slots) of the sample whose index
+/// has the bits `reversed_index`; next_1d() returns x. With s0, s1, s2 the slot's seeds, hashes
+/// of (sampler seed, render seed, pixel, slot), and LK the permutation above:
+///   shuffled index  i = owen(index, s0)     = reverse(r), r = LK(reverse(index), s0)
+///   first dim.      x = owen(vdc(i), s1)    = reverse(LK(i, s1))   since vdc(i) = reverse(i)
+///   second dim.     y = owen(sobol1(i), s2) = reverse(LK(reverse(sobol1(i)), s2))
+template <class U32, class U64>
+[[gnu::always_inline]] constexpr void slot_values(U64 slot, uint64_t pixel_seed,
+                                                  uint64_t slot_offset, uint32_t reversed_index,
+                                                  U32& x, U32& y) {
+    // hash_combine(pixel_seed, slot) = mix64(pixel_seed ^ (slot + slot_offset)).
+    const U64 h = mix64(pixel_seed ^ (slot + slot_offset));
+    const U64 g = mix64(h ^ 0x2545f4914f6cdd1dULL);
+    const U32 r = laine_karras_permutation(U32{} + reversed_index, low_words<U32>(h));
+    const U32 i = reverse_bits(r);
+    x = reverse_bits(laine_karras_permutation(i, low_words<U32>(h >> 32)));
+    U32 sobol;
+    if constexpr (std::is_same_v<U32, uint32_t>)
+        sobol = sobol_dim1_reversed_from_r(r);
+    else
+        sobol = sobol_dim1_reversed(i);
+    y = reverse_bits(laine_karras_permutation(sobol, low_words<U32>(g)));
+}
+
+constexpr uint64_t kSlotBatch = 8;
+
+/// slot_values() of slots first .. first + 7, into xs and ys. One slot's values are a chain of
+/// hashes and permutations, each step waiting on the last, and the path waits on the draw; the
+/// slots of a sample are independent of each other, so a sampler drawing in sequence computes
+/// eight at a time in SIMD lanes. Compiled for AVX-512, AVX2 and the x86-64 baseline (the
+/// loader picks what the CPU runs; the numbers are the same integers on each).
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void
+slot_values_batch(uint64_t first, uint64_t pixel_seed, uint64_t slot_offset,
+                  uint32_t reversed_index, uint32_t* xs, uint32_t* ys) {
+    const U64x8 slots = U64x8{0, 1, 2, 3, 4, 5, 6, 7} + first;
+    U32x8 x, y;
+    slot_values(slots, pixel_seed, slot_offset, reversed_index, x, y);
+    __builtin_memcpy(xs, &x, sizeof x);
+    __builtin_memcpy(ys, &y, sizeof y);
+}
 
 /// [0, 1) float from the 24 most significant bits (never rounds up to 1).
 constexpr float to_unit_float(uint32_t x) { return static_cast<float>(x >> 8) * 0x1p-24f; }
-
-constexpr uint32_t low32(uint64_t x) { return static_cast<uint32_t>(x); }
 
 class LowDiscrepancySampler final : public femto::Sampler {
 public:
@@ -124,24 +203,18 @@ public:
         slot_offset_ = 0x9e3779b97f4a7c15ULL + (pixel_seed_ << 6) + (pixel_seed_ >> 2);
         reversed_index_ = reverse_bits(sample_index);
         slot_ = 0;
+        computed_ = 0;
     }
 
-    // In both functions below, with s0, s1, s2 the slot's seeds and LK the permutation above:
-    //   shuffled index  i = owen(index, s0)     = reverse(r), r = LK(reverse(index), s0)
-    //   first dim.      x = owen(vdc(i), s1)    = reverse(LK(i, s1))   since vdc(i) = reverse(i)
-    //   second dim.     y = owen(sobol1(i), s2) = reverse(LK(reverse(sobol1(i)), s2))
-    // (reverse(sobol1(i)) is read from r directly: sobol_dim1_reversed).
     float next_1d() override {
-        const Slot s = next_slot();
-        const uint32_t r = laine_karras_permutation(reversed_index_, s.index_seed);
-        return to_unit_float(reverse_bits(laine_karras_permutation(reverse_bits(r), s.x_seed)));
+        uint32_t x, y;
+        draw(x, y);  // y, unused, is not computed for a slot alone (the inlined code drops it)
+        return to_unit_float(x);
     }
 
     femto::Vec2 next_2d() override {
-        const Slot s = next_slot();
-        const uint32_t r = laine_karras_permutation(reversed_index_, s.index_seed);
-        const uint32_t x = reverse_bits(laine_karras_permutation(reverse_bits(r), s.x_seed));
-        const uint32_t y = reverse_bits(laine_karras_permutation(sobol_dim1_reversed(r), s.y_seed));
+        uint32_t x, y;
+        draw(x, y);
         return {to_unit_float(x), to_unit_float(y)};
     }
 
@@ -149,20 +222,37 @@ public:
     void advance_to(uint64_t d) override { slot_ = std::max(slot_, d); }
 
 private:
-    struct Slot {
-        uint32_t index_seed, x_seed, y_seed;
-    };
-    /// Seeds of the next dimension slot: hashes of (sampler seed, render seed, pixel, slot).
-    Slot next_slot() {
-        const uint64_t h = femto::mix64(pixel_seed_ ^ (slot_++ + slot_offset_));
-        const uint64_t g = femto::mix64(h ^ 0x2545f4914f6cdd1dULL);
-        return {low32(h), static_cast<uint32_t>(h >> 32), low32(g)};
+    /// The next slot's pair. Eight slots are computed at once at a sample's first slot and
+    /// where a batch of eight ended (a sampler drawing in sequence, as the path tracer does);
+    /// elsewhere (a draw after advance_to(), as BDPT's fixed layout makes most of its draws: a
+    /// vertex's few numbers would not pay for a batch) the slot is computed alone.
+    [[gnu::always_inline]] void draw(uint32_t& x, uint32_t& y) {
+        uint64_t k = slot_ - first_;
+        if (k >= computed_) {
+            if (slot_ != 0 && !(computed_ == kSlotBatch && k == kSlotBatch)) {
+                slot_values(slot_++, pixel_seed_, slot_offset_, reversed_index_, x, y);
+                computed_ = 0;
+                return;
+            }
+            slot_values_batch(slot_, pixel_seed_, slot_offset_, reversed_index_, xs_, ys_);
+            first_ = slot_;
+            computed_ = kSlotBatch;
+            k = 0;
+        }
+        ++slot_;
+        x = xs_[k];
+        y = ys_[k];
     }
 
     uint64_t pixel_seed_ = 0;
     uint64_t slot_offset_ = 0;
     uint32_t reversed_index_ = 0;
     uint64_t slot_ = 0;
+    // The pairs of slots first_ .. first_ + computed_ - 1.
+    uint64_t first_ = 0;
+    uint64_t computed_ = 0;
+    uint32_t xs_[kSlotBatch] = {};
+    uint32_t ys_[kSlotBatch] = {};
 };
 
 }  // namespace
