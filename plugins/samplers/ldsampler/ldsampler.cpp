@@ -44,15 +44,18 @@ namespace {
 
 // Every helper below works on one 32- or 64-bit word and, unchanged, on eight of them in SIMD
 // lanes (GCC's vector extensions: the same operators, scalars broadcast). A sampler drawing its
-// dimensions in sequence gets eight slots computed at once (slot_values_batch()); the
-// static_asserts check the helpers on single words.
+// dimensions in sequence gets eight slots computed at once (slot_values_batch()). The helpers
+// change their operand in place: a vector passed or returned by value would cross from one
+// instruction set's clone of slot_values_batch() into a function compiled for another, whose
+// calling conventions differ (clang refuses it even where the call is inlined). The
+// static_asserts check them on single words, through reverse_bits().
 using U32x8 = uint32_t __attribute__((vector_size(32)));
 using U64x8 = uint64_t __attribute__((vector_size(64)));
 
-/// The bits of x in reverse order: halves and bytes swapped (one bswap for a single word), then
-/// nibbles, pairs and bits.
+/// Reverses the order of the bits of each word of x: halves and bytes swapped (one bswap for a
+/// single word), then nibbles, pairs and bits.
 template <class U>
-[[gnu::always_inline]] constexpr U reverse_bits(U x) {
+[[gnu::always_inline]] constexpr void reverse_bits_of(U& x) {
     if constexpr (std::is_same_v<U, uint32_t>) {
         x = __builtin_bswap32(x);
     } else {
@@ -61,29 +64,32 @@ template <class U>
     }
     x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    return ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+}
+constexpr uint32_t reverse_bits(uint32_t x) {
+    reverse_bits_of(x);
+    return x;
 }
 static_assert(reverse_bits(1u) == 0x80000000u && reverse_bits(0x12345678u) == 0x1e6a2c48u);
 
-/// A random permutation of 32-bit words in which output bit i depends only on input bits
-/// 0..i and the seed (every step only propagates information towards higher bits).
+/// Applies to x a random permutation of 32-bit words in which output bit i depends only on
+/// input bits 0..i and the seed (every step only propagates information towards higher bits).
 template <class U>
-[[gnu::always_inline]] constexpr U laine_karras_permutation(U x, U seed) {
+[[gnu::always_inline]] constexpr void laine_karras_permute(U& x, const U& seed) {
     x ^= x * 0x3d20adeau;
     x += seed;
     x *= (seed >> 16) | 1u;
     x ^= x * 0x05526c56u;
     x ^= x * 0x53a22864u;
-    return x;
 }
 
 // Owen scrambling of a 32-bit binary fraction x (most significant bit = first digit), where
 // the flip of each digit depends on all the digits before it, is then Burley's nested uniform
-// scramble: owen(x, seed) = reverse_bits(laine_karras_permutation(reverse_bits(x), seed)).
+// scramble: owen(x, seed) = reverse(laine_karras(reverse(x), seed)).
 
 /// The second Sobol dimension, y = C i over GF(2) with the generator matrix's columns
 /// v_0 = 1 << 31, v_j = v_{j-1} ^ (v_{j-1} >> 1) (Pascal's triangle mod 2): the reference
-/// definition, for the check below.
+/// definition, for the checks below.
 constexpr uint32_t sobol_dim1(uint32_t index) {
     uint32_t result = 0;
     for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1)
@@ -93,20 +99,28 @@ constexpr uint32_t sobol_dim1(uint32_t index) {
 static_assert(sobol_dim1(1) == 0x80000000u && sobol_dim1(2) == 0xc0000000u &&
               sobol_dim1(3) == 0x40000000u && sobol_dim1(4) == 0xa0000000u);
 
-/// reverse_bits(sobol_dim1(i)), the form the scrambling consumes. Vectors compute it without
-/// tables: by Lucas' theorem C's entry (k, j) is binom(j, k) mod 2, which is 1 iff the bits of k
-/// are a subset of j's, so digit k of y is the XOR of the index bits j at superset positions of
-/// k: a superset transform in five shift-and-XOR steps (shifts vectorise where lookups do not).
-/// A single word reads it from byte tables instead, indexed by the bits of r = reverse_bits(i)
-/// that the index shuffle produces, which takes the reversal of i off the path to y.
+/// Replaces i by reverse_bits(sobol_dim1(i)), the form the scrambling consumes, without tables:
+/// by Lucas' theorem C's entry (k, j) is binom(j, k) mod 2, which is 1 iff the bits of k are a
+/// subset of j's, so digit k of y is the XOR of the index bits j at superset positions of k: a
+/// superset transform in five shift-and-XOR steps (shifts vectorise where lookups do not).
 template <class U>
-[[gnu::always_inline]] constexpr U sobol_dim1_reversed(U i) {
+[[gnu::always_inline]] constexpr void sobol_dim1_reversed_of(U& i) {
     i ^= (i >> 1) & 0x55555555u;
     i ^= (i >> 2) & 0x33333333u;
     i ^= (i >> 4) & 0x0f0f0f0fu;
     i ^= (i >> 8) & 0x00ff00ffu;
-    return i ^ (i >> 16);
+    i ^= i >> 16;
 }
+constexpr uint32_t sobol_dim1_reversed(uint32_t i) {
+    sobol_dim1_reversed_of(i);
+    return i;
+}
+static_assert(sobol_dim1_reversed(0xdeadbeefu) == reverse_bits(sobol_dim1(0xdeadbeefu)));
+static_assert(sobol_dim1_reversed(0x01234567u) == reverse_bits(sobol_dim1(0x01234567u)));
+static_assert(sobol_dim1_reversed(0xffffffffu) == reverse_bits(sobol_dim1(0xffffffffu)));
+
+/// A single word reads the same from byte tables, indexed by the bits of r = reverse_bits(i)
+/// that the index shuffle produces: that takes the reversal of i off the path to y.
 struct SobolDim1Tables {
     uint32_t by_reversed_index[4][256];
     constexpr SobolDim1Tables() : by_reversed_index{} {
@@ -123,26 +137,27 @@ constexpr uint32_t sobol_dim1_reversed_from_r(uint32_t r) {
 }
 static_assert(sobol_dim1_reversed_from_r(0x89abcdefu) ==
               reverse_bits(sobol_dim1(reverse_bits(0x89abcdefu))));
-static_assert(sobol_dim1_reversed(0xdeadbeefu) == reverse_bits(sobol_dim1(0xdeadbeefu)));
-static_assert(sobol_dim1_reversed(0x01234567u) == reverse_bits(sobol_dim1(0x01234567u)));
-static_assert(sobol_dim1_reversed(0xffffffffu) == reverse_bits(sobol_dim1(0xffffffffu)));
 
-/// femto::mix64 (femto/random.h), for single words and vectors of them.
+/// Applies femto::mix64 (femto/random.h) to each word of z.
 template <class U>
-[[gnu::always_inline]] constexpr U mix64(U z) {
+[[gnu::always_inline]] constexpr void mix64_of(U& z) {
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
+    z ^= z >> 31;
 }
-static_assert(mix64(uint64_t(12345)) == femto::mix64(12345) && mix64(~0ull) == femto::mix64(~0ull));
+constexpr uint64_t mix64(uint64_t z) {
+    mix64_of(z);
+    return z;
+}
+static_assert(mix64(12345) == femto::mix64(12345) && mix64(~0ull) == femto::mix64(~0ull));
 
-/// The low 32 bits of each 64-bit word.
+/// The low 32 bits of each 64-bit word of x, into low.
 template <class U32, class U64>
-[[gnu::always_inline]] constexpr U32 low_words(U64 x) {
+[[gnu::always_inline]] constexpr void low_words_of(const U64& x, U32& low) {
     if constexpr (std::is_same_v<U64, uint64_t>)
-        return static_cast<uint32_t>(x);
+        low = static_cast<uint32_t>(x);
     else
-        return __builtin_convertvector(x, U32);
+        low = __builtin_convertvector(x, U32);
 }
 
 /// The pair of dimension slot `slot` (a word, or a vector of slots) of the sample whose index
@@ -152,21 +167,31 @@ template <class U32, class U64>
 ///   first dim.      x = owen(vdc(i), s1)    = reverse(LK(i, s1))   since vdc(i) = reverse(i)
 ///   second dim.     y = owen(sobol1(i), s2) = reverse(LK(reverse(sobol1(i)), s2))
 template <class U32, class U64>
-[[gnu::always_inline]] constexpr void slot_values(U64 slot, uint64_t pixel_seed,
+[[gnu::always_inline]] constexpr void slot_values(const U64& slot, uint64_t pixel_seed,
                                                   uint64_t slot_offset, uint32_t reversed_index,
                                                   U32& x, U32& y) {
-    // hash_combine(pixel_seed, slot) = mix64(pixel_seed ^ (slot + slot_offset)).
-    const U64 h = mix64(pixel_seed ^ (slot + slot_offset));
-    const U64 g = mix64(h ^ 0x2545f4914f6cdd1dULL);
-    const U32 r = laine_karras_permutation(U32{} + reversed_index, low_words<U32>(h));
-    const U32 i = reverse_bits(r);
-    x = reverse_bits(laine_karras_permutation(i, low_words<U32>(h >> 32)));
-    U32 sobol;
-    if constexpr (std::is_same_v<U32, uint32_t>)
-        sobol = sobol_dim1_reversed_from_r(r);
-    else
-        sobol = sobol_dim1_reversed(i);
-    y = reverse_bits(laine_karras_permutation(sobol, low_words<U32>(g)));
+    // h = hash_combine(pixel_seed, slot) = mix64(pixel_seed ^ (slot + slot_offset)).
+    U64 h = pixel_seed ^ (slot + slot_offset);
+    mix64_of(h);
+    U64 g = h ^ 0x2545f4914f6cdd1dULL;
+    mix64_of(g);
+    U32 s0{}, s1{}, s2{};
+    low_words_of(h, s0);
+    low_words_of(U64(h >> 32), s1);
+    low_words_of(g, s2);
+    U32 r = U32{} + reversed_index;  // becomes r, then i
+    laine_karras_permute(r, s0);
+    if constexpr (std::is_same_v<U32, uint32_t>) y = sobol_dim1_reversed_from_r(r);
+    reverse_bits_of(r);
+    if constexpr (!std::is_same_v<U32, uint32_t>) {
+        y = r;
+        sobol_dim1_reversed_of(y);
+    }
+    x = r;
+    laine_karras_permute(x, s1);
+    reverse_bits_of(x);
+    laine_karras_permute(y, s2);
+    reverse_bits_of(y);
 }
 
 constexpr uint64_t kSlotBatch = 8;
