@@ -408,6 +408,56 @@ TEST(SamplerLd, NumbersAreTheOneSlotDefinitionsBitForBit) {
     }
 }
 
+// The same, for the ways a sampler can be left midway through a batch of slots: a new start(),
+// a clone() that goes on beside the original, skips to the batch's end, to the current
+// dimension and backwards (no-ops), and slots past 2^64 (the count wraps, as before).
+TEST(SamplerLd, NumbersAreTheOneSlotDefinitionsMidwayThroughABatch) {
+    auto s = make_sampler("ldsampler", 16);
+    const auto expect_pairs = [](Sampler& sampler, LdReference& ref, int n) {
+        for (int draw = 0; draw < n; ++draw) {
+            ASSERT_EQ(sampler.dimension(), ref.slot);
+            const Vec2 expected = ref.next_2d(), u = sampler.next_2d();
+            ASSERT_EQ(u.x, expected.x) << "slot " << ref.slot - 1;
+            ASSERT_EQ(u.y, expected.y) << "slot " << ref.slot - 1;
+        }
+    };
+    // Every draw a pair (so each lane's y is checked), across three batches.
+    s->start(4, 21, 3);
+    LdReference all_pairs(0, 4, 21, 3);
+    expect_pairs(*s, all_pairs, 24);
+    // start() after three draws of a batch.
+    s->start(4, 21, 3);
+    LdReference first(0, 4, 21, 3);
+    expect_pairs(*s, first, 3);
+    s->start(4, 22, 7);
+    LdReference second(0, 4, 22, 7);
+    expect_pairs(*s, second, 12);
+    // A clone taken midway through a batch, both going on.
+    s->start(4, 23, 1);
+    LdReference original(0, 4, 23, 1);
+    expect_pairs(*s, original, 5);
+    auto copy = s->clone();
+    LdReference copied = original;
+    expect_pairs(*copy, copied, 12);
+    expect_pairs(*s, original, 12);
+    // advance_to() to the batch's end from inside it, to the current dimension, backwards.
+    s->start(4, 24, 2);
+    LdReference skips(0, 4, 24, 2);
+    expect_pairs(*s, skips, 3);
+    s->advance_to(8);
+    skips.slot = 8;
+    expect_pairs(*s, skips, 2);
+    s->advance_to(s->dimension());
+    s->advance_to(1);
+    expect_pairs(*s, skips, 9);
+    // Slots counted past 2^64 wrap to 0, where the sequence starts again.
+    s->start(4, 25, 9);
+    LdReference wrap(0, 4, 25, 9);
+    s->advance_to(~uint64_t(0) - 3);
+    wrap.slot = ~uint64_t(0) - 3;
+    expect_pairs(*s, wrap, 12);
+}
+
 TEST(SamplerLd, IndependentSamplerIsNotANet) {
     // Control for the test above: 64 random points almost never form a (0,6,2)-net.
     auto s = make_sampler("independent", 64);

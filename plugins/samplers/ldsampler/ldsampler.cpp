@@ -179,15 +179,17 @@ template <class U32, class U64>
     low_words_of(h, s0);
     low_words_of(U64(h >> 32), s1);
     low_words_of(g, s2);
-    U32 r = U32{} + reversed_index;  // becomes r, then i
+    U32 r = U32{} + reversed_index;
     laine_karras_permute(r, s0);
-    if constexpr (std::is_same_v<U32, uint32_t>) y = sobol_dim1_reversed_from_r(r);
-    reverse_bits_of(r);
-    if constexpr (!std::is_same_v<U32, uint32_t>) {
-        y = r;
+    U32 i = r;  // the shuffled index
+    reverse_bits_of(i);
+    if constexpr (std::is_same_v<U32, uint32_t>) {
+        y = sobol_dim1_reversed_from_r(r);
+    } else {
+        y = i;
         sobol_dim1_reversed_of(y);
     }
-    x = r;
+    x = i;
     laine_karras_permute(x, s1);
     reverse_bits_of(x);
     laine_karras_permute(y, s2);
@@ -199,11 +201,23 @@ constexpr uint64_t kSlotBatch = 8;
 /// slot_values() of slots first .. first + 7, into xs and ys. One slot's values are a chain of
 /// hashes and permutations, each step waiting on the last, and the path waits on the draw; the
 /// slots of a sample are independent of each other, so a sampler drawing in sequence computes
-/// eight at a time in SIMD lanes. Compiled for AVX-512, AVX2 and the x86-64 baseline (the
-/// loader picks what the CPU runs; the numbers are the same integers on each).
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void
-slot_values_batch(uint64_t first, uint64_t pixel_seed, uint64_t slot_offset,
-                  uint32_t reversed_index, uint32_t* xs, uint32_t* ys) {
+/// eight at a time in SIMD lanes. Compiled for AVX-512 (with its 64-bit multiplications), AVX2
+/// and the x86-64 baseline (the loader picks what the CPU runs; the numbers are the same
+/// integers on each).
+// GCC names the clones by x86-64 level (v4 includes AVX-512's 64-bit multiplications, which
+// its "avx512f" alone lacks, and GCC takes no "avx512dq" clone); clang 14 by feature, since its
+// dispatcher reads an arch= name as a CPU model, matches none, and would always run the baseline.
+#if defined(__x86_64__) && defined(__clang__)
+#define FEMTO_SLOT_BATCH_CLONES __attribute__((target_clones("avx512dq", "avx2", "default")))
+#elif defined(__x86_64__)
+#define FEMTO_SLOT_BATCH_CLONES \
+    __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else  // other architectures: one version, for the target the plugin is built for
+#define FEMTO_SLOT_BATCH_CLONES
+#endif
+FEMTO_SLOT_BATCH_CLONES void slot_values_batch(uint64_t first, uint64_t pixel_seed,
+                                               uint64_t slot_offset, uint32_t reversed_index,
+                                               uint32_t* xs, uint32_t* ys) {
     const U64x8 slots = U64x8{0, 1, 2, 3, 4, 5, 6, 7} + first;
     U32x8 x, y;
     slot_values(slots, pixel_seed, slot_offset, reversed_index, x, y);
@@ -228,7 +242,7 @@ public:
         slot_offset_ = 0x9e3779b97f4a7c15ULL + (pixel_seed_ << 6) + (pixel_seed_ >> 2);
         reversed_index_ = reverse_bits(sample_index);
         slot_ = 0;
-        computed_ = 0;
+        batch_size_ = 0;
     }
 
     float next_1d() override {
@@ -248,20 +262,22 @@ public:
 
 private:
     /// The next slot's pair. Eight slots are computed at once at a sample's first slot and
-    /// where a batch of eight ended (a sampler drawing in sequence, as the path tracer does);
-    /// elsewhere (a draw after advance_to(), as BDPT's fixed layout makes most of its draws: a
-    /// vertex's few numbers would not pay for a batch) the slot is computed alone.
+    /// where the previous batch of eight ended: a sampler drawn in sequence, as the path tracer
+    /// draws it. Elsewhere, after an advance_to() past the batch (BDPT's fixed layout: a vertex
+    /// takes two or three numbers of a block of its own, too few to pay for a batch), each slot
+    /// is computed alone, for the rest of the sample.
     [[gnu::always_inline]] void draw(uint32_t& x, uint32_t& y) {
-        uint64_t k = slot_ - first_;
-        if (k >= computed_) {
-            if (slot_ != 0 && !(computed_ == kSlotBatch && k == kSlotBatch)) {
+        uint64_t k = slot_ - batch_first_;
+        if (k >= batch_size_) {
+            const bool in_sequence = slot_ == 0 || (batch_size_ == kSlotBatch && k == kSlotBatch);
+            if (!in_sequence) {
                 slot_values(slot_++, pixel_seed_, slot_offset_, reversed_index_, x, y);
-                computed_ = 0;
+                batch_size_ = 0;
                 return;
             }
             slot_values_batch(slot_, pixel_seed_, slot_offset_, reversed_index_, xs_, ys_);
-            first_ = slot_;
-            computed_ = kSlotBatch;
+            batch_first_ = slot_;
+            batch_size_ = kSlotBatch;
             k = 0;
         }
         ++slot_;
@@ -273,9 +289,9 @@ private:
     uint64_t slot_offset_ = 0;
     uint32_t reversed_index_ = 0;
     uint64_t slot_ = 0;
-    // The pairs of slots first_ .. first_ + computed_ - 1.
-    uint64_t first_ = 0;
-    uint64_t computed_ = 0;
+    // The pairs of slots batch_first_ .. batch_first_ + batch_size_ - 1.
+    uint64_t batch_first_ = 0;
+    uint64_t batch_size_ = 0;
     uint32_t xs_[kSlotBatch] = {};
     uint32_t ys_[kSlotBatch] = {};
 };
