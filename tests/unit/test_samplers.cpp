@@ -421,28 +421,28 @@ TEST(SamplerLd, NumbersAreTheOneSlotDefinitionsMidwayThroughABatch) {
             ASSERT_EQ(u.y, expected.y) << "slot " << ref.slot - 1;
         }
     };
+    // Starts the sampler and its reference at (render seed 4, pixel, sample).
+    const auto start = [&](uint64_t pixel, uint32_t sample) {
+        s->start(4, pixel, sample);
+        return LdReference(0, 4, pixel, sample);
+    };
     // Every draw a pair (so each lane's y is checked), across three batches.
-    s->start(4, 21, 3);
-    LdReference all_pairs(0, 4, 21, 3);
+    LdReference all_pairs = start(21, 3);
     expect_pairs(*s, all_pairs, 24);
     // start() after three draws of a batch.
-    s->start(4, 21, 3);
-    LdReference first(0, 4, 21, 3);
+    LdReference first = start(21, 3);
     expect_pairs(*s, first, 3);
-    s->start(4, 22, 7);
-    LdReference second(0, 4, 22, 7);
+    LdReference second = start(22, 7);
     expect_pairs(*s, second, 12);
     // A clone taken midway through a batch, both going on.
-    s->start(4, 23, 1);
-    LdReference original(0, 4, 23, 1);
+    LdReference original = start(23, 1);
     expect_pairs(*s, original, 5);
     auto copy = s->clone();
     LdReference copied = original;
     expect_pairs(*copy, copied, 12);
     expect_pairs(*s, original, 12);
     // advance_to() to the batch's end from inside it, to the current dimension, backwards.
-    s->start(4, 24, 2);
-    LdReference skips(0, 4, 24, 2);
+    LdReference skips = start(24, 2);
     expect_pairs(*s, skips, 3);
     s->advance_to(8);
     skips.slot = 8;
@@ -451,15 +451,14 @@ TEST(SamplerLd, NumbersAreTheOneSlotDefinitionsMidwayThroughABatch) {
     s->advance_to(1);
     expect_pairs(*s, skips, 9);
     // Slots counted past 2^64 wrap to 0, where the sequence starts again.
-    s->start(4, 25, 9);
-    LdReference wrap(0, 4, 25, 9);
+    LdReference wrap = start(25, 9);
     s->advance_to(~uint64_t(0) - 3);
     wrap.slot = ~uint64_t(0) - 3;
     expect_pairs(*s, wrap, 12);
 }
 
 TEST(SamplerLd, IndependentSamplerIsNotANet) {
-    // Control for the test above: 64 random points almost never form a (0,6,2)-net.
+    // Control for EveryPixelIsAZeroTwoNet: 64 random points almost never form a (0,6,2)-net.
     auto s = make_sampler("independent", 64);
     std::vector<Vec2> pts;
     for (uint32_t i = 0; i < 64; ++i) {
