@@ -198,12 +198,6 @@ template <class U32, class U64>
 
 constexpr uint64_t kSlotBatch = 8;
 
-/// slot_values() of slots first .. first + 7, into xs and ys. One slot's values are a chain of
-/// hashes and permutations, each step waiting on the last, and the path waits on the draw; the
-/// slots of a sample are independent of each other, so a sampler drawing in sequence computes
-/// eight at a time in SIMD lanes. Compiled for AVX-512 (with its 64-bit multiplications), AVX2
-/// and the x86-64 baseline (the loader picks what the CPU runs; the numbers are the same
-/// integers on each).
 // GCC names the clones by x86-64 level (v4 includes AVX-512's 64-bit multiplications, which
 // its "avx512f" alone lacks, and GCC takes no "avx512dq" clone); clang 14 by feature, since its
 // dispatcher reads an arch= name as a CPU model, matches none, and would always run the baseline.
@@ -215,6 +209,13 @@ constexpr uint64_t kSlotBatch = 8;
 #else  // other architectures: one version, for the target the plugin is built for
 #define FEMTO_SLOT_BATCH_CLONES
 #endif
+
+/// slot_values() of slots first .. first + 7, into xs and ys. One slot's values are a chain of
+/// hashes and permutations, each step waiting on the last, and the path waits on the draw; the
+/// slots of a sample are independent of each other, so a sampler drawing in sequence computes
+/// eight at a time in SIMD lanes. Compiled for AVX-512 (with its 64-bit multiplications), AVX2
+/// and the x86-64 baseline (the loader picks what the CPU runs; the numbers are the same
+/// integers on each).
 FEMTO_SLOT_BATCH_CLONES void slot_values_batch(uint64_t first, uint64_t pixel_seed,
                                                uint64_t slot_offset, uint32_t reversed_index,
                                                uint32_t* xs, uint32_t* ys) {
