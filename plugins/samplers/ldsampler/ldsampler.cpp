@@ -145,11 +145,12 @@ template <class U>
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
     z ^= z >> 31;
 }
-constexpr uint64_t mix64(uint64_t z) {
-    mix64_of(z);
-    return z;
-}
-static_assert(mix64(12345) == femto::mix64(12345) && mix64(~0ull) == femto::mix64(~0ull));
+static_assert([] {
+    uint64_t a = 12345, b = ~0ull;
+    mix64_of(a);
+    mix64_of(b);
+    return a == femto::mix64(12345) && b == femto::mix64(~0ull);
+}());
 
 /// The low 32 bits of each 64-bit word of x, into low.
 template <class U32, class U64>
