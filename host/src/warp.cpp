@@ -43,11 +43,6 @@ Vec3 square_to_uniform_cone(Vec2 u, float cos_max) {
     return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
-Vec2 square_to_uniform_triangle(Vec2 u) {
-    const float s = std::sqrt(u.x);
-    return {1.f - s, u.y * s};
-}
-
 uint32_t sample_discrete_cdf(const float* cdf, uint32_t n, float& u) {
     // First index i with cdf[i+1] > u.
     const float* it = std::upper_bound(cdf + 1, cdf + n + 1, u);
@@ -103,22 +98,6 @@ AliasTable::AliasTable(const std::vector<double>& weights) {
         c.inv_threshold = c.threshold > 0 ? 1.f / c.threshold : 0.f;
         c.inv_rest = c.threshold < 1 ? 1.f / (1.f - c.threshold) : 0.f;
     }
-}
-
-uint32_t AliasTable::sample(float& u) const {
-    const uint32_t n = uint32_t(entries_.size());
-    const double scaled = double(u) * double(n);
-    const uint32_t i = std::min(uint32_t(scaled), n - 1);
-    const float f = std::min(float(scaled - double(i)), 0x1.fffffep-1f);
-    const Cell& c = entries_[i];
-    // The rescalings multiply by stored reciprocals: a division is slow, and a light sample's
-    // steps wait on each other.
-    if (f < c.threshold) {
-        u = std::min(f * c.inv_threshold, 0x1.fffffep-1f);
-        return i;
-    }
-    u = std::min((f - c.threshold) * c.inv_rest, 0x1.fffffep-1f);
-    return c.alias;
 }
 
 }  // namespace femto::warp

@@ -99,6 +99,10 @@ struct ShapeSample {
     Vec2 uv;
     float pdf = 0.f;      ///< solid-angle density at the reference point (0 = failed)
     float p_error = 0.f;  ///< sample_area(): how far rays leaving p start off (Hit::p_error)
+    /// sample_direct(): the unit direction from the reference point to p, and the distance
+    /// (computed once here, so that an emitter need not take the same square root again).
+    Vec3 wi;
+    float distance = 0.f;
 };
 
 class Shape : public Object {
@@ -182,7 +186,14 @@ private:
     // Built on a mesh's first sample_area() (most shapes are never sampled): the triangles
     // by area, and each one's unit normal (flipped with the shape) and rounding bound.
     struct AreaSampling;
-    const AreaSampling& area_sampling() const;
+    const AreaSampling& area_sampling() const {
+        // Double-checked: after the first build a sample pays one atomic load (std::call_once
+        // would pay a thread-local lookup per call).
+        if (const AreaSampling* built = area_sampling_.load(std::memory_order_acquire))
+            return *built;
+        return build_area_sampling();
+    }
+    const AreaSampling& build_area_sampling() const;
     mutable std::mutex area_sampling_mutex_;  // guards the build
     mutable std::unique_ptr<const AreaSampling> area_sampling_owner_;
     mutable std::atomic<const AreaSampling*> area_sampling_{nullptr};  // set once built

@@ -2,6 +2,8 @@
 // Each has a chi-square test against its pdf in tests/unit/test_warp_chi2.cpp.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -25,8 +27,12 @@ Vec3 square_to_uniform_cone(Vec2 u, float cos_max);
 inline float uniform_cone_pdf(const Vec3& v, float cos_max) {
     return v.z >= cos_max ? 1.f / (2.f * kPi * (1.f - cos_max)) : 0.f;
 }
-/// Barycentric coordinates (b1, b2) uniform over a triangle.
-Vec2 square_to_uniform_triangle(Vec2 u);
+/// Barycentric coordinates (b1, b2) uniform over a triangle. (Inline, as AliasTable::sample():
+/// a light sample on a mesh takes both, and a call costs as much as either.)
+inline Vec2 square_to_uniform_triangle(Vec2 u) {
+    const float s = std::sqrt(u.x);
+    return {1.f - s, u.y * s};
+}
 
 /// Sample an index of a discrete distribution given its normalized CDF (size n+1, cdf[0]=0,
 /// cdf[n]=1). Returns the index and rescales `u` to [0,1) within the chosen interval.
@@ -43,7 +49,21 @@ public:
     size_t size() const { return entries_.size(); }
     /// An index, with `u` rescaled to [0, 1) within the part of [0, 1) that chose it, for
     /// reuse. Never an index of weight 0. The table must not be empty.
-    uint32_t sample(float& u) const;
+    uint32_t sample(float& u) const {
+        const uint32_t n = uint32_t(entries_.size());
+        const double scaled = double(u) * double(n);
+        const uint32_t i = std::min(uint32_t(scaled), n - 1);
+        const float f = std::min(float(scaled - double(i)), 0x1.fffffep-1f);
+        const Cell& c = entries_[i];
+        // The rescalings multiply by stored reciprocals: a division is slow, and a light
+        // sample's steps wait on each other.
+        if (f < c.threshold) {
+            u = std::min(f * c.inv_threshold, 0x1.fffffep-1f);
+            return i;
+        }
+        u = std::min((f - c.threshold) * c.inv_rest, 0x1.fffffep-1f);
+        return c.alias;
+    }
 
 private:
     // Cell i (of width 1/n) keeps i below `threshold` (a fraction of the cell) and gives

@@ -192,7 +192,8 @@ bool Scene::occluded(const Ray& ray) const {
 EmitterSample Scene::sample_emitter(const Vec3& ref, float u_select, Vec2 u) const {
     const size_t n = emitter_list_.size();
     if (n == 0) return {};
-    const size_t i = std::min(size_t(u_select * float(n)), n - 1);
+    // (Through a 32-bit index: x86-64 converts a float to an unsigned 64-bit one by a branch.)
+    const size_t i = std::min(size_t(uint32_t(u_select * float(n))), n - 1);
     EmitterSample s = emitter_list_[i]->sample_direct(ref, u);
     s.emitter = emitter_list_[i];
     if (n > 1) {  // (a division costs a light sample's wait even by 1)

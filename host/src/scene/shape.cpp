@@ -397,10 +397,7 @@ struct Shape::AreaSampling {
     std::vector<float> p_error;  // Hit::p_error of a point on the triangle
 };
 
-const Shape::AreaSampling& Shape::area_sampling() const {
-    // Double-checked: after the first build a sample pays one atomic load (std::call_once
-    // would pay a thread-local lookup per call).
-    if (const AreaSampling* built = area_sampling_.load(std::memory_order_acquire)) return *built;
+const Shape::AreaSampling& Shape::build_area_sampling() const {
     std::lock_guard<std::mutex> lock(area_sampling_mutex_);
     if (!area_sampling_owner_) {
         auto table = std::make_unique<AreaSampling>();
@@ -470,6 +467,16 @@ float area_to_solid_angle(float pdf_area, const Vec3& ref, const Vec3& p, const 
     const float cos = std::abs(dot(n, d)) / std::sqrt(dist2);
     return cos > 0 ? pdf_area * dist2 / cos : 0.f;
 }
+
+// Sets s.wi and s.distance from `d`, the reference point's offset to s.p. Returns |d|^2 (0
+// when the reference point is the sampled point).
+float aim(ShapeSample& s, const Vec3& d) {
+    const float dist2 = squared_length(d);
+    if (!(dist2 > 0)) return 0.f;
+    s.distance = std::sqrt(dist2);
+    s.wi = d / s.distance;
+    return dist2;
+}
 }  // namespace
 
 ShapeSample Shape::sample_direct(const Vec3& ref, Vec2 u) const {
@@ -498,11 +505,16 @@ ShapeSample Shape::sample_direct(const Vec3& ref, Vec2 u) const {
             out.p = center_ + n * radius_;
             out.n = flip_normals_ ? -n : n;
             out.pdf = 1.f / (2.f * kPi * one_minus_cos_max);
-            return out;
+            return aim(out, out.p - ref) > 0 ? out : ShapeSample{};
         }
     }
+    // Area sampling, converted to solid angle: pdf_A d^2 / |cos theta at the sampled point|.
     ShapeSample s = sample_area(u);
-    s.pdf = area_to_solid_angle(s.pdf, ref, s.p, s.n);
+    const Vec3 d = s.p - ref;
+    const float dist2 = aim(s, d);
+    if (!(dist2 > 0)) return {};
+    const float cos = std::abs(dot(s.n, d)) / s.distance;
+    s.pdf = cos > 0 ? s.pdf * dist2 / cos : 0.f;
     return s;
 }
 

@@ -24,17 +24,12 @@ public:
         if (!shape_) return es;
         const ShapeSample ss = shape_->sample_direct(ref, u);
         if (!(ss.pdf > 0) || !std::isfinite(ss.pdf)) return es;
-        const Vec3 d = ss.p - ref;
-        const float dist2 = squared_length(d);
-        if (!(dist2 > 0)) return es;
-        const float dist = std::sqrt(dist2);
-        const Vec3 wi = d / dist;
         // The back side emits nothing: the sampled point must face the reference point.
-        if (!(dot(wi, ss.n) < 0)) return es;
+        if (!(dot(ss.wi, ss.n) < 0)) return es;
         es.p = ss.p;
         es.n = ss.n;
-        es.wi = wi;
-        es.distance = dist;
+        es.wi = ss.wi;
+        es.distance = ss.distance;
         es.pdf = ss.pdf;
         es.weight = radiance_ / ss.pdf;
         es.delta = false;
