@@ -61,8 +61,9 @@ namespace femto {
 /// (28: Sampler::dimension() and Sampler::advance_to() change Sampler's vtable.)
 /// (29: DistanceSample::at changes the layout sample_distance() returns; DistanceMixture's
 ///  layout and MediumPieces::piece()'s result change.)
-/// (30: ShapeSample::wi and ::distance change its layout; warp::AliasTable::sample() and
-///  warp::square_to_uniform_triangle() are inline, no longer exported.)
+/// (30: ShapeSample::wi and ::distance change its layout, and a flag for flat vertex normals
+///  Shape's; warp::AliasTable::sample() and warp::square_to_uniform_triangle() are inline, no
+///  longer exported.)
 inline constexpr uint32_t kPluginAbiVersion = 30;
 
 struct PluginDescriptor {

@@ -25,7 +25,8 @@ class Medium;
 class Sensor;
 class Shape;
 
-/// What one pixel of a camera ray covers around a hit (zero / valid = false for other rays):
+/// What one pixel of a camera ray covers around a hit (valid = false for other rays, whose
+/// other fields are then left as they were: read none of them unless valid):
 /// the first-order change of the hit's quantities per pixel step on the film, from the ray's
 /// differential (Ray::differential) intersected with the hit's tangent plane (pbrt's
 /// SurfaceInteraction::ComputeDifferentials). Materials that prefilter their textures (the
@@ -182,6 +183,7 @@ private:
     bool is_cylinder_ = false;
     bool flip_normals_ = false;
     bool fills_tangent_ = false;  // the bsdf reads Hit::dpdu (Bsdf::uses_tangent())
+    bool flat_normals_ = false;   // each triangle's vertex normals are equal: no interpolation
     TriangleMesh mesh_;
     // Built on a mesh's first sample_area() (most shapes are never sampled): the triangles
     // by area, and each one's unit normal (flipped with the shape) and rounding bound.

@@ -30,6 +30,17 @@ double triangle_area(const TriangleMesh& mesh, size_t i) {
     const Vec3& c = mesh.positions[mesh.indices[3 * i + 2]];
     return 0.5 * double(length(cross(b - a, c - a)));
 }
+
+// Whether each triangle's three vertex normals are equal (a flat-shaded mesh's): its normal is
+// then the same everywhere on it, and a hit need not interpolate and normalise them.
+bool normals_constant_per_triangle(const TriangleMesh& mesh) {
+    for (size_t i = 0; i < mesh.triangle_count(); ++i) {
+        const uint32_t* idx = &mesh.indices[3 * i];
+        const Vec3& n0 = mesh.normals[idx[0]];
+        if (!(mesh.normals[idx[1]] == n0) || !(mesh.normals[idx[2]] == n0)) return false;
+    }
+    return true;
+}
 }  // namespace
 
 std::vector<ParamSpec> Shape::inherited_params() {
@@ -94,6 +105,7 @@ void Shape::set_mesh(TriangleMesh mesh) {
     }
     if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
         throw SceneError(location_, "the mesh has a different number of uvs and positions");
+    flat_normals_ = !mesh.normals.empty() && normals_constant_per_triangle(mesh);
     mesh_ = std::move(mesh);
     is_sphere_ = false;
     double area = 0;
@@ -335,7 +347,9 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
     // The tangent only for materials that read it and for footprints (which need it).
     const bool tangent = fills_tangent_ || ray.differential;
     // Every field of `hit` is written, so that an integrator may reuse one Hit for all of a
-    // path's intersections (zeroing a fresh one per ray costs more than this store).
+    // path's intersections (zeroing a fresh one per ray costs more than this store); only an
+    // invalid footprint keeps its stale fields, which nothing reads (zeroing its 108 bytes
+    // per hit took a twentieth of this function's instructions).
     hit.dpdu = Vec3();
     hit.t = t;
     hit.shape = this;
@@ -368,7 +382,9 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         const float l = length(ng);
         hit.ng = l > 0 ? ng / l : Vec3(0, 0, 1);
         ns = hit.ng;
-        if (!mesh_.normals.empty()) {
+        if (flat_normals_) {  // (a rectangle's, a cube's, a flat-shaded mesh file's)
+            ns = mesh_.normals[i0];
+        } else if (!mesh_.normals.empty()) {
             const Vec3 n = mesh_.normals[i0] * w + mesh_.normals[i1] * u + mesh_.normals[i2] * v;
             const float ln = length(n);
             if (ln > 0) ns = n / ln;
@@ -388,7 +404,12 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
     }
     hit.sh = Frame(ns);
     hit.wi = hit.sh.to_local(-ray.d);
-    hit.footprint = ray.differential ? pixel_footprint(*this, ray, hit, {u, v}) : PixelFootprint{};
+    if (ray.differential) {
+        hit.footprint = pixel_footprint(*this, ray, hit, {u, v});
+    } else {
+        hit.footprint.valid = false;
+        hit.footprint.light_cone = 0.f;
+    }
 }
 
 struct Shape::AreaSampling {
