@@ -480,12 +480,10 @@ ShapeSample Shape::sample_area(Vec2 u) const {
 }
 
 namespace {
-// Solid-angle pdf from an area pdf: pdf_A * d^2 / |cos theta at the sampled point|.
-float area_to_solid_angle(float pdf_area, const Vec3& ref, const Vec3& p, const Vec3& n) {
-    const Vec3 d = p - ref;
-    const float dist2 = squared_length(d);
-    if (!(dist2 > 0)) return 0.f;
-    const float cos = std::abs(dot(n, d)) / std::sqrt(dist2);
+// Solid-angle pdf from an area pdf: pdf_A * d^2 / |cos theta at the sampled point|, for the
+// offset d from the reference point to a point of normal n, |d|^2 = dist2 > 0 and |d| = dist.
+float area_to_solid_angle(float pdf_area, const Vec3& n, const Vec3& d, float dist2, float dist) {
+    const float cos = std::abs(dot(n, d)) / dist;
     return cos > 0 ? pdf_area * dist2 / cos : 0.f;
 }
 
@@ -529,13 +527,11 @@ ShapeSample Shape::sample_direct(const Vec3& ref, Vec2 u) const {
             return aim(out, out.p - ref) > 0 ? out : ShapeSample{};
         }
     }
-    // Area sampling, converted to solid angle: pdf_A d^2 / |cos theta at the sampled point|.
-    ShapeSample s = sample_area(u);
+    ShapeSample s = sample_area(u);  // converted to solid angle
     const Vec3 d = s.p - ref;
     const float dist2 = aim(s, d);
     if (!(dist2 > 0)) return {};
-    const float cos = std::abs(dot(s.n, d)) / s.distance;
-    s.pdf = cos > 0 ? s.pdf * dist2 / cos : 0.f;
+    s.pdf = area_to_solid_angle(s.pdf, s.n, d, dist2, s.distance);
     return s;
 }
 
@@ -549,7 +545,10 @@ float Shape::pdf_direct(const Vec3& ref, const Hit& hit) const {
             return 1.f / (2.f * kPi * sin2_max / (1.f + cos_max));
         }
     }
-    return area_to_solid_angle(1.f / area_, ref, hit.p, hit.ng);
+    const Vec3 d = hit.p - ref;
+    const float dist2 = squared_length(d);
+    if (!(dist2 > 0)) return 0.f;
+    return area_to_solid_angle(1.f / area_, hit.ng, d, dist2, std::sqrt(dist2));
 }
 
 }  // namespace femto
