@@ -1,22 +1,46 @@
 #include "femto/warp.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
 
 namespace femto::warp {
 
+namespace {
+
+// Picks a when `pick_a`, else b, through bit masks: compilers turn a ternary between floats
+// into a branch, and here the choice is a coin flip per sample, mispredicted half the time.
+inline float select(bool pick_a, float a, float b) {
+    const uint32_t mask = 0u - uint32_t(pick_a);
+    return std::bit_cast<float>((std::bit_cast<uint32_t>(a) & mask) |
+                                (std::bit_cast<uint32_t>(b) & ~mask));
+}
+
+// sin and cos of x in [-pi/4, pi/4], where their Taylor series to x^9 and x^10 are within
+// about an ulp (WarpDisk.QuarterSineAndCosineWithinTwoUlps): no call, no range reduction.
+inline Vec2 quarter_cos_sin(float x) {
+    const float x2 = x * x;
+    const float s =
+        x * (1.f + x2 * (-1.f / 6 + x2 * (1.f / 120 + x2 * (-1.f / 5040 + x2 * (1.f / 362880)))));
+    const float c =
+        1.f + x2 * (-0.5f + x2 * (1.f / 24 +
+                                  x2 * (-1.f / 720 + x2 * (1.f / 40320 + x2 * (-1.f / 3628800)))));
+    return {c, s};
+}
+
+}  // namespace
+
 Vec2 square_to_uniform_disk(Vec2 u) {
     const float a = 2.f * u.x - 1.f, b = 2.f * u.y - 1.f;
     if (a == 0 && b == 0) return {0, 0};
-    // The wedge's operands are selected, not branched on: the choice is a coin flip per
-    // sample, which as a branch the CPU mispredicts half the time (the same values either way).
+    // Wedge |a| > |b|: radius a, angle (pi/4) b/a. Otherwise radius b, angle
+    // pi/2 - (pi/4) a/b, whose cosine and sine are the sine and cosine of (pi/4) a/b.
     const bool wide = a * a > b * b;
-    const float r = wide ? a : b;
-    const float ratio = (wide ? b : a) / r;
-    const float phi = wide ? (kPi / 4.f) * ratio : (kPi / 2.f) - (kPi / 4.f) * ratio;
-    return {r * std::cos(phi), r * std::sin(phi)};
+    const float r = select(wide, a, b);
+    const Vec2 cs = quarter_cos_sin((kPi / 4.f) * (select(wide, b, a) / r));
+    return {r * select(wide, cs.x, cs.y), r * select(wide, cs.y, cs.x)};
 }
 
 Vec3 square_to_cosine_hemisphere(Vec2 u) {
