@@ -607,6 +607,35 @@ TEST(ShapeObj, EqualVertexNormalsAreTheTrianglesNormal) {
     }
 }
 
+// A flat mesh whose vertex normals are its face normals gives hits that normal as their
+// geometric normal too (without normalising the face's cross product again); a normal against
+// the winding, or tilted from the face, leaves the geometric normal the winding's.
+TEST(ShapeObj, FaceNormalsAreTheGeometricNormal) {
+    ScratchDir dir;
+    auto quad_with_normal = [&](const std::string& normal) {
+        Properties props("obj", {});
+        props.set_string("filename",
+                         dir.write("quad.obj", "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nvn " + normal +
+                                                   "\nf 1//1 2//1 3//1\nf 1//1 3//1 "
+                                                   "4//1\n"));
+        return make_shape(props);
+    };
+    const femto::Ray down{{0.5f, 0.5f, 1.f}, {0, 0, -1}};
+    const Vec3 tilted = normalize(Vec3(0.f, 1e-3f, 1.f));  // a thousandth of a radian off
+    for (const auto& [normal, shading] : {std::pair{std::string("0 0 1"), Vec3(0, 0, 1)},
+                                          std::pair{std::string("0 0 -1"), Vec3(0, 0, -1)},
+                                          std::pair{std::string("0 0.001 1"), tilted}}) {
+        auto s = quad_with_normal(normal);
+        ASSERT_TRUE(s);
+        for (uint32_t prim = 0; prim < 2; ++prim) {
+            Hit hit;
+            s->fill_hit(down, 1.f, prim, 0.25f, 0.25f, hit);
+            EXPECT_TRUE(vec_near(hit.ng, {0, 0, 1}, 0)) << normal;
+            EXPECT_TRUE(vec_near(hit.sh.n, shading, 1e-7f)) << normal;
+        }
+    }
+}
+
 TEST(ShapeObj, BadFiles) {
     ScratchDir dir;
     auto error_for = [&](const std::string& content) {

@@ -184,6 +184,7 @@ private:
     bool flip_normals_ = false;
     bool fills_tangent_ = false;  // the bsdf reads Hit::dpdu (Bsdf::uses_tangent())
     bool flat_normals_ = false;   // each triangle's vertex normals are equal: no interpolation
+    bool face_normals_ = false;   // ... and each is its triangle's face normal: Hit::ng too
     TriangleMesh mesh_;
     // Built on a mesh's first sample_area() (most shapes are never sampled): the triangles
     // by area, and each one's unit normal (flipped with the shape) and rounding bound.

@@ -41,6 +41,20 @@ bool normals_constant_per_triangle(const TriangleMesh& mesh) {
     }
     return true;
 }
+
+// Whether each triangle's (constant) vertex normal is its face normal on the side its winding
+// gives, to within rounding (1e-6 apart: a millionth of a radian): then a hit's geometric
+// normal can be that normal, without a normalisation per hit.
+bool normals_are_face_normals(const TriangleMesh& mesh) {
+    for (size_t i = 0; i < mesh.triangle_count(); ++i) {
+        const uint32_t* idx = &mesh.indices[3 * i];
+        const Vec3& p0 = mesh.positions[idx[0]];
+        const Vec3 face = cross(mesh.positions[idx[1]] - p0, mesh.positions[idx[2]] - p0);
+        const float l = length(face);
+        if (!(l > 0) || !(squared_length(mesh.normals[idx[0]] - face / l) <= 1e-12f)) return false;
+    }
+    return true;
+}
 }  // namespace
 
 std::vector<ParamSpec> Shape::inherited_params() {
@@ -106,6 +120,7 @@ void Shape::set_mesh(TriangleMesh mesh) {
     if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
         throw SceneError(location_, "the mesh has a different number of uvs and positions");
     flat_normals_ = !mesh.normals.empty() && normals_constant_per_triangle(mesh);
+    face_normals_ = flat_normals_ && normals_are_face_normals(mesh);
     mesh_ = std::move(mesh);
     is_sphere_ = false;
     double area = 0;
@@ -378,11 +393,15 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         hit.p = p0 * w + p1 * u + p2 * v;
         hit.p_error = kRayOffsetScale * std::max({max_abs_component(p0), max_abs_component(p1),
                                                   max_abs_component(p2)});
-        Vec3 ng = cross(p1 - p0, p2 - p0);
-        const float l = length(ng);
-        hit.ng = l > 0 ? ng / l : Vec3(0, 0, 1);
-        ns = hit.ng;
-        if (flat_normals_) {  // (a rectangle's, a cube's, a flat-shaded mesh file's)
+        if (face_normals_) {  // (a rectangle's, a cube's)
+            hit.ng = ns = mesh_.normals[i0];
+        } else {
+            const Vec3 ng = cross(p1 - p0, p2 - p0);
+            const float l = length(ng);
+            hit.ng = l > 0 ? ng / l : Vec3(0, 0, 1);
+            ns = hit.ng;
+        }
+        if (flat_normals_) {  // (and a flat-shaded mesh file's)
             ns = mesh_.normals[i0];
         } else if (!mesh_.normals.empty()) {
             const Vec3 n = mesh_.normals[i0] * w + mesh_.normals[i1] * u + mesh_.normals[i2] * v;
