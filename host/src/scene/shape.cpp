@@ -401,7 +401,7 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
             hit.ng = l > 0 ? ng / l : Vec3(0, 0, 1);
             ns = hit.ng;
         }
-        if (flat_normals_) {  // (and a flat-shaded mesh file's)
+        if (flat_normals_) {  // one normal per triangle (a flat-shaded mesh file's too)
             ns = mesh_.normals[i0];
         } else if (!mesh_.normals.empty()) {
             const Vec3 n = mesh_.normals[i0] * w + mesh_.normals[i1] * u + mesh_.normals[i2] * v;
