@@ -394,13 +394,13 @@ void Shape::fill_hit(const Ray& ray, float t, uint32_t prim, float u, float v, H
         hit.p_error = kRayOffsetScale * std::max({max_abs_component(p0), max_abs_component(p1),
                                                   max_abs_component(p2)});
         if (face_normals_) {  // (a rectangle's, a cube's)
-            hit.ng = ns = mesh_.normals[i0];
+            hit.ng = mesh_.normals[i0];
         } else {
             const Vec3 ng = cross(p1 - p0, p2 - p0);
             const float l = length(ng);
             hit.ng = l > 0 ? ng / l : Vec3(0, 0, 1);
-            ns = hit.ng;
         }
+        ns = hit.ng;
         if (flat_normals_) {  // one normal per triangle (a flat-shaded mesh file's too)
             ns = mesh_.normals[i0];
         } else if (!mesh_.normals.empty()) {
