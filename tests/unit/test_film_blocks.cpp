@@ -1,7 +1,6 @@
 // The transient film's block sums (plugins/films/transient/block_storage.h): the dense map and
 // the open-addressing table must make the same entries, in the same order (the order of first
-// touch, which the merge follows), with the same sums, and empty themselves for the next block;
-// pixel runs must make the same entries too, whether pixels come in runs or not.
+// touch, which the merge follows), with the same sums, and empty themselves for the next block.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -91,67 +90,6 @@ TEST(TransientBlockStorage, ClearedStorageServesTheNextBlockAsANewOne) {
         EXPECT_TRUE(std::all_of(reused.dense.begin(), reused.dense.end(),
                                 [](uint32_t e) { return e == 0; }));
         EXPECT_TRUE(std::all_of(reused.table.begin(), reused.table.end(),
-                                [](uint32_t e) { return e == 0; }));
-    }
-}
-
-TEST(TransientBlockStorage, PixelRunsMakeTheMapsEntriesWhenPixelsComeInRuns) {
-    // A box filter's camera samples: each pixel's touches one after another, every pixel once.
-    constexpr size_t kPixels = 300, kBins = 1024;
-    std::mt19937 rng(11);
-    std::uniform_int_distribution<size_t> bin(0, kBins - 1), run(1, 40);
-    std::uniform_real_distribution<double> value(0.0, 1.0);
-    std::vector<Touch> t;
-    for (size_t p = 0; p < kPixels; ++p)
-        for (size_t k = run(rng); k-- > 0;) t.push_back({uint64_t(bin(rng)) << 32 | p, value(rng)});
-    BlockStorage map(false, false, kBins), runs(false, false, kBins);
-    map.prepare(kPixels);
-    runs.prepare(kPixels);
-    runs.find_by_pixel_runs();
-    EXPECT_EQ(fill(runs, t), fill(map, t));  // the same entries, order and sums
-}
-
-TEST(TransientBlockStorage, PixelRunsHandTheirEntriesOverWhenAPixelComesBack) {
-    // Splats or a wide filter reach pixels in any order: once a pixel receives again after its
-    // run, the map or the table takes every entry over, and the entries stay those of the map.
-    constexpr size_t kPixels = 50, kBins = 64;
-    const std::vector<Touch> t = touches(kPixels, kBins, 3);
-    BlockStorage map(false, false, kBins), runs_then_map(false, false, kBins),
-        runs_then_table(false, false, kBins, /*max_dense_slots=*/0);
-    for (BlockStorage* st : {&map, &runs_then_map, &runs_then_table}) st->prepare(kPixels);
-    runs_then_map.find_by_pixel_runs();
-    runs_then_table.find_by_pixel_runs();
-    const auto want = fill(map, t);
-    EXPECT_EQ(fill(runs_then_map, t), want);
-    EXPECT_EQ(fill(runs_then_table, t), want);
-    EXPECT_FALSE(runs_then_map.pixel_runs);  // the test does bring pixels back
-    EXPECT_FALSE(runs_then_table.pixel_runs);
-}
-
-TEST(TransientBlockStorage, PixelRunsEndWithTheBlock) {
-    // clear() forgets the last run's bins and the mode: the next block (of the same pool) finds
-    // its entries as a fresh storage does, by the map unless it asks for runs again.
-    constexpr size_t kPixels = 20, kBins = 32;
-    BlockStorage reused(false, false, kBins);
-    reused.prepare(kPixels);
-    reused.find_by_pixel_runs();
-    fill(reused, touches(kPixels, kBins, 5));
-    reused.clear();
-    EXPECT_TRUE(reused.entries.empty());
-    EXPECT_FALSE(reused.pixel_runs);
-    for (const bool runs : {false, true}) {
-        SCOPED_TRACE(runs);
-        BlockStorage fresh(false, false, kBins);
-        reused.prepare(kPixels);
-        fresh.prepare(kPixels);
-        if (runs) {
-            reused.find_by_pixel_runs();
-            fresh.find_by_pixel_runs();
-        }
-        const std::vector<Touch> t = touches(kPixels, kBins, 9);
-        EXPECT_EQ(fill(reused, t), fill(fresh, t));
-        reused.clear();
-        EXPECT_TRUE(std::all_of(reused.dense.begin(), reused.dense.end(),
                                 [](uint32_t e) { return e == 0; }));
     }
 }

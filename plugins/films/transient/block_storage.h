@@ -31,15 +31,6 @@ namespace {
 // past 1/8 of the cube's bytes (many threads), use that table. Both make the entries in the order
 // of their first touch: the merge is the same either way. Recycled through the film's pool, empty
 // between uses.
-// Pixel runs: with a one-pixel reconstruction filter (box) a camera sample adds to its own pixel
-// alone and the renderer takes a pixel's samples of a pass one after another, so a block needs
-// to find the bins of the pixel being filled only. A map of one pixel's bins (4 KiB at 1024
-// bins: the same memory for every pixel, so it stays in the cache) then replaces the block's
-// map, whose slice of a new pixel missed the cache at each new (pixel, bin): a quarter of a box
-// filter's put. When a pixel receives again after its run ended (samples in another order), the
-// block hands its entries to the map or the table and goes on with them: the entries are the
-// same, in the same order, whichever finds them.
-
 struct BlockStorage {
     // Double: a pass may add many contributions to one entry (a light tracer's splats onto a
     // one-pixel meter: every light path of the pass), and float sums of that many lose digits.
@@ -58,7 +49,6 @@ struct BlockStorage {
     const size_t bins;
     const size_t max_dense;
     bool dense_in_use = true;     // for the current block: the map, or else the table
-    bool pixel_runs = false;      // for the current block: the run's map, until a pixel returns
     std::vector<uint32_t> dense;  // [block pixel * bins + bin]: entry + 1, or 0
     std::vector<uint32_t> table;  // open addressing, linear probing: entry + 1, or 0 (free)
     int shift = 64;               // 64 - log2(table size)
@@ -71,13 +61,11 @@ struct BlockStorage {
           bins(grid_bins),
           max_dense(max_dense_slots) {}
 
-    /// Readies the (empty) storage for a block of `pixels` pixels (found by the map or the table
-    /// unless find_by_pixel_runs() follows). `map_room`: how many map
+    /// Readies the (empty) storage for a block of `pixels` pixels. `map_room`: how many map
     /// slots it may add (the film bounds all its storages' maps together); where its map would
     /// pass that or max_dense, the block uses the table. Returns the slots it added.
     size_t prepare(size_t pixels, size_t map_room = SIZE_MAX) {
         if (weights.size() < pixels) weights.resize(pixels);  // all zero between uses
-        block_pixels = pixels;
         const size_t slots = pixels <= max_dense / bins ? pixels * bins : SIZE_MAX;
         const size_t added = slots > dense.size() ? slots - dense.size() : 0;
         dense_in_use = slots != SIZE_MAX && added <= map_room;
@@ -89,22 +77,8 @@ struct BlockStorage {
         return added;
     }
 
-    /// Finds entries by pixel runs (above) from now until clear() or a pixel's return: for a
-    /// block whose contributions come pixel by pixel. Call it after prepare(), before any entry.
-    void find_by_pixel_runs() {
-        if (run_map.size() != bins) run_map.assign(bins, 0);
-        if (had_run.size() < block_pixels)
-            had_run.resize(block_pixels, 0);  // all zero between uses
-        pixel_runs = runs_began = true;
-    }
-
     /// The entry of `key`, created (zero) on its first touch.
     size_t entry(uint64_t key) {
-        if (pixel_runs && (uint32_t(key) == run_pixel || start_run(uint32_t(key)))) {
-            uint32_t& e = run_map[key >> 32];
-            if (e == 0) e = uint32_t(append(key) + 1);
-            return e - 1;
-        }
         if (dense_in_use) {
             uint32_t& e = dense[slot(key)];
             if (e == 0) e = uint32_t(append(key) + 1);
@@ -114,15 +88,7 @@ struct BlockStorage {
     }
     /// Empties the entries and the map or table (keeping their memory for the next block).
     void clear() {
-        if (runs_began) {
-            end_run();
-            std::fill(had_run.begin(), had_run.end(), uint8_t(0));
-            run_first = 0;
-            runs_began = false;
-        }
-        if (pixel_runs) {  // the map and the table hold none of the entries
-            pixel_runs = false;
-        } else if (dense_in_use) {
+        if (dense_in_use) {
             for (const Entry& en : entries) dense[slot(en.key)] = 0;
         } else {
             // Latest first: the slots between an entry's home and its own hold earlier entries
@@ -140,40 +106,6 @@ struct BlockStorage {
     }
 
 private:
-    static constexpr uint32_t kNoPixel = std::numeric_limits<uint32_t>::max();
-    size_t block_pixels = 0;
-    bool runs_began = false;        // find_by_pixel_runs() since the last clear()
-    uint32_t run_pixel = kNoPixel;  // the block pixel of the current run
-    size_t run_first = 0;           // the run's first entry
-    std::vector<uint32_t> run_map;  // [bin]: entry + 1 of the run's pixel, or 0
-    std::vector<uint8_t> had_run;   // [block pixel]: 1 once a run of it began
-
-    /// Ends the current run and starts one of `pixel`; or, when `pixel` had a run already,
-    /// hands every entry to the map or the table for the rest of the block and returns false.
-    [[gnu::noinline]] bool start_run(uint32_t pixel) {
-        end_run();
-        if (had_run[pixel]) {
-            pixel_runs = false;
-            if (dense_in_use) {
-                for (size_t e = 0; e < entries.size(); ++e)
-                    dense[slot(entries[e].key)] = uint32_t(e + 1);
-            } else {
-                size_t slots = std::max<size_t>(4096, table.size());
-                while (2 * (entries.size() + 1) > slots) slots *= 2;
-                rehash(slots);
-            }
-            return false;
-        }
-        had_run[pixel] = 1;
-        run_pixel = pixel;
-        return true;
-    }
-    /// The run's bins leave the run's map.
-    void end_run() {
-        for (size_t e = run_first; e < entries.size(); ++e) run_map[entries[e].key >> 32] = 0;
-        run_first = entries.size();
-        run_pixel = kNoPixel;
-    }
     size_t slot(uint64_t key) const { return size_t(key & 0xffffffffu) * bins + (key >> 32); }
     [[gnu::noinline]] size_t find(uint64_t key) {  // through the table
         for (size_t i = home(key);; i = next(i)) {

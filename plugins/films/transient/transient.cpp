@@ -43,11 +43,7 @@ public:
     CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h);
     ~CubeBlock() override;
     void put(Vec2 pos, const ContributionList& sample) override {
-        if (clean_) {
-            // A block's camera samples come pixel by pixel; its splats (light paths) do not.
-            if (one_pixel_filter_ && !sample.is_splat()) st_->find_by_pixel_runs();
-            clean_ = false;
-        }
+        clean_ = false;
         splat(pos, sample, *this);
     }
 
@@ -81,7 +77,6 @@ public:
     // Film pixel of each block pixel, or SIZE_MAX outside the film: merge looks it up instead
     // of working it out per entry (merge is a hot loop of cube films).
     std::vector<size_t> dst_of_local_;
-    const bool one_pixel_filter_;  // a sample adds to its own pixel alone (a box filter)
 };
 
 class TransientFilm final : public TimeResolvedFilm {
@@ -359,8 +354,7 @@ CubeBlock::CubeBlock(const TransientFilm& film, int x0, int y0, int w, int h)
     : TimeResolvedBlock(film, x0, y0, w, h),
       pixels_(size_t(w_) * size_t(h_)),
       st_(film.acquire_storage(pixels_)),
-      dst_of_local_(pixels_),
-      one_pixel_filter_(film.rfilter().radius() <= 0.5f) {
+      dst_of_local_(pixels_) {
     for (int by = 0; by < h_; ++by)
         for (int bx = 0; bx < w_; ++bx) {
             const int x = x0_ + bx, y = y0_ + by;
