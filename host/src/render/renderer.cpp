@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -255,10 +256,15 @@ private:
 // A camera sample's film position in pixel (x, y) for a jitter in [0, 1)^2: inside [x, x + 1) x
 // [y, y + 1) even where x + jitter rounds up to x + 1 in float (a jitter within 2^-24 x of 1),
 // so that the film gives it to the pixel it was taken for (a 1-spp pixel would stay black).
+// The float below x + 1 (>= 1, so positive and normal, and exact: films are at most 2^16
+// pixels across) is the one whose bits are one less: what std::nextafter returns, without its
+// call into libm (two per camera sample).
 Vec2 pixel_position(int x, int y, Vec2 jitter) {
-    const float fx = float(x), fy = float(y);
-    return {std::min(fx + jitter.x, std::nextafter(fx + 1.f, fx)),
-            std::min(fy + jitter.y, std::nextafter(fy + 1.f, fy))};
+    auto below_next = [](int i) {
+        return std::bit_cast<float>(std::bit_cast<uint32_t>(float(i) + 1.f) - 1u);
+    };
+    return {std::min(float(x) + jitter.x, below_next(x)),
+            std::min(float(y) + jitter.y, below_next(y))};
 }
 
 // Adaptive sampling (thesis ch. 3, Fig. 3.15): how many camera samples each pixel takes, spp_p =
