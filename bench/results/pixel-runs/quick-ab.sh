@@ -4,7 +4,7 @@
 # `path` into an hdrfilm and `transient_path` into the 1024-bin film. Prints
 # "ROUND a|b INTEGRATOR SECONDS" per render (the render time `femto render` reports).
 #   quick-ab.sh A_PREFIX B_PREFIX ROUNDS THREADS [SPP=64] > OUT.txt
-#   summarize.py --quick OUT.txt
+#   bench/tools/film_ab_summary.py --quick OUT.txt
 a=$1 b=$2 n=$3 t=$4 spp=${5:-64}
 scene=$(cd "$(dirname "$0")/../../experiments/scenes" && pwd)/cornell-films.xml
 out=$(mktemp -d); trap 'rm -rf "$out"' EXIT

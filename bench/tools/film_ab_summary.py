@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
-"""The pixel-run trial's figures.
+"""The transient film's cost in two builds, from bench/run_film_ab.sh's folder OUT
+({A,B}-tT-rR/results.csv, or {A,B}-tT-rR.csv as kept in results/) or from the output of
+results/pixel-runs/quick-ab.sh.
 
-    summarize.py OUT            run.sh's folder OUT ({A,B}-tT-rR/results.csv): per thread count
-                                and build, the 1024-bin film's samples/s over path-hdrfilm's
-                                (same seed and round, pooled over rounds: median [5 %, 95 %]),
-                                then each variant's render time B/A (same seed and round)
-    summarize.py --quick FILE   quick-ab.sh's output: per build the round-by-round ratio of
-                                path's time over transient_path's, then each integrator's B/A
+    film_ab_summary.py OUT
+        per thread count and build, the 1024-bin film's samples/s over path-hdrfilm's (same
+        seed and round, pooled over rounds: median [5 %, 95 %]), then each variant's render
+        time B/A (same seed and round)
+    film_ab_summary.py --quick FILE
+        per build the round-by-round ratio of path's time over transient_path's, then each
+        integrator's time B/A
 """
 import collections
 import csv
