@@ -2,10 +2,11 @@
 # Quick A/B of two builds' render time: path on the Cornell box (experiments/scenes/cornell-films.xml,
 # hdrfilm, 256x256, 16 spp), ROUNDS rounds alternating A and B, at THREADS threads. Prints
 # "ROUND a|b in SECONDS s (MRAYS M rays" per render.
-#   quickab.sh A_PREFIX B_PREFIX ROUNDS THREADS [femto render args...]
+#   bench/run_quick_ab.sh A_PREFIX B_PREFIX ROUNDS THREADS [femto render args...] > OUT.txt
+#   bench/tools/quick_ab_summary.py OUT.txt
 # (A_PREFIX/bin/femto and B_PREFIX/bin/femto: a build folder or a `cmake --install` prefix.)
 a=$1 b=$2 n=$3 t=$4; shift 4
-repo=$(cd "$(dirname "$0")/../../.." && pwd)
+repo=$(cd "$(dirname "$0")/.." && pwd)
 out=$(mktemp -d); trap 'rm -rf "$out"' EXIT
 for r in $(seq "$n"); do
   for v in a b; do
