@@ -178,6 +178,9 @@ protected:
 
 private:
     void finish_setup();
+    // sample_area()'s body, which sample_direct() takes inline: through the exported call its
+    // sample went to memory and back (defined in shape.cpp).
+    ShapeSample area_sample(Vec2 u) const;
     SourceLocation location_;
     bool is_sphere_ = false;
     bool is_cylinder_ = false;

@@ -463,7 +463,9 @@ const Shape::AreaSampling& Shape::build_area_sampling() const {
     return *area_sampling_owner_;
 }
 
-ShapeSample Shape::sample_area(Vec2 u) const {
+ShapeSample Shape::sample_area(Vec2 u) const { return area_sample(u); }
+
+[[gnu::always_inline]] inline ShapeSample Shape::area_sample(Vec2 u) const {
     ShapeSample s;
     if (is_cylinder_) {
         // Uniform in z and phi (Mitsuba's parameterization: u.x along the axis, u.y around).
@@ -546,7 +548,7 @@ ShapeSample Shape::sample_direct(const Vec3& ref, Vec2 u) const {
             return aim(out, out.p - ref) > 0 ? out : ShapeSample{};
         }
     }
-    ShapeSample s = sample_area(u);  // converted to solid angle
+    ShapeSample s = area_sample(u);  // converted to solid angle
     const Vec3 d = s.p - ref;
     const float dist2 = aim(s, d);
     if (!(dist2 > 0)) return {};
