@@ -191,10 +191,13 @@ bool Scene::occluded(const Ray& ray) const {
 
 EmitterSample Scene::sample_emitter(const Vec3& ref, float u_select, Vec2 u) const {
     const size_t n = emitter_list_.size();
-    if (n == 0) return {};
     // (Through a 32-bit index: x86-64 converts a float to an unsigned 64-bit one by a branch.)
-    const size_t i = std::min(size_t(uint32_t(u_select * float(n))), n - 1);
-    EmitterSample s = emitter_list_[i]->sample_direct(ref, u);
+    const size_t i = n ? std::min(size_t(uint32_t(u_select * float(n))), n - 1) : 0;
+    // One result, made by the emitter in the caller's memory (no `return {}` on another path,
+    // which would keep GCC from it): copied out of a temporary instead, its wide loads of
+    // fields the emitter had just stored one by one waited for the stores.
+    EmitterSample s = n ? emitter_list_[i]->sample_direct(ref, u) : EmitterSample{};
+    if (n == 0) return s;
     s.emitter = emitter_list_[i];
     if (n > 1) {  // (a division costs a light sample's wait even by 1)
         s.pdf /= float(n);

@@ -519,7 +519,11 @@ float aim(ShapeSample& s, const Vec3& d) {
 }
 }  // namespace
 
+// One result object, returned on every path (a failed sample is reset to ShapeSample{}): GCC
+// then builds it in the caller's memory (NRVO) instead of copying it there at the end, where
+// the copy's wide loads of fields just stored one by one waited for the stores.
 ShapeSample Shape::sample_direct(const Vec3& ref, Vec2 u) const {
+    ShapeSample s;
     if (is_sphere_) {
         const Vec3 to_center = center_ - ref;
         const float dist2 = squared_length(to_center);
@@ -536,23 +540,25 @@ ShapeSample Shape::sample_direct(const Vec3& ref, Vec2 u) const {
             const Frame frame(to_center / dist);
             const float sin_t = std::sqrt(sin2_t);
             const Vec3 dir = frame.to_world({sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t});
-            // Nearest intersection of ref + s*dir with the sphere.
+            // Nearest intersection of ref + t*dir with the sphere.
             const float b = dist * cos_t;
-            const float s = b - safe_sqrt(r2 - dist2 * sin2_t);
-            ShapeSample out;
-            out.p = ref + dir * s;
-            const Vec3 n = normalize(out.p - center_);
-            out.p = center_ + n * radius_;
-            out.n = flip_normals_ ? -n : n;
-            out.pdf = 1.f / (2.f * kPi * one_minus_cos_max);
-            return aim(out, out.p - ref) > 0 ? out : ShapeSample{};
+            const float t = b - safe_sqrt(r2 - dist2 * sin2_t);
+            s.p = ref + dir * t;
+            const Vec3 n = normalize(s.p - center_);
+            s.p = center_ + n * radius_;
+            s.n = flip_normals_ ? -n : n;
+            s.pdf = 1.f / (2.f * kPi * one_minus_cos_max);
+            if (!(aim(s, s.p - ref) > 0)) s = ShapeSample{};
+            return s;
         }
     }
-    ShapeSample s = area_sample(u);  // converted to solid angle
+    s = area_sample(u);  // converted to solid angle
     const Vec3 d = s.p - ref;
     const float dist2 = aim(s, d);
-    if (!(dist2 > 0)) return {};
-    s.pdf = area_to_solid_angle(s.pdf, s.n, d, dist2, s.distance);
+    if (dist2 > 0)
+        s.pdf = area_to_solid_angle(s.pdf, s.n, d, dist2, s.distance);
+    else
+        s = ShapeSample{};
     return s;
 }
 
