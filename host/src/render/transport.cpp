@@ -122,12 +122,17 @@ void LightPathStarts::prepare(const Scene& scene, const std::string& integrator)
 }
 
 LightPathStarts::Start LightPathStarts::sample(const Scene& scene, Sampler& sampler) {
-    Start start;
-    const Emitter* emitter = scene.select_emitter(sampler.next_1d(), start.pmf);
-    if (!emitter) return start;
-    const Vec2 u_position = sampler.next_2d();
-    start.emission = emitter->sample_emission(u_position, sampler.next_2d());
-    if (start.emission.valid() && !start.emission.weight.is_black()) start.emitter = emitter;
+    float pmf = 0.f;
+    const Emitter* emitter = scene.select_emitter(sampler.next_1d(), pmf);
+    const Vec2 u_position = emitter ? sampler.next_2d() : Vec2();
+    const Vec2 u_direction = emitter ? sampler.next_2d() : Vec2();
+    // The emitter's sample made in place in the result (which the caller's memory holds), not
+    // assigned from a temporary: the copy's wide loads of fields just stored one by one would
+    // wait for the stores (as in Scene::sample_emitter).
+    Start start{nullptr, pmf,
+                emitter ? emitter->sample_emission(u_position, u_direction) : EmissionSample()};
+    if (emitter && start.emission.valid() && !start.emission.weight.is_black())
+        start.emitter = emitter;
     return start;
 }
 
