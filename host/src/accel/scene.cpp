@@ -193,9 +193,10 @@ EmitterSample Scene::sample_emitter(const Vec3& ref, float u_select, Vec2 u) con
     const size_t n = emitter_list_.size();
     // (Through a 32-bit index: x86-64 converts a float to an unsigned 64-bit one by a branch.)
     const size_t i = n ? std::min(size_t(uint32_t(u_select * float(n))), n - 1) : 0;
-    // One result, made by the emitter in the caller's memory (no `return {}` on another path,
-    // which would keep GCC from it): copied out of a temporary instead, its wide loads of
-    // fields the emitter had just stored one by one waited for the stores.
+    // One result object on every path, so the emitter makes it in the caller's memory. (A
+    // `return {}` on the no-emitter path made GCC build it in a temporary and copy it out, and
+    // the copy's wide loads of fields the emitter had just stored one by one waited for the
+    // stores.)
     EmitterSample s = n ? emitter_list_[i]->sample_direct(ref, u) : EmitterSample{};
     if (n == 0) return s;
     s.emitter = emitter_list_[i];
